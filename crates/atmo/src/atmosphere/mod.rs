@@ -1,0 +1,472 @@
+//! The medium: a spherical planet wrapped in air (Rayleigh), aerosols (Mie) and an
+//! optional ozone layer, described per wavelength.
+//!
+//! Parameters come from TOML (`Atmosphere::from_toml_str`) or an embedded preset
+//! (`Atmosphere::preset`), are validated once here, and are plain numbers afterwards:
+//! per-wavelength coefficients are resolved into one `Vec<f64>` per quantity.
+
+pub mod geometry;
+pub mod optical_depth;
+pub mod phase;
+pub mod spectrum;
+
+use serde::Deserialize;
+
+use crate::error::{check_positive, check_range, Error, Result};
+pub use optical_depth::TransmittanceTable;
+pub use phase::PhaseFunction;
+
+/// Number of absorbing or scattering constituents whose column densities we track:
+/// Rayleigh, Mie, ozone (in this order).
+pub const CONSTITUENTS: usize = 3;
+
+/// Names and TOML texts of the embedded presets; the first is the default.
+const PRESETS: [(&str, &str); 2] = [
+    ("earth", include_str!("../../presets/earth.toml")),
+    ("paper", include_str!("../../presets/paper.toml")),
+];
+
+/// A quantity given per wavelength: one value for all, an array with one value per
+/// wavelength, or a power law `value * (lambda / at_nm)^(-exponent)`
+/// (exponent 4 for Rayleigh, the Angstrom exponent for aerosols).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+enum PerWavelength {
+    Constant(f64),
+    Values(Vec<f64>),
+    PowerLaw(PowerLaw),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PowerLaw {
+    at_nm: f64,
+    value: f64,
+    exponent: f64,
+}
+
+impl PerWavelength {
+    fn resolve(&self, field: &str, wavelengths_nm: &[f64], max: f64) -> Result<Vec<f64>> {
+        let values = match self {
+            PerWavelength::Constant(v) => vec![*v; wavelengths_nm.len()],
+            PerWavelength::Values(v) => {
+                if v.len() != wavelengths_nm.len() {
+                    return Err(Error::out_of_range(
+                        &format!("{field} (length)"),
+                        v.len(),
+                        &format!("one value per wavelength: {}", wavelengths_nm.len()),
+                    ));
+                }
+                v.clone()
+            }
+            PerWavelength::PowerLaw(p) => {
+                check_positive(&format!("{field}.at_nm"), p.at_nm, 1e5)?;
+                check_range(&format!("{field}.exponent"), p.exponent, -10.0, 10.0)?;
+                wavelengths_nm
+                    .iter()
+                    .map(|l| p.value * (l / p.at_nm).powf(-p.exponent))
+                    .collect()
+            }
+        };
+        for (i, v) in values.iter().enumerate() {
+            check_range(&format!("{field}[{i}]"), *v, 0.0, max)?;
+        }
+        Ok(values)
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AtmosphereSpec {
+    name: String,
+    #[serde(default)]
+    description: String,
+    bottom_radius_m: f64,
+    top_radius_m: f64,
+    sun_angular_radius_deg: f64,
+    wavelengths_nm: Vec<f64>,
+    solar_irradiance: PerWavelength,
+    #[serde(default)]
+    ground_albedo: f64,
+    rayleigh: SpeciesSpec,
+    mie: SpeciesSpec,
+    ozone: Option<OzoneSpec>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpeciesSpec {
+    scale_height_m: f64,
+    scattering_per_m: PerWavelength,
+    #[serde(default = "one")]
+    single_scattering_albedo: f64,
+    phase: PhaseFunction,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OzoneSpec {
+    #[serde(default = "yes")]
+    enabled: bool,
+    absorption_per_m: PerWavelength,
+    center_altitude_m: f64,
+    half_width_m: f64,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// A scattering constituent whose density falls off exponentially with altitude,
+/// sky: `rho(h) = exp(-h / H)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Species {
+    /// Scale height `H`, m.
+    pub scale_height_m: f64,
+    /// Scattering coefficient at density 1 (sea level), per wavelength, 1/m.
+    pub scattering_per_m: Vec<f64>,
+    /// Extinction coefficient at density 1, per wavelength, 1/m: scattering divided by
+    /// the single-scattering albedo.
+    pub extinction_per_m: Vec<f64>,
+    /// Angular distribution of the scattered light.
+    pub phase: PhaseFunction,
+}
+
+impl Species {
+    /// Relative density (1 at the ground) at `altitude_m`.
+    #[inline]
+    pub fn density(&self, altitude_m: f64) -> f64 {
+        (-altitude_m / self.scale_height_m).exp()
+    }
+}
+
+/// An absorbing layer whose density is a tent: 1 at `center_altitude_m`, falling
+/// linearly to 0 at `half_width_m` above and below (the profile of Bruneton 2017).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OzoneLayer {
+    /// Absorption coefficient at the tent's peak, per wavelength, 1/m.
+    pub absorption_per_m: Vec<f64>,
+    /// Altitude of the peak, m.
+    pub center_altitude_m: f64,
+    /// Distance from the peak to where the density reaches 0, m.
+    pub half_width_m: f64,
+}
+
+impl OzoneLayer {
+    /// Relative density (1 at the peak) at `altitude_m`.
+    #[inline]
+    pub fn density(&self, altitude_m: f64) -> f64 {
+        (1.0 - (altitude_m - self.center_altitude_m).abs() / self.half_width_m).max(0.0)
+    }
+}
+
+/// A validated atmosphere. Lengths in metres, angles in radians, coefficients in 1/m,
+/// irradiance in the units the file gives (the presets: W m^-2 nm^-1), and every
+/// radiance atmo computes is in those units per steradian.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Atmosphere {
+    /// Short name, e.g. `earth`.
+    pub name: String,
+    /// What the preset or file describes, for `--help` and docs.
+    pub description: String,
+    /// Radius of the ground sphere, m.
+    pub bottom_radius_m: f64,
+    /// Radius of the top of the atmosphere, m; nothing scatters above it.
+    pub top_radius_m: f64,
+    /// Angular radius of the sun's disc, rad.
+    pub sun_angular_radius: f64,
+    /// The wavelengths the spectrum is sampled at, nm, increasing.
+    pub wavelengths_nm: Vec<f64>,
+    /// Solar irradiance at the top of the atmosphere, per wavelength.
+    pub solar_irradiance: Vec<f64>,
+    /// Lambertian reflectance of the ground in [0, 1]; 0 is a black ground.
+    pub ground_albedo: f64,
+    /// Air molecules.
+    pub rayleigh: Species,
+    /// Aerosols.
+    pub mie: Species,
+    /// Ozone, absorbing only; `None` when absent or disabled.
+    pub ozone: Option<OzoneLayer>,
+}
+
+impl Atmosphere {
+    /// The names of the embedded presets, the default first.
+    pub fn preset_names() -> impl Iterator<Item = &'static str> {
+        PRESETS.iter().map(|(n, _)| *n)
+    }
+
+    /// The embedded preset `name` (see [`Atmosphere::preset_names`]).
+    pub fn preset(name: &str) -> Result<Self> {
+        let (_, text) = PRESETS.iter().find(|(n, _)| *n == name).ok_or_else(|| {
+            Error::out_of_range(
+                "atmosphere preset",
+                name,
+                &Self::preset_names().collect::<Vec<_>>().join(", "),
+            )
+        })?;
+        Self::from_toml_str(text, &format!("preset {name}"))
+    }
+
+    /// The measured-coefficient Earth of current sky models (Bruneton 2017, Hillaire
+    /// 2020), without ozone: the default.
+    pub fn earth() -> Self {
+        Self::preset("earth").expect("embedded preset is valid")
+    }
+
+    /// Parses and validates a TOML description; `origin` names it in error messages.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Self> {
+        let spec: AtmosphereSpec = toml::from_str(text).map_err(|e| Error::Parse {
+            path: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        Self::from_spec(spec)
+    }
+
+    /// Reads, parses and validates a TOML file.
+    pub fn from_toml_file(path: &std::path::Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_toml_str(&text, &path.display().to_string())
+    }
+
+    fn from_spec(s: AtmosphereSpec) -> Result<Self> {
+        check_range("bottom_radius_m", s.bottom_radius_m, 1e3, 1e9)?;
+        if !(s.top_radius_m > s.bottom_radius_m && s.top_radius_m <= 2.0 * s.bottom_radius_m) {
+            return Err(Error::out_of_range(
+                "top_radius_m",
+                s.top_radius_m,
+                &format!("({}, {}]", s.bottom_radius_m, 2.0 * s.bottom_radius_m),
+            ));
+        }
+        check_positive("sun_angular_radius_deg", s.sun_angular_radius_deg, 10.0)?;
+        let l = &s.wavelengths_nm;
+        if l.len() < 3 || l.len() > 64 {
+            return Err(Error::out_of_range(
+                "wavelengths_nm (length)",
+                l.len(),
+                "3 to 64 wavelengths",
+            ));
+        }
+        for (i, w) in l.iter().enumerate() {
+            check_range(&format!("wavelengths_nm[{i}]"), *w, 300.0, 1000.0)?;
+            if i > 0 && *w <= l[i - 1] {
+                return Err(Error::out_of_range(
+                    &format!("wavelengths_nm[{i}]"),
+                    w,
+                    "strictly increasing wavelengths",
+                ));
+            }
+        }
+        check_range("ground_albedo", s.ground_albedo, 0.0, 1.0)?;
+        let solar_irradiance = s.solar_irradiance.resolve("solar_irradiance", l, 1e6)?;
+        let species = |name: &str, sp: &SpeciesSpec| -> Result<Species> {
+            check_range(
+                &format!("{name}.scale_height_m"),
+                sp.scale_height_m,
+                1.0,
+                1e6,
+            )?;
+            check_range(
+                &format!("{name}.single_scattering_albedo"),
+                sp.single_scattering_albedo,
+                1e-6,
+                1.0,
+            )?;
+            sp.phase.validate(&format!("{name}.phase"))?;
+            let scattering =
+                sp.scattering_per_m
+                    .resolve(&format!("{name}.scattering_per_m"), l, 1.0)?;
+            let extinction = scattering
+                .iter()
+                .map(|b| b / sp.single_scattering_albedo)
+                .collect();
+            Ok(Species {
+                scale_height_m: sp.scale_height_m,
+                scattering_per_m: scattering,
+                extinction_per_m: extinction,
+                phase: sp.phase,
+            })
+        };
+        let ozone = match s.ozone.as_ref().filter(|o| o.enabled) {
+            None => None,
+            Some(o) => {
+                check_range("ozone.center_altitude_m", o.center_altitude_m, 0.0, 1e6)?;
+                check_positive("ozone.half_width_m", o.half_width_m, 1e6)?;
+                Some(OzoneLayer {
+                    absorption_per_m: o.absorption_per_m.resolve(
+                        "ozone.absorption_per_m",
+                        l,
+                        1.0,
+                    )?,
+                    center_altitude_m: o.center_altitude_m,
+                    half_width_m: o.half_width_m,
+                })
+            }
+        };
+        Ok(Atmosphere {
+            rayleigh: species("rayleigh", &s.rayleigh)?,
+            mie: species("mie", &s.mie)?,
+            name: s.name,
+            description: s.description,
+            bottom_radius_m: s.bottom_radius_m,
+            top_radius_m: s.top_radius_m,
+            sun_angular_radius: s.sun_angular_radius_deg.to_radians(),
+            wavelengths_nm: s.wavelengths_nm,
+            solar_irradiance,
+            ground_albedo: s.ground_albedo,
+            ozone,
+        })
+    }
+
+    /// Switches the ozone layer on with the preset's values (for `--ozone`), or off.
+    pub fn with_ozone(mut self, on: bool) -> Result<Self> {
+        if !on {
+            self.ozone = None;
+        } else if self.ozone.is_none() {
+            return Err(Error::Invalid(format!(
+                "atmosphere '{}' has no [ozone] table to switch on; add one to its TOML",
+                self.name
+            )));
+        }
+        Ok(self)
+    }
+
+    /// Number of wavelengths.
+    pub fn channels(&self) -> usize {
+        self.wavelengths_nm.len()
+    }
+
+    /// Altitude above the ground in metres of a point at radius `r`.
+    #[inline]
+    pub fn altitude(&self, r: f64) -> f64 {
+        r - self.bottom_radius_m
+    }
+
+    /// Height of the atmosphere's top above the ground, m.
+    pub fn thickness_m(&self) -> f64 {
+        self.top_radius_m - self.bottom_radius_m
+    }
+
+    /// Relative densities (Rayleigh, Mie, ozone) at `altitude_m`; integrated along a
+    /// path they give column densities, in metres of air at density 1.
+    #[inline]
+    pub fn densities(&self, altitude_m: f64) -> [f64; CONSTITUENTS] {
+        [
+            self.rayleigh.density(altitude_m),
+            self.mie.density(altitude_m),
+            self.ozone.as_ref().map_or(0.0, |o| o.density(altitude_m)),
+        ]
+    }
+
+    /// Extinction optical depth at wavelength index `c` of a path whose column
+    /// densities are `columns`.
+    #[inline]
+    pub fn optical_depth(&self, columns: &[f64; CONSTITUENTS], c: usize) -> f64 {
+        self.rayleigh.extinction_per_m[c] * columns[0]
+            + self.mie.extinction_per_m[c] * columns[1]
+            + self
+                .ozone
+                .as_ref()
+                .map_or(0.0, |o| o.absorption_per_m[c] * columns[2])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_load_and_differ() {
+        let earth = Atmosphere::earth();
+        let paper = Atmosphere::preset("paper").unwrap();
+        assert_eq!(earth.bottom_radius_m, 6_360_000.0);
+        assert_eq!(earth.top_radius_m, 6_420_000.0);
+        assert_ne!(earth.mie.phase, paper.mie.phase);
+        assert!(earth.ozone.is_none(), "ozone is off by default");
+        // Rayleigh scattering follows lambda^-4 closely in both presets.
+        for a in [&earth, &paper] {
+            let (l0, l1) = (a.wavelengths_nm[0], *a.wavelengths_nm.last().unwrap());
+            let (b0, b1) = (
+                a.rayleigh.scattering_per_m[0],
+                *a.rayleigh.scattering_per_m.last().unwrap(),
+            );
+            let ratio = (b0 / b1) / (l1 / l0).powi(4);
+            assert!((ratio - 1.0).abs() < 0.01, "{}: {ratio}", a.name);
+        }
+    }
+
+    #[test]
+    fn mie_extinction_is_scattering_over_albedo() {
+        let earth = Atmosphere::earth();
+        for c in 0..earth.channels() {
+            let ratio = earth.mie.scattering_per_m[c] / earth.mie.extinction_per_m[c];
+            assert!((ratio - 0.9).abs() < 1e-12);
+        }
+    }
+
+    fn earth_text() -> String {
+        PRESETS[0].1.to_string()
+    }
+
+    #[test]
+    fn unknown_keys_are_refused_with_their_line() {
+        let text = earth_text().replacen("ground_albedo", "ground_albdo", 1);
+        let err = Atmosphere::from_toml_str(&text, "t.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("ground_albdo") && err.contains("line"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn negative_and_nan_coefficients_are_refused() {
+        let text = earth_text().replacen("scale_height_m = 1200.0", "scale_height_m = -5.0", 1);
+        let err = Atmosphere::from_toml_str(&text, "t")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("mie.scale_height_m"), "{err}");
+        let text = earth_text().replacen(
+            "single_scattering_albedo = 0.9",
+            "single_scattering_albedo = nan",
+            1,
+        );
+        let err = Atmosphere::from_toml_str(&text, "t")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("mie.single_scattering_albedo"), "{err}");
+    }
+
+    #[test]
+    fn arrays_must_match_the_wavelengths() {
+        let text = earth_text().replacen("solar_irradiance = [", "solar_irradiance = [1.0, ", 1);
+        let err = Atmosphere::from_toml_str(&text, "t")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("solar_irradiance (length)"), "{err}");
+    }
+
+    #[test]
+    fn power_law_resolves_per_wavelength() {
+        // The paper preset gives Rayleigh as 1.28e-5 /m at 550 nm times (550/lambda)^4.
+        let paper = Atmosphere::preset("paper").unwrap();
+        for (l, b) in paper
+            .wavelengths_nm
+            .iter()
+            .zip(&paper.rayleigh.scattering_per_m)
+        {
+            let expect = 1.28e-5 * (550.0 / l).powi(4);
+            assert!(
+                (b - expect).abs() < 1e-12 * expect.max(1.0),
+                "{l}: {b} vs {expect}"
+            );
+        }
+    }
+}

@@ -1,0 +1,75 @@
+//! The library's error type: every message names what was wrong and what is allowed.
+
+use std::path::PathBuf;
+
+/// Errors from loading parameters, validating them, or writing results.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A parameter is outside its allowed range; `field` names it as the user wrote it.
+    #[error("{field} = {value} is out of range: allowed {allowed}")]
+    OutOfRange {
+        field: String,
+        value: String,
+        allowed: String,
+    },
+    /// A request would need more memory than the stated budget.
+    #[error("{what} would need {needed_bytes} bytes, above the budget of {budget_bytes} bytes; lower {setting}")]
+    OverBudget {
+        what: String,
+        needed_bytes: u64,
+        budget_bytes: u64,
+        setting: String,
+    },
+    /// A parameter file could not be parsed (message carries line and column).
+    #[error("{path}: {message}")]
+    Parse { path: String, message: String },
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// An image could not be encoded.
+    #[error("{path}: could not encode image: {message}")]
+    Image { path: PathBuf, message: String },
+    /// Anything else the user asked for that cannot be done, said plainly.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Result with the library's [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// Shorthand for [`Error::OutOfRange`].
+    pub fn out_of_range(field: &str, value: impl std::fmt::Display, allowed: &str) -> Self {
+        Error::OutOfRange {
+            field: field.to_string(),
+            value: value.to_string(),
+            allowed: allowed.to_string(),
+        }
+    }
+}
+
+/// Checks that `value` is finite and in `[min, max]`, naming `field` otherwise.
+pub fn check_range(field: &str, value: f64, min: f64, max: f64) -> Result<()> {
+    if value.is_finite() && value >= min && value <= max {
+        Ok(())
+    } else {
+        Err(Error::out_of_range(
+            field,
+            value,
+            &format!("[{min}, {max}]"),
+        ))
+    }
+}
+
+/// Checks that `value` is finite and `> 0` (and at most `max`), naming `field` otherwise.
+pub fn check_positive(field: &str, value: f64, max: f64) -> Result<()> {
+    if value.is_finite() && value > 0.0 && value <= max {
+        Ok(())
+    } else {
+        Err(Error::out_of_range(field, value, &format!("(0, {max}]")))
+    }
+}

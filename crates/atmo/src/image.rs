@@ -1,0 +1,244 @@
+//! Float frame buffers, exposure, tone mapping, and PNG / OpenEXR files written
+//! atomically (to a temporary name in the same folder, then renamed), so a failed or
+//! interrupted run never leaves a half-written picture.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use image::{ExtendedColorType, ImageEncoder};
+
+use crate::error::{check_range, Error, Result};
+
+/// Largest frame atmo allocates, bytes (a 16k x 16k float RGB image is 3 GiB).
+pub const FRAME_BUDGET_BYTES: u64 = 1 << 30;
+
+/// How linear radiance becomes a displayable value in [0, 1] before sRGB encoding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ToneMap {
+    /// Clamp at 1: what the 8-bit displays of the papers did.
+    Clamp,
+    /// `1 - exp(-x)`, as Bruneton's (2017) demo: never saturates, keeps hue.
+    #[default]
+    Exponential,
+    /// Narkowicz's fit of the ACES filmic curve.
+    Aces,
+}
+
+impl ToneMap {
+    /// The tone-mapped value of the exposed linear value `x >= 0`.
+    #[inline]
+    pub fn apply(self, x: f32) -> f32 {
+        let x = x.max(0.0);
+        match self {
+            ToneMap::Clamp => x.min(1.0),
+            ToneMap::Exponential => 1.0 - (-x).exp(),
+            ToneMap::Aces => {
+                ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+            }
+        }
+    }
+}
+
+/// The sRGB transfer function of a linear value in [0, 1].
+#[inline]
+pub fn srgb_encode(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The kind of file a path names, by its extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageKind {
+    /// 8-bit sRGB after exposure and tone map.
+    Png,
+    /// Linear float radiance (linear sRGB primaries), no exposure or tone map.
+    Exr,
+}
+
+impl ImageKind {
+    /// The kind of `path`, or an error naming the allowed extensions.
+    pub fn of(path: &Path) -> Result<Self> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("png") => Ok(ImageKind::Png),
+            Some("exr") => Ok(ImageKind::Exr),
+            _ => Err(Error::out_of_range(
+                "output file extension",
+                path.display(),
+                ".png or .exr",
+            )),
+        }
+    }
+}
+
+/// A picture in linear sRGB radiance (the atmosphere's irradiance units per sr).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Row-major pixels, top row first.
+    pub pixels: Vec<Vec3>,
+}
+
+impl Frame {
+    /// Checks that a `width` x `height` frame is allowed, before anything is allocated.
+    pub fn check_size(width: u32, height: u32) -> Result<()> {
+        check_range("width", width as f64, 1.0, 16384.0)?;
+        check_range("height", height as f64, 1.0, 16384.0)?;
+        let bytes = width as u64 * height as u64 * 12;
+        if bytes > FRAME_BUDGET_BYTES {
+            return Err(Error::OverBudget {
+                what: format!("a {width} x {height} frame"),
+                needed_bytes: bytes,
+                budget_bytes: FRAME_BUDGET_BYTES,
+                setting: "width or height".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// A black frame.
+    pub fn new(width: u32, height: u32) -> Self {
+        Frame {
+            width,
+            height,
+            pixels: vec![Vec3::ZERO; width as usize * height as usize],
+        }
+    }
+
+    /// 8-bit sRGB bytes after multiplying by `exposure` and tone mapping.
+    pub fn to_srgb8(&self, exposure: f32, tone: ToneMap) -> Vec<u8> {
+        self.pixels
+            .iter()
+            .flat_map(|p| p.to_array())
+            .map(|v| (srgb_encode(tone.apply(v * exposure)) * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
+            .collect()
+    }
+
+    /// Writes the frame to `path` (.png or .exr), atomically.
+    pub fn write(&self, path: &Path, exposure: f32, tone: ToneMap) -> Result<()> {
+        let kind = ImageKind::of(path)?;
+        let encode_error = |e: image::ImageError| Error::Image {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        write_atomically(path, |w| match kind {
+            ImageKind::Png => image::codecs::png::PngEncoder::new(w)
+                .write_image(
+                    &self.to_srgb8(exposure, tone),
+                    self.width,
+                    self.height,
+                    ExtendedColorType::Rgb8,
+                )
+                .map_err(encode_error),
+            ImageKind::Exr => {
+                let floats: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
+                image::codecs::openexr::OpenExrEncoder::new(w)
+                    .write_image(
+                        bytemuck::cast_slice(&floats),
+                        self.width,
+                        self.height,
+                        ExtendedColorType::Rgb32F,
+                    )
+                    .map_err(encode_error)
+            }
+        })
+    }
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Writes `path` through `fill` into a temporary file beside it, then renames it into
+/// place; on any error the temporary file is removed and `path` is left untouched.
+pub fn write_atomically(
+    path: &Path,
+    fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
+) -> Result<()> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| Error::Invalid(format!("{}: not a file name", path.display())))?;
+    let tmp: PathBuf = path.with_file_name(format!(
+        ".{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| {
+        let file = File::create(&tmp).map_err(io(&tmp))?;
+        let mut w = BufWriter::new(file);
+        fill(&mut w)?;
+        w.flush().map_err(io(&tmp))?;
+        w.get_ref().sync_all().map_err(io(&tmp))?;
+        std::fs::rename(&tmp, path).map_err(io(path))
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tone_maps_are_monotone_and_bounded() {
+        for t in [ToneMap::Clamp, ToneMap::Exponential, ToneMap::Aces] {
+            let mut prev = -1.0;
+            for k in 0..100 {
+                let v = t.apply(k as f32 * 0.1);
+                assert!((0.0..=1.0).contains(&v) && v >= prev, "{t:?}");
+                prev = v;
+            }
+        }
+        assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
+        assert!((srgb_encode(0.5) - 0.7354).abs() < 1e-3);
+    }
+
+    #[test]
+    fn png_and_exr_round_trip_and_no_temporary_is_left() {
+        let dir = std::env::temp_dir().join(format!("atmo-image-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut f = Frame::new(3, 2);
+        f.pixels[4] = Vec3::new(0.5, 1.0, 2.0);
+        f.write(&dir.join("a.png"), 1.0, ToneMap::Clamp).unwrap();
+        f.write(&dir.join("a.exr"), 1.0, ToneMap::Clamp).unwrap();
+        let png = image::open(dir.join("a.png")).unwrap().to_rgb8();
+        assert_eq!((png.width(), png.height()), (3, 2));
+        assert_eq!(png.get_pixel(1, 1).0, [188, 255, 255]);
+        let exr = image::open(dir.join("a.exr")).unwrap().to_rgb32f();
+        assert_eq!(exr.get_pixel(1, 1).0, [0.5, 1.0, 2.0]);
+        assert!(f.write(&dir.join("a.jpg"), 1.0, ToneMap::Clamp).is_err());
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn oversized_frames_are_refused_before_allocation() {
+        assert!(Frame::check_size(0, 10).is_err());
+        assert!(Frame::check_size(16384, 16384)
+            .unwrap_err()
+            .to_string()
+            .contains("budget"));
+        assert!(Frame::check_size(1920, 1080).is_ok());
+    }
+}

@@ -1,0 +1,19 @@
+//! atmo renders light scattered in the air.
+//!
+//! - [`atmosphere`]: the medium (planet, densities, phase functions, optical depth,
+//!   spectrum to colour).
+//! - [`sky`]: the sky with multiple scattering by sampling shells and scattering maps
+//!   (Iwasaki, Yanagita, Dobashi, Nishita 2004), cited as `sky (n)`.
+//! - [`reference`]: slow, obviously-correct integrators the fast methods are tested
+//!   against.
+//! - [`image`]: float frame buffers, exposure, tone mapping, PNG/EXR written atomically.
+
+pub mod atmosphere;
+pub mod error;
+pub mod image;
+pub mod quadrature;
+pub mod reference;
+pub mod sky;
+
+pub use atmosphere::Atmosphere;
+pub use error::{Error, Result};

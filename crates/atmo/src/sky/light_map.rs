@@ -1,0 +1,319 @@
+//! The light maps: what lights each point on a sampling shell.
+//!
+//! - [`LightMap`] is sky (6): sunlight reaching a shell, `I_sun exp(-tau)`, zero where
+//!   the sun has set behind the planet.
+//! - [`ScatteredLightMap`] is the first-order light map `I_t(P_k, omega_i)` of sky
+//!   (10)-(11): scattered light arriving at a shell point from `N_omega` directions,
+//!   and, built the same way from it, the light of each higher order.
+//!
+//! Both are tabulated over the cosine `mu_s` of the sun's zenith angle at the point,
+//! with the directions `omega_i` fixed in the point's local frame (z up, sun in the xz
+//! plane). By the symmetry of a spherical atmosphere about the axis through the sun,
+//! the light at a point depends on nothing else, so these tables do not depend on where
+//! the sun is: moving the sun is only a new lookup. The paper recomputes them per sun.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::maps::{Orders, ScatteringMaps, Sources, SunGeometry};
+use super::shells::SamplingShells;
+use crate::atmosphere::geometry::horizon_mu;
+use crate::atmosphere::{Atmosphere, PhaseFunction, TransmittanceTable};
+use crate::quadrature::fibonacci_sphere;
+
+/// Entries per shell of the sunlight light map.
+const LIGHT_MAP_SIZE: usize = 512;
+
+/// Sunlight `I_sun exp(-tau)` reaching each shell, over the sun's zenith cosine, sky (6).
+#[derive(Debug, Clone)]
+pub struct LightMap {
+    channels: usize,
+    /// Per shell, the lowest `mu_s` with any sunlight (the disc's last edge setting).
+    mu_low: Vec<f64>,
+    /// `[shell][entry][channel]`; entry `k` is at `mu_s = mu_low + (1 - mu_low) x^2`,
+    /// `x = k / (size - 1)`, which puts the entries where transmittance changes
+    /// fastest, just above the horizon.
+    values: Vec<f32>,
+}
+
+impl LightMap {
+    /// The light map of every shell, from the transmittance table.
+    pub fn new(
+        atmosphere: &Atmosphere,
+        table: &TransmittanceTable,
+        shells: &SamplingShells,
+    ) -> Self {
+        let n = atmosphere.channels();
+        let mu_low: Vec<f64> = shells
+            .radii()
+            .iter()
+            .map(|&r| {
+                let half_disc = atmosphere.bottom_radius_m / r * atmosphere.sun_angular_radius;
+                (horizon_mu(r, atmosphere.bottom_radius_m) - 1.01 * half_disc).max(-1.0)
+            })
+            .collect();
+        let mut values = vec![0.0f32; shells.len() * LIGHT_MAP_SIZE * n];
+        values
+            .par_chunks_mut(LIGHT_MAP_SIZE * n)
+            .zip(shells.radii().par_iter().zip(&mu_low))
+            .for_each(|(shell, (&r, &low))| {
+                for (k, entry) in shell.chunks_mut(n).enumerate() {
+                    let x = k as f64 / (LIGHT_MAP_SIZE - 1) as f64;
+                    table.to_sun(r, low + (1.0 - low) * x * x, entry);
+                    for (v, e) in entry.iter_mut().zip(&atmosphere.solar_irradiance) {
+                        *v *= *e as f32;
+                    }
+                }
+            });
+        LightMap {
+            channels: n,
+            mu_low,
+            values,
+        }
+    }
+
+    /// Sunlight per channel reaching shell `shell` with the sun at zenith cosine `mu_s`.
+    #[inline]
+    pub fn sample(&self, shell: usize, mu_s: f64, out: &mut [f32]) {
+        let low = self.mu_low[shell];
+        if mu_s <= low {
+            out.fill(0.0);
+            return;
+        }
+        let x = ((mu_s - low) / (1.0 - low)).min(1.0).sqrt() * (LIGHT_MAP_SIZE - 1) as f64;
+        let k = (x as usize).min(LIGHT_MAP_SIZE - 2);
+        let f = (x - k as f64) as f32;
+        let n = self.channels;
+        let base = (shell * LIGHT_MAP_SIZE + k) * n;
+        let (a, b) = (
+            &self.values[base..base + n],
+            &self.values[base + n..base + 2 * n],
+        );
+        for c in 0..n {
+            out[c] = a[c] + (b[c] - a[c]) * f;
+        }
+    }
+}
+
+/// Bins over the sun's zenith cosine: uniform in `x` in [-1, 1] with
+/// `mu_s = x (a + (1 - a)|x|)`, three times denser near the horizon than at the zenith.
+#[derive(Debug, Clone, Copy)]
+struct SunBins {
+    count: usize,
+}
+
+impl SunBins {
+    const A: f64 = 0.3;
+
+    fn mu_s(&self, b: usize) -> f64 {
+        let x = 2.0 * b as f64 / (self.count - 1) as f64 - 1.0;
+        x * (Self::A + (1.0 - Self::A) * x.abs())
+    }
+
+    /// Fractional bin of `mu_s`.
+    fn coordinate(&self, mu_s: f64) -> f64 {
+        let m = mu_s.abs().min(1.0);
+        let a = Self::A;
+        let x = (-a + (a * a + 4.0 * (1.0 - a) * m).sqrt()) / (2.0 * (1.0 - a));
+        (0.5 * (x.copysign(mu_s) + 1.0)) * (self.count - 1) as f64
+    }
+
+    fn lerp(&self, mu_s: f64) -> (usize, f32) {
+        let x = self.coordinate(mu_s);
+        let b = (x as usize).min(self.count - 2);
+        (b, (x - b as f64) as f32)
+    }
+}
+
+/// Number of moments that reduce a Rayleigh-phase integral: the integral of the light
+/// itself and of `x^2`, `y^2`, `z^2` and `xz` times it.
+const MOMENTS: usize = 5;
+
+/// The light map of scattered light of one order, `I_t(P_k, omega_i)` of sky (10)-(11):
+/// radiance arriving at each shell, for each sun zenith bin, from each of `N_omega`
+/// directions of a spherical Fibonacci set in the local frame.
+#[derive(Debug, Clone)]
+pub struct ScatteredLightMap {
+    channels: usize,
+    bins: SunBins,
+    directions: Vec<DVec3>,
+    /// `[shell][bin][direction][channel]`, radiance.
+    values: Vec<f32>,
+    /// `[shell][bin][moment][channel]`: the quadrature of sky (11) reduced to moments,
+    /// radiance x sr.
+    moments: Vec<f32>,
+}
+
+impl ScatteredLightMap {
+    /// The directions `omega_i` of the second-order quadrature, with the rays from every
+    /// shell along each of them (`rays[shell * N_omega + i]`): sun-independent geometry.
+    pub fn rays(
+        atmosphere: &Atmosphere,
+        shells: &SamplingShells,
+        directions: usize,
+    ) -> (Vec<DVec3>, ScatteringMaps) {
+        let dirs = fibonacci_sphere(directions);
+        let rays: Vec<(usize, f64)> = (0..shells.len())
+            .flat_map(|j| dirs.iter().map(move |d| (j, d.z)))
+            .collect();
+        let maps = ScatteringMaps::new(atmosphere, shells, &rays);
+        (dirs, maps)
+    }
+
+    /// The light map of scattering order `order`, integrating along `rays` the light
+    /// that `sources` provide for that order.
+    pub fn new(
+        order: u32,
+        directions: &[DVec3],
+        rays: &ScatteringMaps,
+        sources: &Sources,
+        sun_bins: usize,
+    ) -> Self {
+        let n = sources.atmosphere.channels();
+        let bins = SunBins { count: sun_bins };
+        let nd = directions.len();
+        let per_shell = sun_bins * nd * n;
+        let mut values = vec![0.0f32; sources.shells.len() * per_shell];
+        values
+            .par_chunks_mut(per_shell)
+            .enumerate()
+            .for_each(|(j, shell)| {
+                for b in 0..sun_bins {
+                    let mu_s = bins.mu_s(b);
+                    let sun = DVec3::new((1.0 - mu_s * mu_s).max(0.0).sqrt(), 0.0, mu_s);
+                    for (i, d) in directions.iter().enumerate() {
+                        let out = &mut shell[(b * nd + i) * n..(b * nd + i + 1) * n];
+                        let geometry = SunGeometry {
+                            mu_s,
+                            nu: d.dot(sun),
+                        };
+                        let orders = Orders {
+                            first: order,
+                            last: order,
+                        };
+                        rays.radiance(j * nd + i, geometry, sources, orders, out);
+                    }
+                }
+            });
+        let weight = 4.0 * std::f64::consts::PI / nd as f64;
+        let mut moments = vec![0.0f32; sources.shells.len() * sun_bins * MOMENTS * n];
+        for (cell, m) in values.chunks(nd * n).zip(moments.chunks_mut(MOMENTS * n)) {
+            for (d, light) in directions.iter().zip(cell.chunks(n)) {
+                let f = [1.0, d.x * d.x, d.y * d.y, d.z * d.z, d.x * d.z];
+                for (k, fk) in f.iter().enumerate() {
+                    for c in 0..n {
+                        m[k * n + c] += (weight * fk) as f32 * light[c];
+                    }
+                }
+            }
+        }
+        ScatteredLightMap {
+            channels: n,
+            bins,
+            directions: directions.to_vec(),
+            values,
+            moments,
+        }
+    }
+
+    /// `integral of phase(omega . d) I_t(omega) d omega` over the sphere, sky (11), per
+    /// channel, at shell `shell` with the sun at `mu_s`, toward the local direction `d`
+    /// (the direction the light leaves in, reversed). For the Rayleigh phase, which is
+    /// `a + b (omega . d)^2`, the sum over the directions is exactly a sum of five moments.
+    pub fn inscatter(
+        &self,
+        shell: usize,
+        mu_s: f64,
+        d: DVec3,
+        phase: &PhaseFunction,
+        out: &mut [f32],
+    ) {
+        let n = self.channels;
+        let (b, f) = self.bins.lerp(mu_s);
+        if phase.is_rayleigh() {
+            let cell = |b: usize| {
+                let at = ((shell * self.bins.count + b) * MOMENTS) * n;
+                &self.moments[at..at + MOMENTS * n]
+            };
+            let (m0, m1) = (cell(b), cell(b + 1));
+            let k = 3.0 / (16.0 * std::f64::consts::PI);
+            let g = [
+                k,
+                k * d.x * d.x,
+                k * d.y * d.y,
+                k * d.z * d.z,
+                2.0 * k * d.x * d.z,
+            ]
+            .map(|v| v as f32);
+            for c in 0..n {
+                let mut sum = 0.0;
+                for (i, gi) in g.iter().enumerate() {
+                    let v = m0[i * n + c] + (m1[i * n + c] - m0[i * n + c]) * f;
+                    sum += gi * v;
+                }
+                out[c] = sum;
+            }
+            return;
+        }
+        // Any other phase: the direct sum, each direction paired with its mirror image
+        // across the sun's vertical plane (the light there is the same).
+        out.fill(0.0);
+        let nd = self.directions.len();
+        let weight = (2.0 * std::f64::consts::PI / nd as f64) as f32;
+        let at = |b: usize| (shell * self.bins.count + b) * nd * n;
+        let (v0, v1) = (
+            &self.values[at(b)..at(b) + nd * n],
+            &self.values[at(b + 1)..at(b + 1) + nd * n],
+        );
+        for (i, w) in self.directions.iter().enumerate() {
+            let mirrored = DVec3::new(w.x, -w.y, w.z);
+            let p = weight * (phase.eval(w.dot(d)) + phase.eval(mirrored.dot(d))) as f32;
+            for c in 0..n {
+                let v = v0[i * n + c] + (v1[i * n + c] - v0[i * n + c]) * f;
+                out[c] += p * v;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sun_bins_invert() {
+        let bins = SunBins { count: 64 };
+        for b in 0..64 {
+            let x = bins.coordinate(bins.mu_s(b));
+            assert!((x - b as f64).abs() < 1e-9, "{b}: {x}");
+        }
+        assert_eq!(bins.mu_s(0), -1.0);
+        assert_eq!(bins.mu_s(63), 1.0);
+    }
+
+    #[test]
+    fn light_map_matches_the_transmittance_table() {
+        let a = Atmosphere::earth();
+        let table = TransmittanceTable::new(&a);
+        let shells = SamplingShells::new(&a, 40, 1000.0);
+        let map = LightMap::new(&a, &table, &shells);
+        let n = a.channels();
+        let (mut got, mut want) = (vec![0.0; n], vec![0.0; n]);
+        for j in [0, 5, shells.viewpoint(), 39] {
+            let r = shells.radii()[j];
+            for k in 0..200 {
+                let mu_s = -0.2 + 1.2 * k as f64 / 199.0;
+                map.sample(j, mu_s, &mut got);
+                table.to_sun(r, mu_s, &mut want);
+                for c in 0..n {
+                    let w = want[c] * a.solar_irradiance[c] as f32;
+                    assert!(
+                        (got[c] - w).abs() < 0.01 * a.solar_irradiance[c] as f32,
+                        "{j} {mu_s}: {} {w}",
+                        got[c]
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,352 @@
+//! The sky with multiple scattering by sampling shells and scattering maps
+//! (Iwasaki, Yanagita, Dobashi, Nishita 2004, sections 3.1-3.4), cited as `sky (n)`.
+//!
+//! [`SkyModel`] holds everything that does not depend on the sun for one viewpoint
+//! altitude: the sampling shells, the density x attenuation maps of the view rays, and
+//! the light maps; [`SkyModel::skylight_map`] then gives the skylight map for any sun
+//! elevation with lookups only. See docs/sky.md for the derivation and the choices made
+//! beyond the paper.
+
+pub mod frame;
+pub mod grid;
+pub mod light_map;
+pub mod maps;
+pub mod shells;
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use serde::Deserialize;
+
+use crate::atmosphere::geometry::horizon_dip;
+use crate::atmosphere::spectrum::SpectrumToRgb;
+use crate::atmosphere::{Atmosphere, TransmittanceTable};
+use crate::error::{check_range, Error, Result};
+pub use grid::DirectionGrid;
+use light_map::{LightMap, ScatteredLightMap};
+use maps::{Orders, ScatteringMaps, Sources, SunGeometry};
+use shells::SamplingShells;
+
+/// Memory the sky may use for its maps, bytes; larger settings are refused up front.
+pub const MEMORY_BUDGET_BYTES: u64 = 2 << 30;
+
+/// Quality settings of the shell method, with the paper's values as defaults.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SkySettings {
+    /// Sampling shells `K` from the ground to the top (sky 3.2; paper: 40).
+    pub shells: usize,
+    /// View directions per axis `L` of the skylight map (sky (11)-(12); paper: 64).
+    pub directions: usize,
+    /// Directions `N_omega` of the second-order quadrature (sky (11); paper: 15).
+    pub scattering_directions: usize,
+    /// Sun zenith bins of the scattered light maps.
+    pub sun_bins: usize,
+    /// Highest scattering order, 1 to 3 (paper: 2).
+    pub order: u32,
+    /// Whether aerosols scatter the orders above the first (paper: no, Rayleigh only).
+    pub multiple_mie: bool,
+}
+
+impl Default for SkySettings {
+    fn default() -> Self {
+        SkySettings {
+            shells: 40,
+            directions: 64,
+            scattering_directions: 15,
+            sun_bins: 64,
+            order: 2,
+            multiple_mie: false,
+        }
+    }
+}
+
+impl SkySettings {
+    /// Checks every field, and that the maps fit [`MEMORY_BUDGET_BYTES`].
+    pub fn validate(&self, channels: usize) -> Result<()> {
+        check_range("shells", self.shells as f64, 2.0, 2000.0)?;
+        check_range("directions", self.directions as f64, 2.0, 4096.0)?;
+        check_range(
+            "scattering_directions",
+            self.scattering_directions as f64,
+            1.0,
+            4096.0,
+        )?;
+        check_range("sun_bins", self.sun_bins as f64, 4.0, 4096.0)?;
+        check_range("order", self.order as f64, 1.0, 3.0)?;
+        let needed = self.memory_bytes(channels);
+        if needed > MEMORY_BUDGET_BYTES {
+            return Err(Error::OverBudget {
+                what: "the sky maps".into(),
+                needed_bytes: needed,
+                budget_bytes: MEMORY_BUDGET_BYTES,
+                setting: "directions, shells, scattering_directions or sun_bins".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// An upper bound of the bytes the maps of one model take.
+    pub fn memory_bytes(&self, channels: usize) -> u64 {
+        let (k, l, nd, b, n) = (
+            self.shells as u64 + 1,
+            self.directions as u64,
+            self.scattering_directions as u64,
+            self.sun_bins as u64,
+            channels as u64,
+        );
+        // A ray crosses each shell at most twice; a sample holds 2 maps per channel + 18 B.
+        let sample = 8 * n + 18;
+        let view_rays = 2 * l;
+        let light_rays = k * nd;
+        let samples = (view_rays + light_rays) * 2 * k * sample;
+        let light_maps = (self.order as u64 - 1) * k * b * (nd + 5) * n * 4;
+        let skylight = 2 * l * l * n * 4;
+        samples + light_maps + skylight + k * 512 * n * 4
+    }
+}
+
+/// A skylight map: radiance per wavelength over a [`DirectionGrid`], sky (3.2).
+#[derive(Debug, Clone)]
+pub struct SkylightMap {
+    /// The directions the map is sampled at.
+    pub grid: DirectionGrid,
+    /// Wavelengths per entry.
+    pub channels: usize,
+    /// `[elevation][azimuth][channel]`, radiance.
+    pub radiance: Vec<f32>,
+}
+
+impl SkylightMap {
+    /// Radiance per channel at grid point (azimuth index `i`, elevation index `j`).
+    pub fn at(&self, i: usize, j: usize) -> &[f32] {
+        let at = (j * self.grid.azimuths + i) * self.channels;
+        &self.radiance[at..at + self.channels]
+    }
+
+    /// The map converted to linear sRGB, `[elevation][azimuth]`.
+    pub fn to_rgb(&self, colour: &SpectrumToRgb) -> Vec<[f32; 3]> {
+        self.radiance
+            .chunks(self.channels)
+            .map(|l| colour.rgb(l))
+            .collect()
+    }
+}
+
+/// Where the sun is, seen from the viewpoint.
+#[derive(Debug, Clone, Copy)]
+pub struct Sun {
+    /// Elevation above the horizontal, rad, in [-pi/2, pi/2].
+    pub elevation: f64,
+    /// Azimuth, rad, clockwise from north (+y) toward east (+x).
+    pub azimuth: f64,
+}
+
+impl Sun {
+    /// A sun at `elevation_deg` and `azimuth_deg`, validated.
+    pub fn from_degrees(elevation_deg: f64, azimuth_deg: f64) -> Result<Self> {
+        check_range("sun elevation (deg)", elevation_deg, -90.0, 90.0)?;
+        check_range("sun azimuth (deg)", azimuth_deg, -360.0, 360.0)?;
+        Ok(Sun {
+            elevation: elevation_deg.to_radians(),
+            azimuth: azimuth_deg.to_radians(),
+        })
+    }
+}
+
+/// Everything about the sky at one viewpoint altitude that does not depend on the sun.
+pub struct SkyModel {
+    atmosphere: Atmosphere,
+    settings: SkySettings,
+    altitude_m: f64,
+    transmittance: Arc<TransmittanceTable>,
+    shells: SamplingShells,
+    sunlight: LightMap,
+    /// `scattered[n - 1]`: light of order `n` arriving at the shells, n < order.
+    scattered: Vec<ScatteredLightMap>,
+    /// The sky grid (elevation from the horizon's dip to the zenith) and its view rays,
+    /// one per elevation: the maps do not depend on the azimuth.
+    sky_grid: DirectionGrid,
+    sky_rays: ScatteringMaps,
+    /// Rays below the horizon, which end on the ground, for pictures.
+    ground_grid: DirectionGrid,
+    ground_rays: ScatteringMaps,
+}
+
+impl SkyModel {
+    /// The model at `altitude_m` above the ground, with the paper's skylight grid
+    /// (elevations from minus the horizon's dip to the zenith, sky (12), (15)).
+    pub fn new(atmosphere: &Atmosphere, settings: &SkySettings, altitude_m: f64) -> Result<Self> {
+        let table = Arc::new(TransmittanceTable::new(atmosphere));
+        let dip = horizon_dip(atmosphere.bottom_radius_m, altitude_m.max(0.0));
+        Self::with_grid(atmosphere, table, settings, altitude_m, -dip)
+    }
+
+    /// The model with a given transmittance table (shared between altitudes) and a
+    /// skylight grid starting at `min_elevation` rad (a fixed `-phi(h0)` for tables
+    /// over many altitudes, sky (12)).
+    pub fn with_grid(
+        atmosphere: &Atmosphere,
+        transmittance: Arc<TransmittanceTable>,
+        settings: &SkySettings,
+        altitude_m: f64,
+        min_elevation: f64,
+    ) -> Result<Self> {
+        settings.validate(atmosphere.channels())?;
+        let top = atmosphere.thickness_m();
+        if !(altitude_m.is_finite() && (0.0..top).contains(&altitude_m)) {
+            return Err(Error::out_of_range(
+                "altitude (m)",
+                altitude_m,
+                &format!("[0, {top})"),
+            ));
+        }
+        let shells = SamplingShells::new(atmosphere, settings.shells, altitude_m);
+        let sunlight = LightMap::new(atmosphere, &transmittance, &shells);
+        let mut scattered: Vec<ScatteredLightMap> = Vec::new();
+        if settings.order >= 2 {
+            let (dirs, rays) =
+                ScatteredLightMap::rays(atmosphere, &shells, settings.scattering_directions);
+            for order in 1..settings.order {
+                let sources = Sources {
+                    atmosphere,
+                    shells: &shells,
+                    sunlight: &sunlight,
+                    scattered: &scattered,
+                    multiple_mie: settings.multiple_mie,
+                };
+                let map = ScatteredLightMap::new(order, &dirs, &rays, &sources, settings.sun_bins);
+                scattered.push(map);
+            }
+        }
+        let l = settings.directions;
+        let dip = horizon_dip(atmosphere.bottom_radius_m, altitude_m);
+        let sky_grid = DirectionGrid::new(l, l, min_elevation, std::f64::consts::FRAC_PI_2);
+        let ground_grid = DirectionGrid::new(l, l.div_ceil(2), -std::f64::consts::FRAC_PI_2, -dip);
+        let view = shells.viewpoint();
+        let rays_of = |grid: &DirectionGrid| -> Vec<(usize, f64)> {
+            (0..grid.elevations)
+                .map(|j| (view, grid.elevation(j).sin()))
+                .collect()
+        };
+        let sky_rays = ScatteringMaps::new(atmosphere, &shells, &rays_of(&sky_grid));
+        let ground_rays = ScatteringMaps::new(atmosphere, &shells, &rays_of(&ground_grid));
+        Ok(SkyModel {
+            atmosphere: atmosphere.clone(),
+            settings: settings.clone(),
+            altitude_m,
+            transmittance,
+            shells,
+            sunlight,
+            scattered,
+            sky_grid,
+            sky_rays,
+            ground_grid,
+            ground_rays,
+        })
+    }
+
+    /// The viewpoint altitude, m.
+    pub fn altitude_m(&self) -> f64 {
+        self.altitude_m
+    }
+
+    /// The atmosphere the model was built for.
+    pub fn atmosphere(&self) -> &Atmosphere {
+        &self.atmosphere
+    }
+
+    /// The settings the model was built with.
+    pub fn settings(&self) -> &SkySettings {
+        &self.settings
+    }
+
+    /// Total shell crossings of the sky grid's view rays (a measure of the work per map).
+    pub fn view_samples(&self) -> usize {
+        self.sky_rays.samples()
+    }
+
+    /// The skylight map for a sun at `sun_elevation` rad, orders 1 to the model's order:
+    /// the sum over the shells of sky (3), plus sky (11) for the higher orders.
+    pub fn skylight_map(&self, sun_elevation: f64) -> SkylightMap {
+        self.map(
+            &self.sky_grid,
+            &self.sky_rays,
+            sun_elevation,
+            self.all_orders(),
+        )
+    }
+
+    /// The skylight map of the orders `first..=last` only.
+    pub fn skylight_map_orders(&self, sun_elevation: f64, first: u32, last: u32) -> SkylightMap {
+        let last = last.min(self.settings.order);
+        self.map(
+            &self.sky_grid,
+            &self.sky_rays,
+            sun_elevation,
+            Orders { first, last },
+        )
+    }
+
+    /// The map of the directions below the horizon, which end on the ground.
+    pub fn ground_map(&self, sun_elevation: f64) -> SkylightMap {
+        self.map(
+            &self.ground_grid,
+            &self.ground_rays,
+            sun_elevation,
+            self.all_orders(),
+        )
+    }
+
+    fn all_orders(&self) -> Orders {
+        Orders {
+            first: 1,
+            last: self.settings.order,
+        }
+    }
+
+    fn map(
+        &self,
+        grid: &DirectionGrid,
+        rays: &ScatteringMaps,
+        sun_elevation: f64,
+        orders: Orders,
+    ) -> SkylightMap {
+        let n = self.atmosphere.channels();
+        let sources = Sources {
+            atmosphere: &self.atmosphere,
+            shells: &self.shells,
+            sunlight: &self.sunlight,
+            scattered: &self.scattered,
+            multiple_mie: self.settings.multiple_mie,
+        };
+        let (sin_s, cos_s) = sun_elevation.sin_cos();
+        let mut radiance = vec![0.0f32; grid.azimuths * grid.elevations * n];
+        radiance
+            .par_chunks_mut(grid.azimuths * n)
+            .enumerate()
+            .for_each(|(j, row)| {
+                let (sin_e, cos_e) = grid.elevation(j).sin_cos();
+                for (i, out) in row.chunks_mut(n).enumerate() {
+                    let nu = cos_e * grid.azimuth(i).cos() * cos_s + sin_e * sin_s;
+                    rays.radiance(j, SunGeometry { mu_s: sin_s, nu }, &sources, orders, out);
+                }
+            });
+        SkylightMap {
+            grid: grid.clone(),
+            channels: n,
+            radiance,
+        }
+    }
+
+    /// Radiance per wavelength of the sun's disc seen from the viewpoint (no limb
+    /// darkening): irradiance / (pi alpha^2), through the atmosphere.
+    pub fn sun_radiance(&self, sun_elevation: f64, out: &mut [f32]) {
+        let r = self.atmosphere.bottom_radius_m + self.altitude_m;
+        self.transmittance.to_sun(r, sun_elevation.sin(), out);
+        let solid_angle = std::f64::consts::PI * self.atmosphere.sun_angular_radius.powi(2);
+        for (o, e) in out.iter_mut().zip(&self.atmosphere.solar_irradiance) {
+            *o *= (*e / solid_angle) as f32;
+        }
+    }
+}
