@@ -18,12 +18,16 @@ pub fn distance_to_sphere_exit(r: f64, mu: f64, top: f64) -> f64 {
     (-r * mu + disc.max(0.0).sqrt()).max(0.0)
 }
 
+/// A ray whose closest approach to the planet's centre is within this many metres of
+/// the ground grazes it and goes on: the horizon's own direction is the limit from above.
+pub const GRAZE_M: f64 = 1e-3;
+
 /// Distance in metres to the ground sphere of radius `bottom`, or `None` when the ray
-/// misses the ground.
+/// misses (or only grazes, see [`GRAZE_M`]) the ground.
 #[inline]
 pub fn distance_to_ground(r: f64, mu: f64, bottom: f64) -> Option<f64> {
     let disc = r * r * (mu * mu - 1.0) + bottom * bottom;
-    (mu < 0.0 && disc >= 0.0).then(|| (-r * mu - disc.sqrt()).max(0.0))
+    (mu < 0.0 && disc > 2.0 * bottom * GRAZE_M).then(|| (-r * mu - disc.sqrt()).max(0.0))
 }
 
 /// Cosine of the zenith angle of the horizon seen from radius `r`: rays with a smaller

@@ -15,16 +15,17 @@ use crate::quadrature::gauss_legendre;
 pub const EXACT_SEGMENTS: usize = 96;
 
 /// Column densities (Rayleigh, Mie, ozone), in metres at density 1, along the ray from
-/// radius `r` with zenith cosine `mu` over the distance `length` m.
+/// radius `r` with zenith cosine `mu`, from distance `start` over `length` m.
 pub fn column_densities(
     atmosphere: &Atmosphere,
     r: f64,
     mu: f64,
+    start: f64,
     length: f64,
     segments: usize,
 ) -> [f64; CONSTITUENTS] {
     let mut columns = [0.0; CONSTITUENTS];
-    gauss_legendre(0.0, length, segments, |t, w| {
+    gauss_legendre(start, start + length, segments, |t, w| {
         let rho = atmosphere.densities(atmosphere.altitude(radius_at(r, mu, t)));
         for k in 0..CONSTITUENTS {
             columns[k] += w * rho[k];
@@ -37,7 +38,7 @@ pub fn column_densities(
 /// the ground (used only where the ray misses it).
 pub fn column_densities_to_top(atmosphere: &Atmosphere, r: f64, mu: f64) -> [f64; CONSTITUENTS] {
     let length = distance_to_sphere_exit(r, mu, atmosphere.top_radius_m);
-    column_densities(atmosphere, r, mu, length, EXACT_SEGMENTS)
+    column_densities(atmosphere, r, mu, 0.0, length, EXACT_SEGMENTS)
 }
 
 /// Transmittance per wavelength for the column densities `columns`.
@@ -205,8 +206,8 @@ mod tests {
         let a = Atmosphere::earth();
         let r = a.bottom_radius_m + 10.0;
         let length = distance_to_sphere_exit(r, 0.0, a.top_radius_m);
-        let coarse = column_densities(&a, r, 0.0, length, EXACT_SEGMENTS);
-        let fine = column_densities(&a, r, 0.0, length, 4 * EXACT_SEGMENTS);
+        let coarse = column_densities(&a, r, 0.0, 0.0, length, EXACT_SEGMENTS);
+        let fine = column_densities(&a, r, 0.0, 0.0, length, 4 * EXACT_SEGMENTS);
         for k in 0..2 {
             assert!(
                 (coarse[k] / fine[k] - 1.0).abs() < 1e-9,

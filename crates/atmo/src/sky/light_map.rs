@@ -12,6 +12,8 @@
 //! the light at a point depends on nothing else, so these tables do not depend on where
 //! the sun is: moving the sun is only a new lookup. The paper recomputes them per sun.
 
+use std::sync::Arc;
+
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -19,20 +21,25 @@ use super::maps::{Orders, ScatteringMaps, Sources, SunGeometry};
 use super::shells::SamplingShells;
 use crate::atmosphere::geometry::horizon_mu;
 use crate::atmosphere::{Atmosphere, PhaseFunction, TransmittanceTable};
-use crate::quadrature::fibonacci_sphere;
+use crate::quadrature::SymmetricSphereRule;
 
-/// Entries per shell of the sunlight light map.
-const LIGHT_MAP_SIZE: usize = 512;
+/// Entries per shell of the sunlight light map: uniform in `mu_s` from the last light
+/// to the zenith, about 0.001 apart (a tenth of the sun disc's passage through the
+/// horizon), so a lookup is one multiply.
+const LIGHT_MAP_SIZE: usize = 1024;
 
 /// Sunlight `I_sun exp(-tau)` reaching each shell, over the sun's zenith cosine, sky (6).
 #[derive(Debug, Clone)]
 pub struct LightMap {
     channels: usize,
+    /// For samples between shells.
+    table: Arc<TransmittanceTable>,
+    irradiance: Vec<f32>,
     /// Per shell, the lowest `mu_s` with any sunlight (the disc's last edge setting).
     mu_low: Vec<f64>,
-    /// `[shell][entry][channel]`; entry `k` is at `mu_s = mu_low + (1 - mu_low) x^2`,
-    /// `x = k / (size - 1)`, which puts the entries where transmittance changes
-    /// fastest, just above the horizon.
+    /// Per shell, entries per unit of `mu_s`.
+    scale: Vec<f64>,
+    /// `[shell][entry][channel]`; entry `k` is at `mu_s = mu_low + k / scale`.
     values: Vec<f32>,
 }
 
@@ -40,7 +47,7 @@ impl LightMap {
     /// The light map of every shell, from the transmittance table.
     pub fn new(
         atmosphere: &Atmosphere,
-        table: &TransmittanceTable,
+        table: Arc<TransmittanceTable>,
         shells: &SamplingShells,
     ) -> Self {
         let n = atmosphere.channels();
@@ -59,16 +66,36 @@ impl LightMap {
             .for_each(|(shell, (&r, &low))| {
                 for (k, entry) in shell.chunks_mut(n).enumerate() {
                     let x = k as f64 / (LIGHT_MAP_SIZE - 1) as f64;
-                    table.to_sun(r, low + (1.0 - low) * x * x, entry);
+                    table.to_sun(r, low + (1.0 - low) * x, entry);
                     for (v, e) in entry.iter_mut().zip(&atmosphere.solar_irradiance) {
                         *v *= *e as f32;
                     }
                 }
             });
+        let irradiance = atmosphere
+            .solar_irradiance
+            .iter()
+            .map(|&e| e as f32)
+            .collect();
+        let scale = mu_low
+            .iter()
+            .map(|low| (LIGHT_MAP_SIZE - 1) as f64 / (1.0 - low))
+            .collect();
         LightMap {
             channels: n,
+            table,
+            irradiance,
             mu_low,
+            scale,
             values,
+        }
+    }
+
+    /// Sunlight per channel reaching radius `r` (between shells), from the table.
+    pub fn sample_at(&self, r: f64, mu_s: f64, out: &mut [f32]) {
+        self.table.to_sun(r, mu_s, out);
+        for (o, e) in out.iter_mut().zip(&self.irradiance) {
+            *o *= e;
         }
     }
 
@@ -80,7 +107,7 @@ impl LightMap {
             out.fill(0.0);
             return;
         }
-        let x = ((mu_s - low) / (1.0 - low)).min(1.0).sqrt() * (LIGHT_MAP_SIZE - 1) as f64;
+        let x = (mu_s - low) * self.scale[shell];
         let k = (x as usize).min(LIGHT_MAP_SIZE - 2);
         let f = (x - k as f64) as f32;
         let n = self.channels;
@@ -131,12 +158,13 @@ const MOMENTS: usize = 5;
 
 /// The light map of scattered light of one order, `I_t(P_k, omega_i)` of sky (10)-(11):
 /// radiance arriving at each shell, for each sun zenith bin, from each of `N_omega`
-/// directions of a spherical Fibonacci set in the local frame.
+/// directions of a [`SymmetricSphereRule`] in the local frame.
 #[derive(Debug, Clone)]
 pub struct ScatteredLightMap {
     channels: usize,
     bins: SunBins,
-    directions: Vec<DVec3>,
+    /// The directions of each shell, split at its horizon.
+    rules: Vec<SymmetricSphereRule>,
     /// `[shell][bin][direction][channel]`, radiance.
     values: Vec<f32>,
     /// `[shell][bin][moment][channel]`: the quadrature of sky (11) reduced to moments,
@@ -145,33 +173,46 @@ pub struct ScatteredLightMap {
 }
 
 impl ScatteredLightMap {
-    /// The directions `omega_i` of the second-order quadrature, with the rays from every
-    /// shell along each of them (`rays[shell * N_omega + i]`): sun-independent geometry.
+    /// The directions `omega_i` of the second-order quadrature for each shell (split at
+    /// its horizon), with the rays from every shell along each of them
+    /// (`rays[shell * N_omega + i]`): sun-independent geometry.
     pub fn rays(
         atmosphere: &Atmosphere,
         shells: &SamplingShells,
         directions: usize,
-    ) -> (Vec<DVec3>, ScatteringMaps) {
-        let dirs = fibonacci_sphere(directions);
-        let rays: Vec<(usize, f64)> = (0..shells.len())
-            .flat_map(|j| dirs.iter().map(move |d| (j, d.z)))
+        max_interval_m: f64,
+    ) -> (Vec<SymmetricSphereRule>, ScatteringMaps) {
+        let rules: Vec<SymmetricSphereRule> = shells
+            .radii()
+            .iter()
+            .map(|&r| {
+                SymmetricSphereRule::with_about(
+                    directions,
+                    horizon_mu(r, atmosphere.bottom_radius_m),
+                )
+            })
             .collect();
-        let maps = ScatteringMaps::new(atmosphere, shells, &rays);
-        (dirs, maps)
+        let rays: Vec<(usize, f64)> = rules
+            .iter()
+            .enumerate()
+            .flat_map(|(j, rule)| rule.directions.iter().map(move |d| (j, d.z)))
+            .collect();
+        let maps = ScatteringMaps::new(atmosphere, shells, &rays, max_interval_m);
+        (rules, maps)
     }
 
     /// The light map of scattering order `order`, integrating along `rays` the light
     /// that `sources` provide for that order.
     pub fn new(
         order: u32,
-        directions: &[DVec3],
+        rules: &[SymmetricSphereRule],
         rays: &ScatteringMaps,
         sources: &Sources,
         sun_bins: usize,
     ) -> Self {
         let n = sources.atmosphere.channels();
         let bins = SunBins { count: sun_bins };
-        let nd = directions.len();
+        let nd = rules[0].directions.len();
         let per_shell = sun_bins * nd * n;
         let mut values = vec![0.0f32; sources.shells.len() * per_shell];
         values
@@ -181,7 +222,7 @@ impl ScatteredLightMap {
                 for b in 0..sun_bins {
                     let mu_s = bins.mu_s(b);
                     let sun = DVec3::new((1.0 - mu_s * mu_s).max(0.0).sqrt(), 0.0, mu_s);
-                    for (i, d) in directions.iter().enumerate() {
+                    for (i, d) in rules[j].directions.iter().enumerate() {
                         let out = &mut shell[(b * nd + i) * n..(b * nd + i + 1) * n];
                         let geometry = SunGeometry {
                             mu_s,
@@ -195,10 +236,19 @@ impl ScatteredLightMap {
                     }
                 }
             });
-        let weight = 4.0 * std::f64::consts::PI / nd as f64;
         let mut moments = vec![0.0f32; sources.shells.len() * sun_bins * MOMENTS * n];
-        for (cell, m) in values.chunks(nd * n).zip(moments.chunks_mut(MOMENTS * n)) {
-            for (d, light) in directions.iter().zip(cell.chunks(n)) {
+        for (k, (cell, m)) in values
+            .chunks(nd * n)
+            .zip(moments.chunks_mut(MOMENTS * n))
+            .enumerate()
+        {
+            let rule = &rules[k / sun_bins];
+            for ((d, weight), light) in rule
+                .directions
+                .iter()
+                .zip(&rule.weights)
+                .zip(cell.chunks(n))
+            {
                 let f = [1.0, d.x * d.x, d.y * d.y, d.z * d.z, d.x * d.z];
                 for (k, fk) in f.iter().enumerate() {
                     for c in 0..n {
@@ -210,7 +260,7 @@ impl ScatteredLightMap {
         ScatteredLightMap {
             channels: n,
             bins,
-            directions: directions.to_vec(),
+            rules: rules.to_vec(),
             values,
             moments,
         }
@@ -231,11 +281,6 @@ impl ScatteredLightMap {
         let n = self.channels;
         let (b, f) = self.bins.lerp(mu_s);
         if phase.is_rayleigh() {
-            let cell = |b: usize| {
-                let at = ((shell * self.bins.count + b) * MOMENTS) * n;
-                &self.moments[at..at + MOMENTS * n]
-            };
-            let (m0, m1) = (cell(b), cell(b + 1));
             let k = 3.0 / (16.0 * std::f64::consts::PI);
             let g = [
                 k,
@@ -245,29 +290,30 @@ impl ScatteredLightMap {
                 2.0 * k * d.x * d.z,
             ]
             .map(|v| v as f32);
-            for c in 0..n {
-                let mut sum = 0.0;
-                for (i, gi) in g.iter().enumerate() {
-                    let v = m0[i * n + c] + (m1[i * n + c] - m0[i * n + c]) * f;
-                    sum += gi * v;
+            let at = (shell * self.bins.count + b) * MOMENTS * n;
+            let (m0, m1) = self.moments[at..at + 2 * MOMENTS * n].split_at(MOMENTS * n);
+            out.fill(0.0);
+            for (i, gi) in g.iter().enumerate() {
+                let (a, b) = (&m0[i * n..(i + 1) * n], &m1[i * n..(i + 1) * n]);
+                for c in 0..n {
+                    out[c] += gi * (a[c] + (b[c] - a[c]) * f);
                 }
-                out[c] = sum;
             }
             return;
         }
         // Any other phase: the direct sum, each direction paired with its mirror image
         // across the sun's vertical plane (the light there is the same).
         out.fill(0.0);
-        let nd = self.directions.len();
-        let weight = (2.0 * std::f64::consts::PI / nd as f64) as f32;
+        let rule = &self.rules[shell];
+        let nd = rule.directions.len();
         let at = |b: usize| (shell * self.bins.count + b) * nd * n;
         let (v0, v1) = (
             &self.values[at(b)..at(b) + nd * n],
             &self.values[at(b + 1)..at(b + 1) + nd * n],
         );
-        for (i, w) in self.directions.iter().enumerate() {
+        for (i, (w, weight)) in rule.directions.iter().zip(&rule.weights).enumerate() {
             let mirrored = DVec3::new(w.x, -w.y, w.z);
-            let p = weight * (phase.eval(w.dot(d)) + phase.eval(mirrored.dot(d))) as f32;
+            let p = (0.5 * weight * (phase.eval(w.dot(d)) + phase.eval(mirrored.dot(d)))) as f32;
             for c in 0..n {
                 let v = v0[i * n + c] + (v1[i * n + c] - v0[i * n + c]) * f;
                 out[c] += p * v;
@@ -294,9 +340,9 @@ mod tests {
     #[test]
     fn light_map_matches_the_transmittance_table() {
         let a = Atmosphere::earth();
-        let table = TransmittanceTable::new(&a);
+        let table = Arc::new(TransmittanceTable::new(&a));
         let shells = SamplingShells::new(&a, 40, 1000.0);
-        let map = LightMap::new(&a, &table, &shells);
+        let map = LightMap::new(&a, table.clone(), &shells);
         let n = a.channels();
         let (mut got, mut want) = (vec![0.0; n], vec![0.0; n]);
         for j in [0, 5, shells.viewpoint(), 39] {

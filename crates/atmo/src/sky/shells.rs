@@ -5,14 +5,12 @@
 //! the ray crosses them. The shells are denser near the ground, where the air and the
 //! aerosols are dense and thin: altitude `h_k = thickness * (k / (K - 1))^p`.
 
+use crate::atmosphere::geometry::GRAZE_M;
 use crate::atmosphere::Atmosphere;
 
 /// Exponent `p` of the shell spacing: 2 puts the first shell 37 m above the ground and
 /// spaces them 3 km apart at the top, for 40 shells in 60 km.
 pub const SHELL_SPACING_EXPONENT: f64 = 2.0;
-
-/// A ray that touches a shell closer than this (m) is taken to graze it, not cross it.
-const GRAZE_M: f64 = 1e-3;
 
 /// The radii of the sampling shells, increasing, from the ground to the top of the
 /// atmosphere, plus one shell through the viewpoint so that the view rays start on one.
