@@ -1,1 +1,46 @@
-fn main() {}
+//! `atmo`: render light scattered in the air from the command line.
+//!
+//! Exit codes: 0 on success, 2 for bad input (a message names the field and the
+//! allowed range; no output file is left behind), 1 for anything else.
+
+mod bench;
+mod sky;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "atmo",
+    version,
+    about = "Light scattered in the air: sky, light shafts, clouds"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render the sky with multiple scattering (sampling shells and scattering maps).
+    Sky(sky::SkyArgs),
+    /// Time each method against its baseline in the same run and print the ratios.
+    Bench(bench::BenchArgs),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Sky(args) => sky::run(args),
+        Command::Bench(args) => bench::run(args),
+    };
+    if let Err(error) = result {
+        eprintln!("atmo: {error:#}");
+        // Errors of the library are about what the user asked for; others are ours.
+        let code = if error.downcast_ref::<atmo::Error>().is_some() {
+            2
+        } else {
+            1
+        };
+        std::process::exit(code);
+    }
+}

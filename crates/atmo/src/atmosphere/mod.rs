@@ -148,6 +148,8 @@ impl Species {
 /// linearly to 0 at `half_width_m` above and below (the profile of Bruneton 2017).
 #[derive(Debug, Clone, PartialEq)]
 pub struct OzoneLayer {
+    /// Whether the layer absorbs; a disabled layer is kept so `--ozone` can enable it.
+    pub enabled: bool,
     /// Absorption coefficient at the tent's peak, per wavelength, 1/m.
     pub absorption_per_m: Vec<f64>,
     /// Altitude of the peak, m.
@@ -189,7 +191,7 @@ pub struct Atmosphere {
     pub rayleigh: Species,
     /// Aerosols.
     pub mie: Species,
-    /// Ozone, absorbing only; `None` when absent or disabled.
+    /// Ozone, absorbing only; `None` when absent. See [`Atmosphere::absorbing_ozone`].
     pub ozone: Option<OzoneLayer>,
 }
 
@@ -293,12 +295,13 @@ impl Atmosphere {
                 phase: sp.phase,
             })
         };
-        let ozone = match s.ozone.as_ref().filter(|o| o.enabled) {
+        let ozone = match s.ozone.as_ref() {
             None => None,
             Some(o) => {
                 check_range("ozone.center_altitude_m", o.center_altitude_m, 0.0, 1e6)?;
                 check_positive("ozone.half_width_m", o.half_width_m, 1e6)?;
                 Some(OzoneLayer {
+                    enabled: o.enabled,
                     absorption_per_m: o.absorption_per_m.resolve(
                         "ozone.absorption_per_m",
                         l,
@@ -324,17 +327,24 @@ impl Atmosphere {
         })
     }
 
-    /// Switches the ozone layer on with the preset's values (for `--ozone`), or off.
+    /// Switches the ozone layer on or off (for `--ozone`); an error if there is none.
     pub fn with_ozone(mut self, on: bool) -> Result<Self> {
-        if !on {
-            self.ozone = None;
-        } else if self.ozone.is_none() {
-            return Err(Error::Invalid(format!(
-                "atmosphere '{}' has no [ozone] table to switch on; add one to its TOML",
-                self.name
-            )));
+        match self.ozone.as_mut() {
+            Some(layer) => layer.enabled = on,
+            None if on => {
+                return Err(Error::Invalid(format!(
+                    "atmosphere '{}' has no [ozone] table to switch on; add one to its TOML",
+                    self.name
+                )))
+            }
+            None => {}
         }
         Ok(self)
+    }
+
+    /// The ozone layer if it absorbs.
+    pub fn absorbing_ozone(&self) -> Option<&OzoneLayer> {
+        self.ozone.as_ref().filter(|o| o.enabled)
     }
 
     /// Number of wavelengths.
@@ -360,7 +370,8 @@ impl Atmosphere {
         [
             self.rayleigh.density(altitude_m),
             self.mie.density(altitude_m),
-            self.ozone.as_ref().map_or(0.0, |o| o.density(altitude_m)),
+            self.absorbing_ozone()
+                .map_or(0.0, |o| o.density(altitude_m)),
         ]
     }
 
@@ -371,8 +382,7 @@ impl Atmosphere {
         self.rayleigh.extinction_per_m[c] * columns[0]
             + self.mie.extinction_per_m[c] * columns[1]
             + self
-                .ozone
-                .as_ref()
+                .absorbing_ozone()
                 .map_or(0.0, |o| o.absorption_per_m[c] * columns[2])
     }
 }
@@ -388,7 +398,16 @@ mod tests {
         assert_eq!(earth.bottom_radius_m, 6_360_000.0);
         assert_eq!(earth.top_radius_m, 6_420_000.0);
         assert_ne!(earth.mie.phase, paper.mie.phase);
-        assert!(earth.ozone.is_none(), "ozone is off by default");
+        assert!(earth.absorbing_ozone().is_none(), "ozone is off by default");
+        let with = earth.clone().with_ozone(true).unwrap();
+        // Ozone absorbs most in the orange (Chappuis band), not in the blue.
+        let o = with.absorbing_ozone().unwrap();
+        let peak = o.absorption_per_m.iter().cloned().fold(0.0, f64::max);
+        assert!(o.absorption_per_m[0] < 0.5 * peak && peak > 1e-6);
+        assert!(Atmosphere::preset("paper")
+            .unwrap()
+            .with_ozone(true)
+            .is_err());
         // Rayleigh scattering follows lambda^-4 closely in both presets.
         for a in [&earth, &paper] {
             let (l0, l1) = (a.wavelengths_nm[0], *a.wavelengths_nm.last().unwrap());

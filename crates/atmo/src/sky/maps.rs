@@ -204,7 +204,6 @@ impl ScatteringMaps {
         // linear, and density x attenuation is integrated exactly, which also covers
         // the densest point of a ray that dips between two crossings of one shell.
         let mut columns = [0.0f64; CONSTITUENTS];
-        let mut tau = [0.0f64; MAX_CHANNELS];
         for i in 1..m {
             let (ta, tb) = (maps.distance[i - 1], maps.distance[i]);
             let dt = tb - ta;
@@ -231,14 +230,11 @@ impl ScatteringMaps {
                 columns[k] += step[k];
             }
         }
-        for (c, t) in tau[..n].iter_mut().enumerate() {
-            *t = atmosphere.optical_depth(&columns, c);
-        }
         if on_ground {
             maps.ground_distance = maps.distance[m - 1];
-            for c in 0..n {
-                maps.ground[c] =
-                    (atmosphere.ground_albedo / std::f64::consts::PI * (-tau[c]).exp()) as f32;
+            for (c, g) in maps.ground.iter_mut().enumerate() {
+                let tau = atmosphere.optical_depth(&columns, c);
+                *g = (atmosphere.ground_albedo / std::f64::consts::PI * (-tau).exp()) as f32;
             }
         }
         maps

@@ -27,6 +27,9 @@ use light_map::{LightMap, ScatteredLightMap};
 use maps::{Orders, ScatteringMaps, Sources, SunGeometry};
 use shells::SamplingShells;
 
+/// How far below the horizon's dip the ground map starts, rad (0.006 deg).
+const GROUND_EDGE_RAD: f64 = 1e-4;
+
 /// Memory the sky may use for its maps, bytes; larger settings are refused up front.
 pub const MEMORY_BUDGET_BYTES: u64 = 2 << 30;
 
@@ -235,7 +238,11 @@ impl SkyModel {
         let l = settings.directions;
         let dip = horizon_dip(atmosphere.bottom_radius_m, altitude_m);
         let sky_grid = DirectionGrid::new(l, l, min_elevation, std::f64::consts::FRAC_PI_2);
-        let ground_grid = DirectionGrid::new(l, l.div_ceil(2), -std::f64::consts::FRAC_PI_2, -dip);
+        // The ground grid's top row is the horizon approached from below: rays that hit
+        // the ground, not the grazing ray that escapes to the sky.
+        let ground_top = -dip - GROUND_EDGE_RAD;
+        let ground_grid =
+            DirectionGrid::new(l, l.div_ceil(2), -std::f64::consts::FRAC_PI_2, ground_top);
         let view = shells.viewpoint();
         let rays_of = |grid: &DirectionGrid| -> Vec<(usize, f64)> {
             (0..grid.elevations)
@@ -327,13 +334,7 @@ impl SkyModel {
         orders: Orders,
     ) -> SkylightMap {
         let n = self.atmosphere.channels();
-        let sources = Sources {
-            atmosphere: &self.atmosphere,
-            shells: &self.shells,
-            sunlight: &self.sunlight,
-            scattered: &self.scattered,
-            multiple_mie: self.settings.multiple_mie,
-        };
+        let sources = self.sources();
         let (sin_s, cos_s) = sun_elevation.sin_cos();
         let mut radiance = vec![0.0f32; grid.azimuths * grid.elevations * n];
         radiance
@@ -350,6 +351,49 @@ impl SkyModel {
             grid: grid.clone(),
             channels: n,
             radiance,
+        }
+    }
+
+    /// Radiance per wavelength along arbitrary directions, given as (azimuth from the
+    /// sun, elevation) in rad, by the same shell sums as the map but without
+    /// interpolation between grid directions. Directions below the horizon end on the
+    /// ground. Returns one spectrum per direction.
+    pub fn radiance_along(&self, sun_elevation: f64, directions: &[(f64, f64)]) -> Vec<Vec<f32>> {
+        let view = self.shells.viewpoint();
+        let rays: Vec<(usize, f64)> = directions.iter().map(|&(_, e)| (view, e.sin())).collect();
+        let maps = ScatteringMaps::new(
+            &self.atmosphere,
+            &self.shells,
+            &rays,
+            self.settings.max_interval_m,
+        );
+        let sources = self.sources();
+        let (sin_s, cos_s) = sun_elevation.sin_cos();
+        directions
+            .par_iter()
+            .enumerate()
+            .map(|(k, &(azimuth, elevation))| {
+                let nu = elevation.cos() * azimuth.cos() * cos_s + elevation.sin() * sin_s;
+                let mut out = vec![0.0f32; self.atmosphere.channels()];
+                maps.radiance(
+                    k,
+                    SunGeometry { mu_s: sin_s, nu },
+                    &sources,
+                    self.all_orders(),
+                    &mut out,
+                );
+                out
+            })
+            .collect()
+    }
+
+    fn sources(&self) -> Sources<'_> {
+        Sources {
+            atmosphere: &self.atmosphere,
+            shells: &self.shells,
+            sunlight: &self.sunlight,
+            scattered: &self.scattered,
+            multiple_mie: self.settings.multiple_mie,
         }
     }
 

@@ -1,0 +1,261 @@
+//! `atmo sky`: a picture of the sky, or its radiance along given directions.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Result;
+use atmo::image::{Frame, ImageKind, ToneMap};
+use atmo::sky::frame::{Projection, SkyPicture, View};
+use atmo::sky::{SkyModel, SkySettings, Sun};
+use atmo::{Atmosphere, Error};
+use clap::{Args, ValueEnum};
+
+#[derive(Args)]
+pub struct SkyArgs {
+    /// Sun elevation above the horizontal, degrees, in [-90, 90].
+    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
+    sun_elevation: f64,
+    /// Sun azimuth, degrees clockwise from north.
+    #[arg(long, default_value_t = 180.0, allow_negative_numbers = true)]
+    sun_azimuth: f64,
+    /// Viewpoint altitude above the ground, metres, below the top of the atmosphere.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    altitude: f64,
+    /// Highest scattering order: 1, 2 (the paper) or 3.
+    #[arg(long, default_value_t = 2)]
+    order: u32,
+    /// Image width, pixels.
+    #[arg(long, default_value_t = 960)]
+    width: u32,
+    /// Image height, pixels.
+    #[arg(long, default_value_t = 540)]
+    height: u32,
+    /// Camera azimuth, degrees clockwise from north (default: toward the sun).
+    #[arg(long, allow_negative_numbers = true)]
+    yaw: Option<f64>,
+    /// Camera elevation, degrees.
+    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
+    pitch: f64,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 70.0)]
+    fov: f64,
+    /// The whole dome as a fisheye (zenith at the centre, north up, east left).
+    #[arg(long)]
+    fisheye: bool,
+    /// Atmosphere TOML file (see docs/atmospheres.md); default: the `--preset`.
+    #[arg(long, value_name = "FILE.toml")]
+    atmosphere: Option<PathBuf>,
+    /// Embedded atmosphere: `earth` (measured coefficients) or `paper`.
+    #[arg(long, default_value = "earth")]
+    preset: String,
+    /// Switch on the atmosphere's ozone layer.
+    #[arg(long)]
+    ozone: bool,
+    /// Sampling shells (paper: 40).
+    #[arg(long, default_value_t = SkySettings::default().shells)]
+    shells: usize,
+    /// View directions per axis of the skylight map (paper: 64).
+    #[arg(long, default_value_t = SkySettings::default().directions)]
+    directions: usize,
+    /// Directions of the higher-order quadrature (paper: 15).
+    #[arg(long, default_value_t = SkySettings::default().scattering_directions)]
+    scattering_directions: usize,
+    /// Let aerosols scatter the higher orders too (the paper: Rayleigh only).
+    #[arg(long)]
+    multiple_mie: bool,
+    /// Multiplies radiance before the tone map (PNG only); 0.15 suits a day sky,
+    /// raise it for twilight.
+    #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Tone map for PNG output.
+    #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]
+    tone_map: ToneMapArg,
+    /// Leave out the sun's disc.
+    #[arg(long)]
+    no_sun_disc: bool,
+    /// Print the radiance per wavelength (CSV) along the directions of this CSV file
+    /// (header `azimuth_deg,elevation_deg`, azimuth from the sun's) instead of a picture.
+    #[arg(long, value_name = "DIRS.csv", conflicts_with = "output")]
+    probe: Option<PathBuf>,
+    /// Output picture: .png (8-bit sRGB) or .exr (linear radiance).
+    #[arg(short, long, value_name = "FILE", required_unless_present = "probe")]
+    output: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ToneMapArg {
+    Exponential,
+    Aces,
+    Clamp,
+}
+
+impl From<ToneMapArg> for ToneMap {
+    fn from(t: ToneMapArg) -> Self {
+        match t {
+            ToneMapArg::Exponential => ToneMap::Exponential,
+            ToneMapArg::Aces => ToneMap::Aces,
+            ToneMapArg::Clamp => ToneMap::Clamp,
+        }
+    }
+}
+
+/// The atmosphere from `--atmosphere` or `--preset`, with `--ozone` applied.
+pub fn load_atmosphere(file: Option<&Path>, preset: &str, ozone: bool) -> atmo::Result<Atmosphere> {
+    let atmosphere = match file {
+        Some(path) => Atmosphere::from_toml_file(path)?,
+        None => Atmosphere::preset(preset)?,
+    };
+    if ozone {
+        atmosphere.with_ozone(true)
+    } else {
+        Ok(atmosphere)
+    }
+}
+
+pub fn run(args: SkyArgs) -> Result<()> {
+    // Everything is validated before any work or any file is written.
+    let atmosphere = load_atmosphere(args.atmosphere.as_deref(), &args.preset, args.ozone)?;
+    let settings = SkySettings {
+        shells: args.shells,
+        directions: args.directions,
+        scattering_directions: args.scattering_directions,
+        order: args.order,
+        multiple_mie: args.multiple_mie,
+        ..SkySettings::default()
+    };
+    settings.validate(atmosphere.channels())?;
+    let sun = Sun::from_degrees(args.sun_elevation, args.sun_azimuth)?;
+    if !(args.exposure.is_finite() && args.exposure > 0.0) {
+        return Err(Error::out_of_range("exposure", args.exposure, "(0, inf)").into());
+    }
+    let probe = args.probe.as_deref().map(read_directions).transpose()?;
+    let view = match &args.output {
+        Some(path) => {
+            ImageKind::of(path)?;
+            Frame::check_size(args.width, args.height)?;
+            let projection = if args.fisheye {
+                Projection::Fisheye
+            } else {
+                Projection::perspective_degrees(
+                    args.yaw.unwrap_or(args.sun_azimuth),
+                    args.pitch,
+                    args.fov,
+                )?
+            };
+            Some(View {
+                width: args.width,
+                height: args.height,
+                projection,
+                sun_disc: !args.no_sun_disc,
+            })
+        }
+        None => None,
+    };
+    let start = Instant::now();
+    let model = SkyModel::new(&atmosphere, &settings, args.altitude)?;
+    if let Some(directions) = probe {
+        return print_probe(&model, &atmosphere, sun, &directions);
+    }
+    let (Some(view), Some(path)) = (view, &args.output) else {
+        unreachable!("clap requires -o without --probe")
+    };
+    let picture = SkyPicture::new(&model, sun);
+    let frame = picture.render(&view);
+    frame.write(path, args.exposure, args.tone_map.into())?;
+    eprintln!(
+        "atmo: {} ({}x{}, {}, order {}) in {:.0} ms",
+        path.display(),
+        view.width,
+        view.height,
+        atmosphere.name,
+        settings.order,
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    Ok(())
+}
+
+/// Reads a probe file: header `azimuth_deg,elevation_deg`, then one direction a line.
+/// Returns (azimuth from the sun, elevation) pairs in degrees.
+fn read_directions(path: &Path) -> atmo::Result<Vec<(f64, f64)>> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let bad = |line: usize, message: String| Error::Parse {
+        path: format!("{}:{line}", path.display()),
+        message,
+    };
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    match lines.next() {
+        Some((_, header)) if header.trim().replace(' ', "") == "azimuth_deg,elevation_deg" => {}
+        _ => {
+            return Err(bad(
+                1,
+                "the first line must be the header `azimuth_deg,elevation_deg`".into(),
+            ))
+        }
+    }
+    let mut directions = Vec::new();
+    for (k, line) in lines {
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let parse = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite());
+        match fields.as_slice() {
+            [a, e] => match (parse(a), parse(e)) {
+                (Some(a), Some(e)) if (-90.0..=90.0).contains(&e) => directions.push((a, e)),
+                (Some(_), Some(e)) => {
+                    return Err(bad(
+                        k + 1,
+                        format!("elevation_deg = {e} is out of range: allowed [-90, 90]"),
+                    ))
+                }
+                _ => return Err(bad(k + 1, format!("expected two numbers, found `{line}`"))),
+            },
+            _ => {
+                return Err(bad(
+                    k + 1,
+                    format!("expected `azimuth_deg,elevation_deg`, found `{line}`"),
+                ))
+            }
+        }
+    }
+    if directions.is_empty() {
+        return Err(bad(1, "no directions after the header".into()));
+    }
+    Ok(directions)
+}
+
+fn print_probe(
+    model: &SkyModel,
+    atmosphere: &Atmosphere,
+    sun: Sun,
+    directions: &[(f64, f64)],
+) -> Result<()> {
+    let rad: Vec<(f64, f64)> = directions
+        .iter()
+        .map(|&(a, e)| {
+            let mut relative = a.to_radians().rem_euclid(std::f64::consts::TAU);
+            if relative > std::f64::consts::PI {
+                relative = std::f64::consts::TAU - relative;
+            }
+            (relative, e.to_radians())
+        })
+        .collect();
+    let spectra = model.radiance_along(sun.elevation, &rad);
+    let mut out = String::from("azimuth_deg,elevation_deg");
+    for l in &atmosphere.wavelengths_nm {
+        out.push_str(&format!(",radiance_{l}nm"));
+    }
+    out.push('\n');
+    for ((a, e), spectrum) in directions.iter().zip(spectra) {
+        out.push_str(&format!("{a},{e}"));
+        for v in spectrum {
+            out.push_str(&format!(",{v:.6e}"));
+        }
+        out.push('\n');
+    }
+    print!("{out}");
+    Ok(())
+}
