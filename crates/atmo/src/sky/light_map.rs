@@ -17,7 +17,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::maps::{Orders, ScatteringMaps, Sources, SunGeometry};
+use super::maps::{lanes, pack, Lane, Orders, ScatteringMaps, Sources, SunGeometry, MAX_CHANNELS};
 use super::shells::SamplingShells;
 use crate::atmosphere::geometry::horizon_mu;
 use crate::atmosphere::{Atmosphere, PhaseFunction, TransmittanceTable};
@@ -39,8 +39,8 @@ pub struct LightMap {
     mu_low: Vec<f64>,
     /// Per shell, entries per unit of `mu_s`.
     scale: Vec<f64>,
-    /// `[shell][entry][channel]`; entry `k` is at `mu_s = mu_low + k / scale`.
-    values: Vec<f32>,
+    /// `[shell][entry][lane]`; entry `k` is at `mu_s = mu_low + k / scale`.
+    values: Vec<Lane>,
 }
 
 impl LightMap {
@@ -59,17 +59,20 @@ impl LightMap {
                 (horizon_mu(r, atmosphere.bottom_radius_m) - 1.01 * half_disc).max(-1.0)
             })
             .collect();
-        let mut values = vec![0.0f32; shells.len() * LIGHT_MAP_SIZE * n];
+        let l = lanes(n);
+        let mut values = vec![Lane::ZERO; shells.len() * LIGHT_MAP_SIZE * l];
         values
-            .par_chunks_mut(LIGHT_MAP_SIZE * n)
+            .par_chunks_mut(LIGHT_MAP_SIZE * l)
             .zip(shells.radii().par_iter().zip(&mu_low))
             .for_each(|(shell, (&r, &low))| {
-                for (k, entry) in shell.chunks_mut(n).enumerate() {
+                let mut entry = vec![0.0f32; n];
+                for (k, out) in shell.chunks_mut(l).enumerate() {
                     let x = k as f64 / (LIGHT_MAP_SIZE - 1) as f64;
-                    table.to_sun(r, low + (1.0 - low) * x, entry);
+                    table.to_sun(r, low + (1.0 - low) * x, &mut entry);
                     for (v, e) in entry.iter_mut().zip(&atmosphere.solar_irradiance) {
                         *v *= *e as f32;
                     }
+                    pack(&entry, out);
                 }
             });
         let irradiance = atmosphere
@@ -91,33 +94,33 @@ impl LightMap {
         }
     }
 
-    /// Sunlight per channel reaching radius `r` (between shells), from the table.
-    pub fn sample_at(&self, r: f64, mu_s: f64, out: &mut [f32]) {
-        self.table.to_sun(r, mu_s, out);
-        for (o, e) in out.iter_mut().zip(&self.irradiance) {
-            *o *= e;
+    /// Sunlight reaching radius `r` (between shells), from the table, packed.
+    pub fn sample_at(&self, r: f64, mu_s: f64, out: &mut [Lane]) {
+        let mut t = [0.0f32; MAX_CHANNELS];
+        let t = &mut t[..self.channels];
+        self.table.to_sun(r, mu_s, t);
+        for (v, e) in t.iter_mut().zip(&self.irradiance) {
+            *v *= e;
         }
+        pack(t, out);
     }
 
-    /// Sunlight per channel reaching shell `shell` with the sun at zenith cosine `mu_s`.
+    /// Sunlight reaching shell `shell` with the sun at zenith cosine `mu_s`, packed.
     #[inline]
-    pub fn sample(&self, shell: usize, mu_s: f64, out: &mut [f32]) {
+    pub fn sample(&self, shell: usize, mu_s: f64, out: &mut [Lane]) {
         let low = self.mu_low[shell];
         if mu_s <= low {
-            out.fill(0.0);
+            out.fill(Lane::ZERO);
             return;
         }
         let x = (mu_s - low) * self.scale[shell];
         let k = (x as usize).min(LIGHT_MAP_SIZE - 2);
         let f = (x - k as f64) as f32;
-        let n = self.channels;
-        let base = (shell * LIGHT_MAP_SIZE + k) * n;
-        let (a, b) = (
-            &self.values[base..base + n],
-            &self.values[base + n..base + 2 * n],
-        );
-        for c in 0..n {
-            out[c] = a[c] + (b[c] - a[c]) * f;
+        let l = out.len();
+        let base = (shell * LIGHT_MAP_SIZE + k) * l;
+        let (a, b) = self.values[base..base + 2 * l].split_at(l);
+        for ((o, a), b) in out.iter_mut().zip(a).zip(b) {
+            *o = *a + (*b - *a) * f;
         }
     }
 }
@@ -167,9 +170,9 @@ pub struct ScatteredLightMap {
     rules: Vec<SymmetricSphereRule>,
     /// `[shell][bin][direction][channel]`, radiance.
     values: Vec<f32>,
-    /// `[shell][bin][moment][channel]`: the quadrature of sky (11) reduced to moments,
-    /// radiance x sr.
-    moments: Vec<f32>,
+    /// `[shell][bin][moment][lane]`: the quadrature of sky (11) reduced to moments,
+    /// radiance x sr, packed.
+    moments: Vec<Lane>,
 }
 
 impl ScatteredLightMap {
@@ -236,13 +239,15 @@ impl ScatteredLightMap {
                     }
                 }
             });
-        let mut moments = vec![0.0f32; sources.shells.len() * sun_bins * MOMENTS * n];
+        let l = lanes(n);
+        let mut moments = vec![Lane::ZERO; sources.shells.len() * sun_bins * MOMENTS * l];
         for (k, (cell, m)) in values
             .chunks(nd * n)
-            .zip(moments.chunks_mut(MOMENTS * n))
+            .zip(moments.chunks_mut(MOMENTS * l))
             .enumerate()
         {
             let rule = &rules[k / sun_bins];
+            let mut sums = vec![0.0f32; MOMENTS * n];
             for ((d, weight), light) in rule
                 .directions
                 .iter()
@@ -250,11 +255,14 @@ impl ScatteredLightMap {
                 .zip(cell.chunks(n))
             {
                 let f = [1.0, d.x * d.x, d.y * d.y, d.z * d.z, d.x * d.z];
-                for (k, fk) in f.iter().enumerate() {
-                    for c in 0..n {
-                        m[k * n + c] += (weight * fk) as f32 * light[c];
+                for (fk, sum) in f.iter().zip(sums.chunks_mut(n)) {
+                    for (s, v) in sum.iter_mut().zip(light) {
+                        *s += (weight * fk) as f32 * v;
                     }
                 }
+            }
+            for (sum, out) in sums.chunks(n).zip(m.chunks_mut(l)) {
+                pack(sum, out);
             }
         }
         ScatteredLightMap {
@@ -276,9 +284,10 @@ impl ScatteredLightMap {
         mu_s: f64,
         d: DVec3,
         phase: &PhaseFunction,
-        out: &mut [f32],
+        out: &mut [Lane],
     ) {
         let n = self.channels;
+        let l = out.len();
         let (b, f) = self.bins.lerp(mu_s);
         if phase.is_rayleigh() {
             let k = 3.0 / (16.0 * std::f64::consts::PI);
@@ -290,20 +299,18 @@ impl ScatteredLightMap {
                 2.0 * k * d.x * d.z,
             ]
             .map(|v| v as f32);
-            let at = (shell * self.bins.count + b) * MOMENTS * n;
-            let (m0, m1) = self.moments[at..at + 2 * MOMENTS * n].split_at(MOMENTS * n);
-            out.fill(0.0);
-            for (i, gi) in g.iter().enumerate() {
-                let (a, b) = (&m0[i * n..(i + 1) * n], &m1[i * n..(i + 1) * n]);
-                for c in 0..n {
-                    out[c] += gi * (a[c] + (b[c] - a[c]) * f);
+            let at = (shell * self.bins.count + b) * MOMENTS * l;
+            let (m0, m1) = self.moments[at..at + 2 * MOMENTS * l].split_at(MOMENTS * l);
+            out.fill(Lane::ZERO);
+            for ((gi, a), b) in g.iter().zip(m0.chunks_exact(l)).zip(m1.chunks_exact(l)) {
+                for ((o, a), b) in out.iter_mut().zip(a).zip(b) {
+                    *o += *gi * (*a + (*b - *a) * f);
                 }
             }
             return;
         }
         // Any other phase: the direct sum, each direction paired with its mirror image
         // across the sun's vertical plane (the light there is the same).
-        out.fill(0.0);
         let rule = &self.rules[shell];
         let nd = rule.directions.len();
         let at = |b: usize| (shell * self.bins.count + b) * nd * n;
@@ -311,14 +318,20 @@ impl ScatteredLightMap {
             &self.values[at(b)..at(b) + nd * n],
             &self.values[at(b + 1)..at(b + 1) + nd * n],
         );
-        for (i, (w, weight)) in rule.directions.iter().zip(&rule.weights).enumerate() {
+        let mut sum = [0.0f32; MAX_CHANNELS];
+        for ((w, weight), (a, b)) in rule
+            .directions
+            .iter()
+            .zip(&rule.weights)
+            .zip(v0.chunks_exact(n).zip(v1.chunks_exact(n)))
+        {
             let mirrored = DVec3::new(w.x, -w.y, w.z);
             let p = (0.5 * weight * (phase.eval(w.dot(d)) + phase.eval(mirrored.dot(d)))) as f32;
-            for c in 0..n {
-                let v = v0[i * n + c] + (v1[i * n + c] - v0[i * n + c]) * f;
-                out[c] += p * v;
+            for ((s, a), b) in sum.iter_mut().zip(a).zip(b) {
+                *s += p * (a + (b - a) * f);
             }
         }
+        pack(&sum[..n], out);
     }
 }
 
@@ -344,12 +357,14 @@ mod tests {
         let shells = SamplingShells::new(&a, 40, 1000.0);
         let map = LightMap::new(&a, table.clone(), &shells);
         let n = a.channels();
-        let (mut got, mut want) = (vec![0.0; n], vec![0.0; n]);
+        let (mut lanes_out, mut want) = (vec![Lane::ZERO; lanes(n)], vec![0.0; n]);
         for j in [0, 5, shells.viewpoint(), 39] {
             let r = shells.radii()[j];
             for k in 0..200 {
                 let mu_s = -0.2 + 1.2 * k as f64 / 199.0;
-                map.sample(j, mu_s, &mut got);
+                map.sample(j, mu_s, &mut lanes_out);
+                let mut got = vec![0.0f32; n];
+                crate::sky::maps::unpack_add(&lanes_out, &mut got);
                 table.to_sun(r, mu_s, &mut want);
                 for c in 0..n {
                     let w = want[c] * a.solar_irradiance[c] as f32;
