@@ -123,18 +123,6 @@ pub struct Sources<'a> {
     pub multiple_mie: bool,
 }
 
-struct RayMaps {
-    shell: Vec<u16>,
-    between: Vec<f32>,
-    radius: Vec<f64>,
-    distance: Vec<f64>,
-    mu: Vec<f64>,
-    rayleigh: Vec<Lane>,
-    mie: Vec<Lane>,
-    ground: Vec<f32>,
-    ground_distance: f64,
-}
-
 impl ScatteringMaps {
     /// Maps for rays given as (origin shell, zenith cosine), computed in parallel; the
     /// result does not depend on the thread count. Intervals between crossings longer
@@ -145,17 +133,24 @@ impl ScatteringMaps {
         rays: &[(usize, f64)],
         max_interval_m: f64,
     ) -> Self {
-        let per_ray: Vec<RayMaps> = rays
+        let per_ray: Vec<ScatteringMaps> = rays
             .par_iter()
             .map_init(Vec::new, |crossings, &(origin, mu)| {
                 Self::ray_maps(atmosphere, shells, origin, mu, max_interval_m, crossings)
             })
             .collect();
-        let channels = atmosphere.channels();
-        let mut maps = ScatteringMaps {
+        let mut maps = ScatteringMaps::empty(atmosphere.channels());
+        for ray in per_ray {
+            maps.append(ray);
+        }
+        maps
+    }
+
+    fn empty(channels: usize) -> Self {
+        ScatteringMaps {
             channels,
-            ray_start: Vec::with_capacity(rays.len() + 1),
-            origin_r: rays.iter().map(|&(o, _)| shells.radii()[o]).collect(),
+            ray_start: vec![0],
+            origin_r: Vec::new(),
             shell: Vec::new(),
             between: Vec::new(),
             radius: Vec::new(),
@@ -163,25 +158,29 @@ impl ScatteringMaps {
             mu: Vec::new(),
             rayleigh: Vec::new(),
             mie: Vec::new(),
-            ground: Vec::with_capacity(rays.len() * channels),
-            ground_distance: Vec::with_capacity(rays.len()),
-        };
-        maps.ray_start.push(0);
-        for r in per_ray {
-            maps.shell.extend_from_slice(&r.shell);
-            maps.between.extend_from_slice(&r.between);
-            maps.radius.extend_from_slice(&r.radius);
-            maps.distance.extend_from_slice(&r.distance);
-            maps.mu.extend_from_slice(&r.mu);
-            maps.rayleigh.extend_from_slice(&r.rayleigh);
-            maps.mie.extend_from_slice(&r.mie);
-            maps.ground.extend_from_slice(&r.ground);
-            maps.ground_distance.push(r.ground_distance);
-            maps.ray_start.push(maps.shell.len() as u32);
+            ground: Vec::new(),
+            ground_distance: Vec::new(),
         }
-        maps
     }
 
+    /// Appends the rays of `other` after these.
+    fn append(&mut self, mut other: ScatteringMaps) {
+        let offset = self.shell.len() as u32;
+        self.ray_start
+            .extend(other.ray_start[1..].iter().map(|s| s + offset));
+        self.origin_r.append(&mut other.origin_r);
+        self.shell.append(&mut other.shell);
+        self.between.append(&mut other.between);
+        self.radius.append(&mut other.radius);
+        self.distance.append(&mut other.distance);
+        self.mu.append(&mut other.mu);
+        self.rayleigh.append(&mut other.rayleigh);
+        self.mie.append(&mut other.mie);
+        self.ground.append(&mut other.ground);
+        self.ground_distance.append(&mut other.ground_distance);
+    }
+
+    /// The maps of one ray from shell `origin` with zenith cosine `mu0`.
     fn ray_maps(
         atmosphere: &Atmosphere,
         shells: &SamplingShells,
@@ -189,22 +188,15 @@ impl ScatteringMaps {
         mu0: f64,
         max_interval_m: f64,
         crossings: &mut Vec<(u16, f64)>,
-    ) -> RayMaps {
+    ) -> ScatteringMaps {
         let n = atmosphere.channels();
         let on_ground = shells.crossings(origin, mu0, crossings);
         let radii = shells.radii();
         let r0 = radii[origin];
-        let mut maps = RayMaps {
-            shell: Vec::with_capacity(crossings.len()),
-            between: Vec::with_capacity(crossings.len()),
-            radius: Vec::with_capacity(crossings.len()),
-            distance: Vec::with_capacity(crossings.len()),
-            mu: Vec::with_capacity(crossings.len()),
-            rayleigh: Vec::new(),
-            mie: Vec::new(),
-            ground: vec![0.0; n],
-            ground_distance: -1.0,
-        };
+        let mut maps = ScatteringMaps::empty(n);
+        maps.origin_r.push(r0);
+        maps.ground = vec![0.0; n];
+        maps.ground_distance.push(-1.0);
         let mut push = |shell: u16, between: f32, r: f64, t: f64| {
             maps.shell.push(shell);
             maps.between.push(between);
@@ -228,6 +220,7 @@ impl ScatteringMaps {
             push(j, 0.0, radii[j as usize], t);
         }
         let m = maps.shell.len();
+        maps.ray_start.push(m as u32);
         let (mut rayleigh, mut mie) = (vec![0.0f32; m * n], vec![0.0f32; m * n]);
         // Quadrature weights folded with the density and attenuation maps: over each
         // interval between crossings the light (light map x phase map) is taken as
@@ -268,7 +261,7 @@ impl ScatteringMaps {
             }
         }
         if on_ground {
-            maps.ground_distance = maps.distance[m - 1];
+            maps.ground_distance[0] = maps.distance[m - 1];
             for (c, g) in maps.ground.iter_mut().enumerate() {
                 let tau = atmosphere.optical_depth(&columns, c);
                 *g = (atmosphere.ground_albedo / std::f64::consts::PI * (-tau).exp()) as f32;
