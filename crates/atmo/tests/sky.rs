@@ -263,3 +263,32 @@ fn bad_settings_and_altitudes_are_refused() {
     };
     assert!(err(huge, 0.0).contains("budget"));
 }
+
+#[test]
+fn pictures_are_symmetric_about_the_suns_vertical_plane() {
+    use atmo::sky::frame::{direction_of, SkyPicture};
+    use atmo::sky::Sun;
+    let a = Atmosphere::earth();
+    let model = SkyModel::new(&a, &SkySettings::default(), 3000.0).unwrap();
+    let sun = Sun::from_degrees(12.0, 237.0).unwrap();
+    let picture = SkyPicture::new(&model, sun);
+    for (offset, elevation) in [
+        (10.0f64, 5.0f64),
+        (75.0, 30.0),
+        (150.0, -1.0),
+        (179.0, -20.0),
+    ] {
+        let left = direction_of((237.0 - offset).to_radians(), elevation.to_radians());
+        let right = direction_of((237.0 + offset).to_radians(), elevation.to_radians());
+        let (l, r) = (picture.radiance(left, true), picture.radiance(right, true));
+        assert!(
+            (l - r).abs().max_element() <= 1e-6 * l.max_element(),
+            "{offset} {elevation}: {l} {r}"
+        );
+        assert!(l.min_element() > 0.0);
+    }
+    // And not symmetric about any other plane: toward the sun is brighter than away.
+    let toward = picture.radiance(direction_of(237f64.to_radians(), 0.2), false);
+    let away = picture.radiance(direction_of(57f64.to_radians(), 0.2), false);
+    assert!(toward.x > 1.2 * away.x, "{toward} {away}");
+}
