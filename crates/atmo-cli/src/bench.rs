@@ -147,6 +147,7 @@ fn bench_sky(quick: bool, json: bool) -> Result<()> {
         "shells": settings.shells, "order": settings.order,
         "scattering_directions": settings.scattering_directions, "channels": atmosphere.channels(),
         "threads": rayon::current_num_threads(),
+        "samples_per_map": model.view_samples() * grid.azimuths,
     });
     let reference_info = json!({
         "directions_timed": directions.len(), "scaled_to": grid.azimuths * grid.elevations,

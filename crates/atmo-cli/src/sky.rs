@@ -9,6 +9,7 @@ use atmo::sky::frame::{Projection, SkyPicture, View};
 use atmo::sky::{SkyModel, SkySettings, Sun};
 use atmo::{Atmosphere, Error};
 use clap::{Args, ValueEnum};
+use indicatif::ProgressBar;
 
 #[derive(Args)]
 pub struct SkyArgs {
@@ -152,7 +153,12 @@ pub fn run(args: SkyArgs) -> Result<()> {
         None => None,
     };
     let start = Instant::now();
-    let model = SkyModel::new(&atmosphere, &settings, args.altitude)?;
+    // Light maps take 0.3 s at the defaults and seconds with --order 3 --multiple-mie.
+    let spinner = ProgressBar::new_spinner().with_message("computing the sampling-shell maps");
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    let model = SkyModel::new(&atmosphere, &settings, args.altitude);
+    spinner.finish_and_clear();
+    let model = model?;
     if let Some(directions) = probe {
         return print_probe(&model, &atmosphere, sun, &directions);
     }

@@ -172,11 +172,6 @@ impl TransmittanceTable {
         self.to_top(r, mu_s, out);
         out.iter_mut().for_each(|o| *o *= visible);
     }
-
-    /// Number of wavelengths per entry.
-    pub fn channels(&self) -> usize {
-        self.channels
-    }
 }
 
 #[cfg(test)]

@@ -270,11 +270,6 @@ impl ScatteringMaps {
         maps
     }
 
-    /// Number of rays.
-    pub fn rays(&self) -> usize {
-        self.origin_r.len()
-    }
-
     /// Total number of samples (shell crossings and sub-samples) over all rays.
     pub fn samples(&self) -> usize {
         self.shell.len()

@@ -282,7 +282,8 @@ impl SkyModel {
         &self.settings
     }
 
-    /// Total shell crossings of the sky grid's view rays (a measure of the work per map).
+    /// Samples (shell crossings and sub-samples) along the sky grid's view rays, one
+    /// ray per elevation; a map evaluates each for every azimuth.
     pub fn view_samples(&self) -> usize {
         self.sky_rays.samples()
     }
