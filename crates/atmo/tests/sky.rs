@@ -292,3 +292,34 @@ fn pictures_are_symmetric_about_the_suns_vertical_plane() {
     let away = picture.radiance(direction_of(57f64.to_radians(), 0.2), false);
     assert!(toward.x > 1.2 * away.x, "{toward} {away}");
 }
+
+#[test]
+fn other_atmospheres_match_the_reference_too() {
+    // The paper's model (phase, lambda^-4 power law) and Earth with ozone, which
+    // changes the attenuation but not the scattering.
+    let paper = Atmosphere::preset("paper").unwrap();
+    let ozone = Atmosphere::earth().with_ozone(true).unwrap();
+    let settings = SkySettings {
+        order: 1,
+        ..SkySettings::default()
+    };
+    let points = grid_points(13);
+    for a in [paper, ozone] {
+        for (altitude, sun) in [(0.0, 10.0f64), (7000.0, 45.0), (13000.0, 3.0)] {
+            let model = SkyModel::new(&a, &settings, altitude).unwrap();
+            let e = sun.to_radians();
+            let map = model.skylight_map(e);
+            let reference = ReferenceSky::new(&a, altitude, e, ReferenceSettings::CONVERGED);
+            let want: Vec<Vec<f64>> = points
+                .par_iter()
+                .map(|&(i, j)| reference.radiance(map.grid.azimuth(i), map.grid.elevation(j), 1, 1))
+                .collect();
+            let (err, at) = worst_error(&map, &points, &want);
+            assert!(
+                err < 0.01,
+                "{}: altitude {altitude}, sun {sun}: {err:.4} at {at:?}",
+                a.name
+            );
+        }
+    }
+}
