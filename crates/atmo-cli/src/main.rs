@@ -12,7 +12,7 @@ use clap::{Parser, Subcommand};
 #[command(
     name = "atmo",
     version,
-    about = "Light scattered in the air: sky, light shafts, clouds"
+    about = "Light scattered in the air: the sky with multiple scattering (light shafts and clouds to come)"
 )]
 struct Cli {
     #[command(subcommand)]
