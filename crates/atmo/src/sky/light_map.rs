@@ -31,7 +31,6 @@ const LIGHT_MAP_SIZE: usize = 1024;
 /// Sunlight `I_sun exp(-tau)` reaching each shell, over the sun's zenith cosine, sky (6).
 #[derive(Debug, Clone)]
 pub struct LightMap {
-    channels: usize,
     /// For samples between shells.
     table: Arc<TransmittanceTable>,
     irradiance: Vec<f32>,
@@ -59,33 +58,27 @@ impl LightMap {
                 (horizon_mu(r, atmosphere.bottom_radius_m) - 1.01 * half_disc).max(-1.0)
             })
             .collect();
+        let irradiance: Vec<f32> = atmosphere
+            .solar_irradiance
+            .iter()
+            .map(|&e| e as f32)
+            .collect();
         let l = lanes(n);
         let mut values = vec![Lane::ZERO; shells.len() * LIGHT_MAP_SIZE * l];
         values
             .par_chunks_mut(LIGHT_MAP_SIZE * l)
             .zip(shells.radii().par_iter().zip(&mu_low))
             .for_each(|(shell, (&r, &low))| {
-                let mut entry = vec![0.0f32; n];
                 for (k, out) in shell.chunks_mut(l).enumerate() {
                     let x = k as f64 / (LIGHT_MAP_SIZE - 1) as f64;
-                    table.to_sun(r, low + (1.0 - low) * x, &mut entry);
-                    for (v, e) in entry.iter_mut().zip(&atmosphere.solar_irradiance) {
-                        *v *= *e as f32;
-                    }
-                    pack(&entry, out);
+                    sunlight(&table, &irradiance, r, low + (1.0 - low) * x, out);
                 }
             });
-        let irradiance = atmosphere
-            .solar_irradiance
-            .iter()
-            .map(|&e| e as f32)
-            .collect();
         let scale = mu_low
             .iter()
             .map(|low| (LIGHT_MAP_SIZE - 1) as f64 / (1.0 - low))
             .collect();
         LightMap {
-            channels: n,
             table,
             irradiance,
             mu_low,
@@ -96,13 +89,7 @@ impl LightMap {
 
     /// Sunlight reaching radius `r` (between shells), from the table, packed.
     pub fn sample_at(&self, r: f64, mu_s: f64, out: &mut [Lane]) {
-        let mut t = [0.0f32; MAX_CHANNELS];
-        let t = &mut t[..self.channels];
-        self.table.to_sun(r, mu_s, t);
-        for (v, e) in t.iter_mut().zip(&self.irradiance) {
-            *v *= e;
-        }
-        pack(t, out);
+        sunlight(&self.table, &self.irradiance, r, mu_s, out);
     }
 
     /// Sunlight reaching shell `shell` with the sun at zenith cosine `mu_s`, packed.
@@ -123,6 +110,18 @@ impl LightMap {
             *o = *a + (*b - *a) * f;
         }
     }
+}
+
+/// Sunlight `I_sun exp(-tau)` reaching radius `r` with the sun at zenith cosine `mu_s`,
+/// sky (6), packed into lanes: what every entry of the light map holds.
+fn sunlight(table: &TransmittanceTable, irradiance: &[f32], r: f64, mu_s: f64, out: &mut [Lane]) {
+    let mut t = [0.0f32; MAX_CHANNELS];
+    let t = &mut t[..irradiance.len()];
+    table.to_sun(r, mu_s, t);
+    for (v, e) in t.iter_mut().zip(irradiance) {
+        *v *= e;
+    }
+    pack(t, out);
 }
 
 /// Bins over the sun's zenith cosine: uniform in `x` in [-1, 1] with

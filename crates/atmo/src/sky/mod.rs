@@ -27,6 +27,12 @@ use light_map::{LightMap, ScatteredLightMap};
 use maps::{Orders, ScatteringMaps, Sources, SunGeometry};
 use shells::SamplingShells;
 
+/// Cosine of the angle between the view direction at `azimuth` from the sun and
+/// `elevation`, and the sun at `sun_elevation` (all rad).
+fn cos_to_sun(azimuth: f64, elevation: f64, sun_elevation: f64) -> f64 {
+    elevation.cos() * azimuth.cos() * sun_elevation.cos() + elevation.sin() * sun_elevation.sin()
+}
+
 /// How far below the horizon's dip the ground map starts, rad (0.006 deg).
 const GROUND_EDGE_RAD: f64 = 1e-4;
 
@@ -44,7 +50,7 @@ pub struct SkySettings {
     /// Directions `N_omega` of the second-order quadrature (sky (11); paper: 15),
     /// rounded to the nearest double-Gauss layout. With Rayleigh's five moments they
     /// cost nothing per sun; 128 holds the second order within 2 % of the reference,
-    /// the paper's 15 is up to 10 % off at sunset (docs/sky.md).
+    /// the paper's 15 is up to 7.6 % off at sunset (docs/sky.md).
     pub scattering_directions: usize,
     /// Sun zenith bins of the scattered light maps.
     pub sun_bins: usize,
@@ -336,15 +342,15 @@ impl SkyModel {
     ) -> SkylightMap {
         let n = self.atmosphere.channels();
         let sources = self.sources();
-        let (sin_s, cos_s) = sun_elevation.sin_cos();
+        let sin_s = sun_elevation.sin();
         let mut radiance = vec![0.0f32; grid.azimuths * grid.elevations * n];
         radiance
             .par_chunks_mut(grid.azimuths * n)
             .enumerate()
             .for_each(|(j, row)| {
-                let (sin_e, cos_e) = grid.elevation(j).sin_cos();
+                let elevation = grid.elevation(j);
                 for (i, out) in row.chunks_mut(n).enumerate() {
-                    let nu = cos_e * grid.azimuth(i).cos() * cos_s + sin_e * sin_s;
+                    let nu = cos_to_sun(grid.azimuth(i), elevation, sun_elevation);
                     rays.radiance(j, SunGeometry { mu_s: sin_s, nu }, &sources, orders, out);
                 }
             });
@@ -369,12 +375,12 @@ impl SkyModel {
             self.settings.max_interval_m,
         );
         let sources = self.sources();
-        let (sin_s, cos_s) = sun_elevation.sin_cos();
+        let sin_s = sun_elevation.sin();
         directions
             .par_iter()
             .enumerate()
             .map(|(k, &(azimuth, elevation))| {
-                let nu = elevation.cos() * azimuth.cos() * cos_s + elevation.sin() * sin_s;
+                let nu = cos_to_sun(azimuth, elevation, sun_elevation);
                 let mut out = vec![0.0f32; self.atmosphere.channels()];
                 maps.radiance(
                     k,
