@@ -4,7 +4,9 @@
 //! allowed range; no output file is left behind), 1 for anything else.
 
 mod bench;
+mod precompute;
 mod sky;
+mod sky_table;
 
 use clap::{Parser, Subcommand};
 
@@ -23,6 +25,8 @@ struct Cli {
 enum Command {
     /// Render the sky with multiple scattering (sampling shells and scattering maps).
     Sky(sky::SkyArgs),
+    /// Precompute tables for real-time drawing: `atmo precompute sky -o earth.atmo-sky`.
+    Precompute(precompute::PrecomputeArgs),
     /// Time each method against its baseline in the same run and print the ratios.
     Bench(bench::BenchArgs),
 }
@@ -31,6 +35,7 @@ fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Sky(args) => sky::run(args),
+        Command::Precompute(args) => precompute::run(args),
         Command::Bench(args) => bench::run(args),
     };
     if let Err(error) = result {

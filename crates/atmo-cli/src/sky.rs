@@ -4,8 +4,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
-use atmo::image::{Frame, ImageKind, ToneMap};
+use atmo::image::{Display, Frame, ImageKind, ToneMap};
 use atmo::sky::frame::{Projection, SkyPicture, View};
+use atmo::sky::table::SkylightTable;
 use atmo::sky::{SkyModel, SkySettings, Sun};
 use atmo::{Atmosphere, Error};
 use clap::{Args, ValueEnum};
@@ -22,9 +23,6 @@ pub struct SkyArgs {
     /// Viewpoint altitude above the ground, metres, below the top of the atmosphere.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     altitude: f64,
-    /// Highest scattering order: 1, 2 (the paper) or 3.
-    #[arg(long, default_value_t = 2)]
-    order: u32,
     /// Image width, pixels.
     #[arg(long, default_value_t = 960)]
     width: u32,
@@ -43,27 +41,10 @@ pub struct SkyArgs {
     /// The whole dome as a fisheye (zenith at the centre, north up, east left).
     #[arg(long)]
     fisheye: bool,
-    /// Atmosphere TOML file (see docs/atmospheres.md); default: the `--preset`.
-    #[arg(long, value_name = "FILE.toml")]
-    atmosphere: Option<PathBuf>,
-    /// Embedded atmosphere: `earth` (measured coefficients) or `paper`.
-    #[arg(long, default_value = "earth")]
-    preset: String,
-    /// Switch on the atmosphere's ozone layer.
-    #[arg(long)]
-    ozone: bool,
-    /// Sampling shells (paper: 40).
-    #[arg(long, default_value_t = SkySettings::default().shells)]
-    shells: usize,
-    /// View directions per axis of the skylight map (paper: 64).
-    #[arg(long, default_value_t = SkySettings::default().directions)]
-    directions: usize,
-    /// Directions of the higher-order quadrature (paper: 15).
-    #[arg(long, default_value_t = SkySettings::default().scattering_directions)]
-    scattering_directions: usize,
-    /// Let aerosols scatter the higher orders too (the paper: Rayleigh only).
-    #[arg(long)]
-    multiple_mie: bool,
+    #[command(flatten)]
+    medium: AtmosphereArgs,
+    #[command(flatten)]
+    method: ShellArgs,
     /// Multiplies radiance before the tone map (PNG only); 0.15 suits a day sky,
     /// raise it for twilight.
     #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
@@ -78,13 +59,37 @@ pub struct SkyArgs {
     /// (header `azimuth_deg,elevation_deg`, azimuth from the sun's) instead of a picture.
     #[arg(long, value_name = "DIRS.csv", conflicts_with = "output")]
     probe: Option<PathBuf>,
-    /// Output picture: .png (8-bit sRGB) or .exr (linear radiance).
+    /// Draw from a skylight table (`atmo precompute sky`) instead of computing the sky:
+    /// any sun elevation and altitude inside the table's ranges, in well under a millisecond.
+    #[arg(long, value_name = "FILE.atmo-sky", conflicts_with_all = [
+        "probe", "atmosphere", "ozone", "shells", "directions", "scattering_directions",
+        "multiple_mie", "order",
+    ])]
+    table: Option<PathBuf>,
+    /// With --table: write a sequence to the folder -o, the sun setting from
+    /// --sun-elevation to the table's lowest, or a climb from --altitude to its highest;
+    /// frame-0000.png ... and animation.png (an animated PNG).
+    #[arg(long, value_enum, requires = "table")]
+    animate: Option<Animate>,
+    /// Frames of --animate.
+    #[arg(long, default_value_t = 120, requires = "animate")]
+    frames: usize,
+    /// Output picture: .png (8-bit sRGB) or .exr (linear radiance); with --animate, a folder.
     #[arg(short, long, value_name = "FILE", required_unless_present = "probe")]
     output: Option<PathBuf>,
 }
 
+/// What `--animate` moves.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Animate {
+    /// The sun sets: elevation from --sun-elevation down to the table's lowest.
+    Sun,
+    /// The viewpoint climbs: altitude from --altitude up to the table's highest.
+    Altitude,
+}
+
 #[derive(Clone, Copy, ValueEnum)]
-enum ToneMapArg {
+pub enum ToneMapArg {
     Exponential,
     Aces,
     Clamp,
@@ -100,30 +105,73 @@ impl From<ToneMapArg> for ToneMap {
     }
 }
 
-/// The atmosphere from `--atmosphere` or `--preset`, with `--ozone` applied.
-pub fn load_atmosphere(file: Option<&Path>, preset: &str, ozone: bool) -> atmo::Result<Atmosphere> {
-    let atmosphere = match file {
-        Some(path) => Atmosphere::from_toml_file(path)?,
-        None => Atmosphere::preset(preset)?,
-    };
-    if ozone {
-        atmosphere.with_ozone(true)
-    } else {
-        Ok(atmosphere)
+/// Which atmosphere: a file, or an embedded preset; ozone on or off.
+#[derive(Args)]
+pub struct AtmosphereArgs {
+    /// Atmosphere TOML file (see docs/atmospheres.md); default: the `--preset`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub atmosphere: Option<PathBuf>,
+    /// Embedded atmosphere: `earth` (measured coefficients) or `paper`.
+    #[arg(long, default_value = "earth")]
+    pub preset: String,
+    /// Switch on the atmosphere's ozone layer.
+    #[arg(long)]
+    pub ozone: bool,
+}
+
+/// The shell method's settings (sky 3).
+#[derive(Args)]
+pub struct ShellArgs {
+    /// Highest scattering order: 1, 2 (the paper) or 3.
+    #[arg(long, default_value_t = 2)]
+    order: u32,
+    /// Sampling shells (paper: 40).
+    #[arg(long, default_value_t = SkySettings::default().shells)]
+    shells: usize,
+    /// View directions per axis L of the skylight map (sky (11)-(12); paper: 64).
+    #[arg(long, default_value_t = SkySettings::default().directions)]
+    directions: usize,
+    /// Directions of the higher-order quadrature (paper: 15).
+    #[arg(long, default_value_t = SkySettings::default().scattering_directions)]
+    scattering_directions: usize,
+    /// Let aerosols scatter the higher orders too (the paper: Rayleigh only).
+    #[arg(long)]
+    multiple_mie: bool,
+}
+
+impl ShellArgs {
+    /// The settings, not yet validated.
+    pub fn settings(&self) -> SkySettings {
+        SkySettings {
+            shells: self.shells,
+            directions: self.directions,
+            scattering_directions: self.scattering_directions,
+            order: self.order,
+            multiple_mie: self.multiple_mie,
+            ..SkySettings::default()
+        }
+    }
+}
+
+impl AtmosphereArgs {
+    /// The atmosphere from `--atmosphere` or `--preset`, with `--ozone` applied.
+    pub fn load(&self) -> atmo::Result<Atmosphere> {
+        let atmosphere = match &self.atmosphere {
+            Some(path) => Atmosphere::from_toml_file(path)?,
+            None => Atmosphere::preset(&self.preset)?,
+        };
+        if self.ozone {
+            atmosphere.with_ozone(true)
+        } else {
+            Ok(atmosphere)
+        }
     }
 }
 
 pub fn run(args: SkyArgs) -> Result<()> {
     // Everything is validated before any work or any file is written.
-    let atmosphere = load_atmosphere(args.atmosphere.as_deref(), &args.preset, args.ozone)?;
-    let settings = SkySettings {
-        shells: args.shells,
-        directions: args.directions,
-        scattering_directions: args.scattering_directions,
-        order: args.order,
-        multiple_mie: args.multiple_mie,
-        ..SkySettings::default()
-    };
+    let atmosphere = args.medium.load()?;
+    let settings = args.method.settings();
     settings.validate(atmosphere.channels())?;
     let sun = Sun::from_degrees(args.sun_elevation, args.sun_azimuth)?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
@@ -132,7 +180,9 @@ pub fn run(args: SkyArgs) -> Result<()> {
     let probe = args.probe.as_deref().map(read_directions).transpose()?;
     let view = match &args.output {
         Some(path) => {
-            ImageKind::of(path)?;
+            if args.animate.is_none() {
+                ImageKind::of(path)?;
+            }
             Frame::check_size(args.width, args.height)?;
             let projection = if args.fisheye {
                 Projection::Fisheye
@@ -152,6 +202,25 @@ pub fn run(args: SkyArgs) -> Result<()> {
         }
         None => None,
     };
+    if let (Some(table), Some(view), Some(path)) = (&args.table, view, &args.output) {
+        let table = SkylightTable::read(table)?;
+        let display = Display {
+            exposure: args.exposure,
+            tone: args.tone_map.into(),
+        };
+        return match args.animate {
+            None => crate::sky_table::draw(&table, sun, args.altitude, &view, display, path),
+            Some(what) => {
+                let frames = crate::sky_table::Animation {
+                    what,
+                    frames: args.frames,
+                    sun,
+                    altitude_m: args.altitude,
+                };
+                crate::sky_table::animate(&table, &frames, &view, display, path)
+            }
+        };
+    }
     let start = Instant::now();
     // Light maps take 0.3 s at the defaults and seconds with --order 3 --multiple-mie.
     let spinner = ProgressBar::new_spinner().with_message("computing the sampling-shell maps");

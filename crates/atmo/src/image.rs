@@ -39,6 +39,49 @@ impl ToneMap {
             }
         }
     }
+
+    /// The exposed linear value whose tone-mapped value is `y` in [0, 1): the inverse
+    /// of [`ToneMap::apply`] where it is one-to-one.
+    pub fn invert(self, y: f32) -> f32 {
+        let y = y.max(0.0);
+        match self {
+            ToneMap::Clamp => y,
+            ToneMap::Exponential => -(-y).ln_1p(),
+            ToneMap::Aces => {
+                // (2.51 - 2.43 y) x^2 + (0.03 - 0.59 y) x - 0.14 y = 0, positive root.
+                let (a, b, c) = (2.51 - 2.43 * y, 0.03 - 0.59 * y, -0.14 * y);
+                (-b + (b * b - 4.0 * a * c).sqrt()) / (2.0 * a)
+            }
+        }
+    }
+}
+
+/// How linear radiance becomes the value a display shows, in [0, 1]: times `exposure`,
+/// through the tone map, then sRGB-encoded (8-bit files round it to 1/255 steps).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Display {
+    /// Multiplies radiance before the tone map.
+    pub exposure: f32,
+    /// The tone map.
+    pub tone: ToneMap,
+}
+
+impl Display {
+    /// The displayed value of linear radiance `x`.
+    #[inline]
+    pub fn value(&self, x: f32) -> f32 {
+        srgb_encode(self.tone.apply(x * self.exposure))
+    }
+}
+
+/// The inverse of [`srgb_encode`].
+#[inline]
+pub fn srgb_decode(v: f32) -> f32 {
+    if v <= 0.040_45 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// The sRGB transfer function of a linear value in [0, 1].
@@ -119,10 +162,11 @@ impl Frame {
 
     /// 8-bit sRGB bytes after multiplying by `exposure` and tone mapping.
     pub fn to_srgb8(&self, exposure: f32, tone: ToneMap) -> Vec<u8> {
+        let display = Display { exposure, tone };
         self.pixels
             .iter()
             .flat_map(|p| p.to_array())
-            .map(|v| (srgb_encode(tone.apply(v * exposure)) * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
+            .map(|v| (display.value(v) * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
             .collect()
     }
 
@@ -161,6 +205,26 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
     move |source| Error::Io {
         path: path.to_path_buf(),
         source,
+    }
+}
+
+/// Checks, before any work, that the folder `path` would be written into exists, so a
+/// long computation does not end in a failed write.
+pub fn check_folder(path: &Path) -> Result<()> {
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if folder.is_dir() {
+        Ok(())
+    } else {
+        Err(Error::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                format!("the folder {} does not exist", folder.display()),
+            ),
+        })
     }
 }
 
@@ -208,6 +272,20 @@ mod tests {
         }
         assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
         assert!((srgb_encode(0.5) - 0.7354).abs() < 1e-3);
+    }
+
+    #[test]
+    fn inverses_undo_the_tone_maps_and_the_srgb_curve() {
+        for tone in [ToneMap::Clamp, ToneMap::Exponential, ToneMap::Aces] {
+            for k in 0..200 {
+                let y = k as f32 / 200.0;
+                assert!(
+                    (tone.apply(tone.invert(y)) - y).abs() < 2e-6,
+                    "{tone:?} {y}"
+                );
+                assert!((srgb_encode(srgb_decode(y)) - y).abs() < 2e-6, "{y}");
+            }
+        }
     }
 
     #[test]

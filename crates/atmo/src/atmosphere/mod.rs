@@ -129,6 +129,8 @@ pub struct Species {
     pub scale_height_m: f64,
     /// Scattering coefficient at density 1 (sea level), per wavelength, 1/m.
     pub scattering_per_m: Vec<f64>,
+    /// Scattering / extinction, in (0, 1].
+    pub single_scattering_albedo: f64,
     /// Extinction coefficient at density 1, per wavelength, 1/m: scattering divided by
     /// the single-scattering albedo.
     pub extinction_per_m: Vec<f64>,
@@ -291,6 +293,7 @@ impl Atmosphere {
             Ok(Species {
                 scale_height_m: sp.scale_height_m,
                 scattering_per_m: scattering,
+                single_scattering_albedo: sp.single_scattering_albedo,
                 extinction_per_m: extinction,
                 phase: sp.phase,
             })
@@ -325,6 +328,47 @@ impl Atmosphere {
             ground_albedo: s.ground_albedo,
             ozone,
         })
+    }
+
+    /// The atmosphere as TOML that [`Atmosphere::from_toml_str`] reads back to the same
+    /// values (per-wavelength quantities written out as arrays), for table files.
+    pub fn to_toml(&self) -> String {
+        use std::fmt::Write;
+        let list = |v: &[f64]| {
+            let items: Vec<String> = v.iter().map(|x| format!("{x:?}")).collect();
+            format!("[{}]", items.join(", "))
+        };
+        let mut t = String::new();
+        let _ = writeln!(t, "name = {:?}", self.name);
+        let _ = writeln!(t, "description = {:?}", self.description);
+        let _ = writeln!(t, "bottom_radius_m = {:?}", self.bottom_radius_m);
+        let _ = writeln!(t, "top_radius_m = {:?}", self.top_radius_m);
+        let _ = writeln!(
+            t,
+            "sun_angular_radius_deg = {:?}",
+            self.sun_angular_radius.to_degrees()
+        );
+        let _ = writeln!(t, "wavelengths_nm = {}", list(&self.wavelengths_nm));
+        let _ = writeln!(t, "solar_irradiance = {}", list(&self.solar_irradiance));
+        let _ = writeln!(t, "ground_albedo = {:?}", self.ground_albedo);
+        for (name, sp) in [("rayleigh", &self.rayleigh), ("mie", &self.mie)] {
+            let _ = writeln!(t, "\n[{name}]");
+            let _ = writeln!(t, "scale_height_m = {:?}", sp.scale_height_m);
+            let _ = writeln!(t, "scattering_per_m = {}", list(&sp.scattering_per_m));
+            let _ = writeln!(
+                t,
+                "single_scattering_albedo = {:?}",
+                sp.single_scattering_albedo
+            );
+            let _ = writeln!(t, "phase = {}", sp.phase.to_toml());
+        }
+        if let Some(o) = &self.ozone {
+            let _ = writeln!(t, "\n[ozone]\nenabled = {}", o.enabled);
+            let _ = writeln!(t, "absorption_per_m = {}", list(&o.absorption_per_m));
+            let _ = writeln!(t, "center_altitude_m = {:?}", o.center_altitude_m);
+            let _ = writeln!(t, "half_width_m = {:?}", o.half_width_m);
+        }
+        t
     }
 
     /// Switches the ozone layer on or off (for `--ozone`); an error if there is none.
@@ -390,6 +434,19 @@ impl Atmosphere {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn to_toml_reads_back_to_the_same_atmosphere() {
+        for name in Atmosphere::preset_names() {
+            let a = Atmosphere::preset(name).unwrap();
+            let a = a.clone().with_ozone(true).unwrap_or(a);
+            let mut b = Atmosphere::from_toml_str(&a.to_toml(), "round trip").unwrap();
+            // Degrees to radians and back may move the last bit.
+            assert!((b.sun_angular_radius - a.sun_angular_radius).abs() < 1e-15);
+            b.sun_angular_radius = a.sun_angular_radius;
+            assert_eq!(a, b, "{name}");
+        }
+    }
 
     #[test]
     fn presets_load_and_differ() {

@@ -48,6 +48,16 @@ pub fn transmittance(atmosphere: &Atmosphere, columns: &[f64; CONSTITUENTS], out
     }
 }
 
+/// Transmittance of the sunlight reaching radius `r` from a sun at zenith cosine `mu_s`,
+/// exactly: what [`TransmittanceTable::to_sun`] looks up, for one-off queries.
+pub fn transmittance_to_sun(atmosphere: &Atmosphere, r: f64, mu_s: f64, out: &mut [f32]) {
+    let bottom = atmosphere.bottom_radius_m;
+    let visible = sun_visible_fraction(r, mu_s, bottom, atmosphere.sun_angular_radius) as f32;
+    let columns = column_densities_to_top(atmosphere, r, mu_s.max(horizon_mu(r, bottom)));
+    transmittance(atmosphere, &columns, out);
+    out.iter_mut().for_each(|o| *o *= visible);
+}
+
 /// Transmittance from the top of the atmosphere, tabulated over (r, mu) for the rays
 /// that do not hit the ground; queried below the horizon it returns the horizon value,
 /// which [`TransmittanceTable::to_sun`] then scales by the visible part of the disc.

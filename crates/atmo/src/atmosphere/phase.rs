@@ -55,6 +55,20 @@ impl PhaseFunction {
         matches!(self, PhaseFunction::Rayleigh)
     }
 
+    /// The inline TOML table that deserializes to this function.
+    pub fn to_toml(&self) -> String {
+        match *self {
+            PhaseFunction::Rayleigh => r#"{ kind = "rayleigh" }"#.into(),
+            PhaseFunction::PaperMie => r#"{ kind = "paper-mie" }"#.into(),
+            PhaseFunction::HenyeyGreenstein { g } => {
+                format!(r#"{{ kind = "henyey-greenstein", g = {g:?} }}"#)
+            }
+            PhaseFunction::CornetteShanks { g } => {
+                format!(r#"{{ kind = "cornette-shanks", g = {g:?} }}"#)
+            }
+        }
+    }
+
     /// Checks the asymmetry parameter, naming `field` when it is out of range.
     pub fn validate(&self, field: &str) -> Result<()> {
         match *self {

@@ -12,6 +12,9 @@ pub mod grid;
 pub mod light_map;
 pub mod maps;
 pub mod shells;
+pub mod svd;
+pub mod table;
+mod table_file;
 
 use std::sync::Arc;
 
@@ -409,9 +412,15 @@ impl SkyModel {
     pub fn sun_radiance(&self, sun_elevation: f64, out: &mut [f32]) {
         let r = self.atmosphere.bottom_radius_m + self.altitude_m;
         self.transmittance.to_sun(r, sun_elevation.sin(), out);
-        let solid_angle = std::f64::consts::PI * self.atmosphere.sun_angular_radius.powi(2);
-        for (o, e) in out.iter_mut().zip(&self.atmosphere.solar_irradiance) {
-            *o *= (*e / solid_angle) as f32;
-        }
+        sun_disc_radiance(&self.atmosphere, out);
+    }
+}
+
+/// Turns the transmittance to the sun `out` into the radiance of the sun's disc:
+/// irradiance / (pi alpha^2) x transmittance (no limb darkening).
+pub(crate) fn sun_disc_radiance(atmosphere: &Atmosphere, out: &mut [f32]) {
+    let solid_angle = std::f64::consts::PI * atmosphere.sun_angular_radius.powi(2);
+    for (o, e) in out.iter_mut().zip(&atmosphere.solar_irradiance) {
+        *o *= (*e / solid_angle) as f32;
     }
 }

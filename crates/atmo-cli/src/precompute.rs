@@ -1,0 +1,136 @@
+//! `atmo precompute sky`: the skylight table over sun elevation and altitude,
+//! compressed by SVD (sky 4.1), written to a `.atmo-sky` file.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use atmo::image::Display;
+use atmo::sky::table::{ErrorBound, SkylightTable, TableSettings};
+use clap::{Args, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::sky::{AtmosphereArgs, ShellArgs, ToneMapArg};
+
+#[derive(Args)]
+pub struct PrecomputeArgs {
+    #[command(subcommand)]
+    what: Precompute,
+}
+
+#[derive(Subcommand)]
+enum Precompute {
+    /// The skylight table for every sun elevation and viewpoint altitude (sky 4.1).
+    Sky(SkyTableArgs),
+}
+
+#[derive(Args)]
+pub struct SkyTableArgs {
+    /// Output table file (.atmo-sky by convention).
+    #[arg(short, long, value_name = "FILE")]
+    output: PathBuf,
+    #[command(flatten)]
+    medium: AtmosphereArgs,
+    #[command(flatten)]
+    method: ShellArgs,
+    /// Sun elevations M, from --min-sun-elevation to the zenith (sky (13)).
+    #[arg(long, default_value_t = 128)]
+    sun_steps: usize,
+    /// Lowest sun elevation, degrees (the paper: 0; below 0 covers dusk and dawn).
+    #[arg(long, default_value_t = -10.0, allow_negative_numbers = true)]
+    min_sun_elevation: f64,
+    /// Viewpoint altitudes N, from the ground to --max-altitude (sky (14)).
+    #[arg(long, default_value_t = 32)]
+    altitude_steps: usize,
+    /// Highest viewpoint altitude h0, metres (paper: 13000).
+    #[arg(long, default_value_t = 13_000.0, allow_negative_numbers = true)]
+    max_altitude: f64,
+    /// Spacing of the altitude grid: h_i = h0 (i / (N - 1))^power (1: even).
+    #[arg(long, default_value_t = TableSettings::default().altitude_power)]
+    altitude_power: f64,
+    /// Largest error per view direction over all suns and altitudes, in displayed sRGB
+    /// values (1/255 is one 8-bit step) at --exposure and --tone-map; a number or a/b.
+    #[arg(long, default_value = "1/255", value_parser = parse_fraction, allow_negative_numbers = true)]
+    epsilon: f32,
+    /// The exposure the error is measured at (as `atmo sky --exposure`).
+    #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
+    exposure: f32,
+    /// The tone map the error is measured through.
+    #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]
+    tone_map: ToneMapArg,
+    /// Measure the error on the sRGB-encoded values (what a PNG holds) or on the linear
+    /// tone-mapped ones (a linear frame buffer, as the paper's 8-bit values).
+    #[arg(long, value_enum, default_value_t = Measure::Srgb)]
+    epsilon_on: Measure,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Measure {
+    Srgb,
+    Linear,
+}
+
+/// A number written as a decimal or a fraction `a/b`.
+fn parse_fraction(s: &str) -> std::result::Result<f32, String> {
+    let number = |t: &str| t.trim().parse::<f32>().map_err(|e| format!("`{t}`: {e}"));
+    match s.split_once('/') {
+        Some((a, b)) => Ok(number(a)? / number(b)?),
+        None => number(s),
+    }
+}
+
+pub fn run(args: PrecomputeArgs) -> Result<()> {
+    let Precompute::Sky(args) = args.what;
+    let atmosphere = args.medium.load()?;
+    let settings = TableSettings {
+        sky: args.method.settings(),
+        sun_steps: args.sun_steps,
+        min_sun_elevation: args.min_sun_elevation.to_radians(),
+        altitude_steps: args.altitude_steps,
+        max_altitude_m: args.max_altitude,
+        altitude_power: args.altitude_power,
+        bound: ErrorBound {
+            epsilon: args.epsilon,
+            display: Display {
+                exposure: args.exposure,
+                tone: args.tone_map.into(),
+            },
+            srgb: matches!(args.epsilon_on, Measure::Srgb),
+        },
+    };
+    settings.validate(&atmosphere)?;
+    atmo::image::check_folder(&args.output)?;
+    let start = Instant::now();
+    let bar = ProgressBar::new((settings.sun_steps * settings.altitude_steps) as u64)
+        .with_style(
+            ProgressStyle::with_template(
+                "{msg} [{bar:32}] {pos}/{len} skylight maps, {elapsed} elapsed, ETA {eta}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        )
+        .with_message("shell method");
+    let values = SkylightTable::skylight_matrices(&atmosphere, &settings, &|done, _| {
+        bar.set_position(done as u64)
+    })?;
+    bar.finish_and_clear();
+    let maps_s = start.elapsed().as_secs_f64();
+    let spinner = ProgressBar::new_spinner().with_message("SVD and term counts per channel");
+    spinner.enable_steady_tick(Duration::from_millis(120));
+    let svd_start = Instant::now();
+    let table = SkylightTable::from_matrices(&atmosphere, &settings, &values);
+    spinner.finish_and_clear();
+    let table = table?;
+    let svd_s = svd_start.elapsed().as_secs_f64();
+    table.write(&args.output)?;
+    let bytes = std::fs::metadata(&args.output)?.len();
+    eprintln!(
+        "atmo: {} ({bytes} bytes): {} skylight maps in {maps_s:.1} s, SVD and term counts in \
+         {svd_s:.1} s; {} terms at most; largest error at the grid points {:.3} epsilon",
+        args.output.display(),
+        settings.sun_steps * settings.altitude_steps,
+        table.max_terms(),
+        table.grid_error(),
+    );
+    Ok(())
+}

@@ -1,0 +1,141 @@
+//! `atmo sky --table`: pictures and sequences drawn from a skylight table (sky 4.2).
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Result;
+use atmo::error::check_range;
+use atmo::image::{write_atomically, Display, Frame};
+use atmo::sky::frame::{SkyPicture, View};
+use atmo::sky::table::SkylightTable;
+use atmo::sky::Sun;
+use atmo::Error;
+
+use crate::sky::Animate;
+
+/// One picture of `table` for `sun` at `altitude_m`, written to `path`.
+pub fn draw(
+    table: &SkylightTable,
+    sun: Sun,
+    altitude_m: f64,
+    view: &View,
+    display: Display,
+    path: &Path,
+) -> Result<()> {
+    let start = Instant::now();
+    let picture = SkyPicture::from_table(table, sun, altitude_m)?;
+    let map_ms = start.elapsed().as_secs_f64() * 1e3;
+    let frame = picture.render(view);
+    let total_ms = start.elapsed().as_secs_f64() * 1e3;
+    frame.write(path, display.exposure, display.tone)?;
+    eprintln!(
+        "atmo: {} ({}x{}) from the table in {total_ms:.1} ms (skylight map {map_ms:.2} ms)",
+        path.display(),
+        view.width,
+        view.height,
+    );
+    Ok(())
+}
+
+/// What a sequence moves, from where, over how many frames.
+pub struct Animation {
+    /// The sun or the altitude.
+    pub what: Animate,
+    /// Frames, at least 2.
+    pub frames: usize,
+    /// The sun of the first frame (and of all frames when the altitude moves).
+    pub sun: Sun,
+    /// The altitude of the first frame (and of all when the sun moves), m.
+    pub altitude_m: f64,
+}
+
+impl Animation {
+    /// (sun elevation rad, altitude m) of frame `k`.
+    fn at(&self, table: &SkylightTable, k: usize) -> (f64, f64) {
+        let u = k as f64 / (self.frames - 1) as f64;
+        match self.what {
+            Animate::Sun => {
+                let end = table.sun_axis().min;
+                (
+                    self.sun.elevation + (end - self.sun.elevation) * u,
+                    self.altitude_m,
+                )
+            }
+            Animate::Altitude => {
+                let end = table.altitude_axis().max;
+                (
+                    self.sun.elevation,
+                    self.altitude_m + (end - self.altitude_m) * u,
+                )
+            }
+        }
+    }
+}
+
+/// Writes `frame-0000.png` ... and `animation.png` (animated PNG, 30 frames/s) into the
+/// folder `folder`, creating it. Everything is checked before the first file.
+pub fn animate(
+    table: &SkylightTable,
+    animation: &Animation,
+    view: &View,
+    display: Display,
+    folder: &Path,
+) -> Result<()> {
+    check_range("frames", animation.frames as f64, 2.0, 10_000.0)?;
+    if folder.extension().is_some_and(|e| e == "png" || e == "exr") {
+        return Err(Error::Invalid(format!(
+            "{}: with --animate, -o names a folder for the frames",
+            folder.display()
+        ))
+        .into());
+    }
+    for k in [0, animation.frames - 1] {
+        let (sun, altitude) = animation.at(table, k);
+        table.map(sun, altitude)?;
+    }
+    std::fs::create_dir_all(folder).map_err(|source| Error::Io {
+        path: folder.to_path_buf(),
+        source,
+    })?;
+    let start = Instant::now();
+    let apng = folder.join("animation.png");
+    let png_error = |e: png::EncodingError| Error::Image {
+        path: apng.clone(),
+        message: e.to_string(),
+    };
+    write_atomically(&apng, |w| {
+        let mut encoder = png::Encoder::new(w, view.width, view.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder
+            .set_animated(animation.frames as u32, 0)
+            .map_err(png_error)?;
+        encoder.set_frame_delay(1, 30).map_err(png_error)?;
+        let mut writer = encoder.write_header().map_err(png_error)?;
+        let mut frame = Frame::new(view.width, view.height);
+        for k in 0..animation.frames {
+            let (elevation, altitude) = animation.at(table, k);
+            let sun = Sun {
+                elevation,
+                ..animation.sun
+            };
+            SkyPicture::from_table(table, sun, altitude)?.render_into(view, &mut frame);
+            frame.write(
+                &folder.join(format!("frame-{k:04}.png")),
+                display.exposure,
+                display.tone,
+            )?;
+            writer
+                .write_image_data(&frame.to_srgb8(display.exposure, display.tone))
+                .map_err(png_error)?;
+        }
+        writer.finish().map_err(png_error)
+    })?;
+    eprintln!(
+        "atmo: {} frames and {} in {:.1} s",
+        animation.frames,
+        apng.display(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

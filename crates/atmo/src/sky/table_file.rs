@@ -1,0 +1,354 @@
+//! The `.atmo-sky` file of a [`SkylightTable`]: little-endian, checksummed, read with
+//! full validation (a truncated, altered or foreign file is an error naming the
+//! problem, never a panic or a wrong sky).
+//!
+//! Layout, version 1 (`u32`, `f64` ... little-endian; `f16` IEEE half):
+//!
+//! | field | type |
+//! | --- | --- |
+//! | magic | 8 bytes `atmo-sky` |
+//! | version | `u32` = 1 |
+//! | atmosphere | `u32` length + UTF-8 TOML (as `Atmosphere::to_toml`) |
+//! | shells, directions L, scattering directions, sun bins, order | 5 x `u32` |
+//! | multiple Mie | `u8` 0 or 1 |
+//! | longest interval, m | `f64` |
+//! | sun steps M, lowest sun elevation (rad) | `u32`, `f64` |
+//! | altitude steps N, highest altitude (m), spacing power | `u32`, `f64`, `f64` |
+//! | epsilon, exposure, tone map (0 clamp, 1 exponential, 2 ACES), sRGB-encoded (0, 1) | `f32`, `f32`, `u8`, `u8` |
+//! | largest error at the grid points, units of epsilon | `f32` |
+//! | terms computed K, singular values | `u32`, K x `f32` |
+//! | term counts T, rows R, G, B x `[elevation][azimuth]` | 3 L*L x `u16`, each <= K |
+//! | fixed-point steps of `s_k` and `t_k`, k < max T | 2 max T x `f32` |
+//! | `t_k sigma_k / step`, `[k][altitude][sun]`, k < max T | `i16` |
+//! | `s_k / step` of the rows in order of decreasing T, k after k | sum of T x `i16` |
+//! | CRC-32 of every byte before it | `u32` |
+
+use std::path::Path;
+
+use super::table::{
+    dequantize, to_fixed, ErrorBound, Factors, SkylightTable, TableSettings, CHANNELS,
+};
+use super::SkySettings;
+use crate::atmosphere::Atmosphere;
+use crate::error::{Error, Result};
+use crate::image::{write_atomically, Display, ToneMap};
+
+/// The first bytes of every table file.
+pub const MAGIC: &[u8; 8] = b"atmo-sky";
+
+/// The version this build writes and reads.
+pub const VERSION: u32 = 1;
+
+impl SkylightTable {
+    /// The file's bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut w = Vec::new();
+        w.extend_from_slice(MAGIC);
+        put_u32(&mut w, VERSION);
+        let toml = self.atmosphere.to_toml();
+        put_u32(&mut w, toml.len() as u32);
+        w.extend_from_slice(toml.as_bytes());
+        let (s, sky) = (&self.settings, &self.settings.sky);
+        for v in [
+            sky.shells,
+            sky.directions,
+            sky.scattering_directions,
+            sky.sun_bins,
+            sky.order as usize,
+        ] {
+            put_u32(&mut w, v as u32);
+        }
+        w.push(sky.multiple_mie as u8);
+        put_f64(&mut w, sky.max_interval_m);
+        put_u32(&mut w, s.sun_steps as u32);
+        put_f64(&mut w, s.min_sun_elevation);
+        put_u32(&mut w, s.altitude_steps as u32);
+        put_f64(&mut w, s.max_altitude_m);
+        put_f64(&mut w, s.altitude_power);
+        put_f32(&mut w, s.bound.epsilon);
+        put_f32(&mut w, s.bound.display.exposure);
+        w.push(match s.bound.display.tone {
+            ToneMap::Clamp => 0,
+            ToneMap::Exponential => 1,
+            ToneMap::Aces => 2,
+        });
+        w.push(s.bound.srgb as u8);
+        put_f32(&mut w, self.grid_error);
+        let f = &self.factors;
+        put_u32(&mut w, f.sigma.len() as u32);
+        f.sigma.iter().for_each(|&x| put_f32(&mut w, x));
+        f.terms
+            .iter()
+            .for_each(|&t| w.extend_from_slice(&t.to_le_bytes()));
+        f.s_step
+            .iter()
+            .chain(&f.t_step)
+            .for_each(|&x| put_f32(&mut w, x));
+        let cols = f.t.len() / f.t_step.len().max(1);
+        for (k, t) in f.t.chunks(cols.max(1)).enumerate() {
+            t.iter()
+                .for_each(|&x| put_i16(&mut w, to_fixed(x, f.t_step[k])));
+        }
+        let mut s = f.s.iter();
+        for (k, &n) in f.used.iter().enumerate() {
+            s.by_ref()
+                .take(n as usize)
+                .for_each(|&x| put_i16(&mut w, to_fixed(x, f.s_step[k])));
+        }
+        let crc = crc32fast::hash(&w);
+        put_u32(&mut w, crc);
+        w
+    }
+
+    /// Writes the table to `path` atomically (a temporary file renamed when complete).
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let bytes = self.to_bytes();
+        write_atomically(path, |w| {
+            std::io::Write::write_all(w, &bytes).map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })
+        })
+    }
+
+    /// Reads and validates a table file.
+    pub fn read(path: &Path) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_bytes(&bytes, &path.display().to_string())
+    }
+
+    /// Parses and validates the bytes of a table file; `origin` names it in errors.
+    pub fn from_bytes(bytes: &[u8], origin: &str) -> Result<Self> {
+        let fail = |message: String| Error::Parse {
+            path: origin.to_string(),
+            message,
+        };
+        if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
+            return Err(fail(
+                "not an atmo sky table (it does not start with 'atmo-sky'); make one with \
+                 `atmo precompute sky`"
+                    .into(),
+            ));
+        }
+        let body = bytes
+            .len()
+            .checked_sub(4)
+            .filter(|&n| n >= 12)
+            .ok_or_else(|| fail("truncated: too short to hold a header and a checksum".into()))?;
+        let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+        if version != VERSION {
+            return Err(fail(format!(
+                "table file version {version}; this atmo reads version {VERSION}"
+            )));
+        }
+        let stored = u32::from_le_bytes(bytes[body..].try_into().expect("4 bytes"));
+        if crc32fast::hash(&bytes[..body]) != stored {
+            return Err(fail(
+                "damaged: the checksum does not match (the file was truncated or altered)".into(),
+            ));
+        }
+        let mut r = Reader {
+            bytes: &bytes[..body],
+            at: 12,
+        };
+        Self::parse(&mut r, origin).map_err(|e| match e {
+            Error::Invalid(message) => fail(message),
+            other => other,
+        })
+    }
+
+    fn parse(r: &mut Reader, origin: &str) -> Result<Self> {
+        let toml_len = r.u32("atmosphere length")? as usize;
+        let toml = std::str::from_utf8(r.take(toml_len, "atmosphere")?)
+            .map_err(|_| Error::Invalid("the atmosphere is not UTF-8".into()))?;
+        let atmosphere = Atmosphere::from_toml_str(toml, &format!("{origin} (atmosphere)"))?;
+        let mut sky = SkySettings {
+            shells: r.u32("shells")? as usize,
+            directions: r.u32("directions")? as usize,
+            scattering_directions: r.u32("scattering directions")? as usize,
+            sun_bins: r.u32("sun bins")? as usize,
+            order: r.u32("order")?,
+            ..SkySettings::default()
+        };
+        sky.multiple_mie = match r.take(1, "multiple Mie")?[0] {
+            0 => false,
+            1 => true,
+            v => return Err(Error::Invalid(format!("multiple Mie flag {v}, not 0 or 1"))),
+        };
+        sky.max_interval_m = r.f64("longest interval")?;
+        let sun_steps = r.u32("sun steps")? as usize;
+        let min_sun_elevation = r.f64("lowest sun elevation")?;
+        let altitude_steps = r.u32("altitude steps")? as usize;
+        let max_altitude_m = r.f64("highest altitude")?;
+        let altitude_power = r.f64("altitude spacing power")?;
+        let epsilon = r.f32("epsilon")?;
+        let exposure = r.f32("exposure")?;
+        let tone = match r.take(1, "tone map")?[0] {
+            0 => ToneMap::Clamp,
+            1 => ToneMap::Exponential,
+            2 => ToneMap::Aces,
+            v => return Err(Error::Invalid(format!("tone map {v}, not 0, 1 or 2"))),
+        };
+        let srgb = match r.take(1, "sRGB flag")?[0] {
+            0 => false,
+            1 => true,
+            v => return Err(Error::Invalid(format!("sRGB flag {v}, not 0 or 1"))),
+        };
+        let settings = TableSettings {
+            sky,
+            sun_steps,
+            min_sun_elevation,
+            altitude_steps,
+            max_altitude_m,
+            altitude_power,
+            bound: ErrorBound {
+                epsilon,
+                display: Display { exposure, tone },
+                srgb,
+            },
+        };
+        settings.validate(&atmosphere)?;
+        let grid_error = r.f32("grid error")?;
+        if !(0.0..=1.0).contains(&grid_error) {
+            return Err(Error::Invalid(format!(
+                "grid error {grid_error} outside [0, 1] epsilon"
+            )));
+        }
+        let rows = settings.sky.directions.pow(2);
+        let cols = settings.sun_steps * settings.altitude_steps;
+        let factors = read_factors(r, CHANNELS * rows, cols)?;
+        if r.at != r.bytes.len() {
+            return Err(Error::Invalid(format!(
+                "{} unexpected bytes after the tables",
+                r.bytes.len() - r.at
+            )));
+        }
+        Ok(SkylightTable {
+            atmosphere,
+            settings,
+            grid_error,
+            factors,
+        })
+    }
+}
+
+fn read_factors(r: &mut Reader, rows: usize, cols: usize) -> Result<Factors> {
+    let rank = r.u32("terms computed")? as usize;
+    if rank == 0 || rank > rows.min(cols) {
+        return Err(Error::Invalid(format!(
+            "{rank} terms computed, allowed 1 to {}",
+            rows.min(cols)
+        )));
+    }
+    let sigma = (0..rank)
+        .map(|_| r.f32("singular values"))
+        .collect::<Result<Vec<_>>>()?;
+    let terms = (0..rows)
+        .map(|_| {
+            let b = r.take(2, "term counts")?;
+            Ok(u16::from_le_bytes([b[0], b[1]]))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    if let Some(&t) = terms.iter().find(|&&t| t as usize > rank) {
+        return Err(Error::Invalid(format!(
+            "a direction uses {t} terms of the {rank} computed"
+        )));
+    }
+    let (order, used) = Factors::layout(&terms);
+    let most = used.len();
+    let steps = (0..2 * most)
+        .map(|_| r.f32("fixed-point steps"))
+        .collect::<Result<Vec<_>>>()?;
+    if let Some(bad) = steps.iter().find(|&&x| x <= 0.0) {
+        return Err(Error::Invalid(format!(
+            "fixed-point step {bad} is not positive"
+        )));
+    }
+    let (s_step, t_step) = (steps[..most].to_vec(), steps[most..].to_vec());
+    let mut t = Vec::with_capacity(most * cols);
+    for &step in &t_step {
+        t.extend(r.i16s(cols, "t tables")?.map(|q| dequantize(q, step)));
+    }
+    let mut s = Vec::new();
+    for (&n, &step) in used.iter().zip(&s_step) {
+        s.extend(r.i16s(n as usize, "s tables")?.map(|q| dequantize(q, step)));
+    }
+    Ok(Factors {
+        s_step,
+        t_step,
+        sigma,
+        terms,
+        order,
+        used,
+        s,
+        t,
+    })
+}
+
+fn put_u32(w: &mut Vec<u8>, v: u32) {
+    w.extend_from_slice(&v.to_le_bytes());
+}
+
+fn put_i16(w: &mut Vec<u8>, v: i16) {
+    w.extend_from_slice(&v.to_le_bytes());
+}
+
+fn put_f32(w: &mut Vec<u8>, v: f32) {
+    w.extend_from_slice(&v.to_le_bytes());
+}
+
+fn put_f64(w: &mut Vec<u8>, v: f64) {
+    w.extend_from_slice(&v.to_le_bytes());
+}
+
+/// A cursor over the checksummed bytes; running past the end names what was missing.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&[u8]> {
+        let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len());
+        let end = end.ok_or_else(|| {
+            Error::Invalid(format!("ends inside the {what} (at byte {})", self.at))
+        })?;
+        let out = &self.bytes[self.at..end];
+        self.at = end;
+        Ok(out)
+    }
+
+    fn i16s(&mut self, n: usize, what: &str) -> Result<impl Iterator<Item = i16> + '_> {
+        let bytes = self.take(2 * n, what)?;
+        Ok(bytes
+            .chunks_exact(2)
+            .map(|b| i16::from_le_bytes([b[0], b[1]])))
+    }
+
+    fn u32(&mut self, what: &str) -> Result<u32> {
+        Ok(u32::from_le_bytes(
+            self.take(4, what)?.try_into().expect("4 bytes"),
+        ))
+    }
+
+    fn f32(&mut self, what: &str) -> Result<f32> {
+        let v = f32::from_le_bytes(self.take(4, what)?.try_into().expect("4 bytes"));
+        finite(v as f64, what).map(|_| v)
+    }
+
+    fn f64(&mut self, what: &str) -> Result<f64> {
+        let v = f64::from_le_bytes(self.take(8, what)?.try_into().expect("8 bytes"));
+        finite(v, what).map(|_| v)
+    }
+}
+
+fn finite(v: f64, what: &str) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::Invalid(format!("the {what} is not a finite number")))
+    }
+}
