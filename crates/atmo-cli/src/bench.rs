@@ -29,21 +29,25 @@ pub struct BenchArgs {
 enum Area {
     /// The skylight map by sampling shells against the reference integrator.
     Sky,
+    /// The SVD skylight table: precompute, size, error against the shell method, and
+    /// drawing a map and a 1920 x 1080 frame from it.
+    SkyTable,
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
     match args.area {
         Area::Sky => bench_sky(args.quick, args.json),
+        Area::SkyTable => crate::bench_table::bench_sky_table(args.quick, args.json),
     }
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
 }
 
 /// Milliseconds taken by `f`.
-fn time_ms(f: impl FnOnce()) -> f64 {
+pub fn time_ms(f: impl FnOnce()) -> f64 {
     let start = Instant::now();
     f();
     start.elapsed().as_secs_f64() * 1e3

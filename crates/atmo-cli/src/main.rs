@@ -4,6 +4,7 @@
 //! allowed range; no output file is left behind), 1 for anything else.
 
 mod bench;
+mod bench_table;
 mod precompute;
 mod sky;
 mod sky_table;

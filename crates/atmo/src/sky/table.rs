@@ -696,6 +696,43 @@ impl SkylightTable {
         )
     }
 
+    /// The display errors (units of epsilon) of the table against the shell method at
+    /// each (sun elevation rad, altitude m) pair, one per direction and channel; pairs at
+    /// the same altitude share one model, so group them for speed.
+    pub fn errors_against_direct(&self, pairs: &[(f64, f64)]) -> Result<Vec<Vec<f32>>> {
+        let mut altitudes: Vec<f64> = pairs.iter().map(|p| p.1).collect();
+        altitudes.sort_by(f64::total_cmp);
+        altitudes.dedup();
+        let per_altitude = altitudes
+            .par_iter()
+            .map(|&h| {
+                let model = self.direct_model(h)?;
+                pairs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| p.1 == h)
+                    .map(|(k, &(sun, _))| {
+                        let table = self.map(sun, h)?;
+                        let direct = self.direct_map(&model, sun);
+                        let errors = table
+                            .iter()
+                            .zip(&direct)
+                            .flat_map(|(a, e)| {
+                                (0..CHANNELS).map(move |c| self.settings.bound.error(a[c], e[c]))
+                            })
+                            .collect();
+                        Ok((k, errors))
+                    })
+                    .collect::<Result<Vec<_>>>()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut out = vec![Vec::new(); pairs.len()];
+        for (k, errors) in per_altitude.into_iter().flatten() {
+            out[k] = errors;
+        }
+        Ok(out)
+    }
+
     /// The skylight map computed directly by `model` for a sun at `sun_elevation` rad,
     /// in the table's channels.
     pub fn direct_map(&self, model: &SkyModel, sun_elevation: f64) -> Vec<Vec3> {
