@@ -5,6 +5,7 @@
 
 mod bench;
 mod bench_table;
+mod inspect;
 mod precompute;
 mod sky;
 mod sky_table;
@@ -28,6 +29,9 @@ enum Command {
     Sky(sky::SkyArgs),
     /// Precompute tables for real-time drawing: `atmo precompute sky -o earth.atmo-sky`.
     Precompute(precompute::PrecomputeArgs),
+    /// What a skylight table holds (parameters, size, terms, error), and with --plots
+    /// the pictures that explain it.
+    Inspect(inspect::InspectArgs),
     /// Time each method against its baseline in the same run and print the ratios.
     Bench(bench::BenchArgs),
 }
@@ -37,6 +41,7 @@ fn main() {
     let result = match cli.command {
         Command::Sky(args) => sky::run(args),
         Command::Precompute(args) => precompute::run(args),
+        Command::Inspect(args) => inspect::run(args),
         Command::Bench(args) => bench::run(args),
     };
     if let Err(error) = result {

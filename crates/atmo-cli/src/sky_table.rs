@@ -50,23 +50,17 @@ pub struct Animation {
 }
 
 impl Animation {
-    /// (sun elevation rad, altitude m) of frame `k`.
+    /// (sun elevation rad, altitude m) of frame `k`; the last is exactly at the end.
     fn at(&self, table: &SkylightTable, k: usize) -> (f64, f64) {
         let u = k as f64 / (self.frames - 1) as f64;
         match self.what {
             Animate::Sun => {
                 let end = table.sun_axis().min;
-                (
-                    self.sun.elevation + (end - self.sun.elevation) * u,
-                    self.altitude_m,
-                )
+                (self.sun.elevation * (1.0 - u) + end * u, self.altitude_m)
             }
             Animate::Altitude => {
                 let end = table.altitude_axis().max;
-                (
-                    self.sun.elevation,
-                    self.altitude_m + (end - self.altitude_m) * u,
-                )
+                (self.sun.elevation, self.altitude_m * (1.0 - u) + end * u)
             }
         }
     }

@@ -235,8 +235,8 @@ impl SkyPicture {
     }
 
     /// Draws the skylight map of `sun` seen from `altitude_m` from `table` (sky 4.2);
-    /// an error outside the table's ranges. Below the table's lowest elevation (the
-    /// horizon's dip at its highest altitude) the picture is black.
+    /// an error outside the table's ranges. The table holds the sky above the horizon;
+    /// below it, where an application draws its terrain, the picture is black.
     pub fn from_table(table: &SkylightTable, sun: Sun, altitude_m: f64) -> Result<Self> {
         let map = table.map(sun.elevation, altitude_m)?;
         Ok(Self::from_table_map(table, sun, altitude_m, map))
@@ -255,7 +255,7 @@ impl SkyPicture {
         let r = atmosphere.bottom_radius_m + altitude_m;
         transmittance_to_sun(atmosphere, r, sun.elevation.sin(), &mut sun_spectrum);
         sun_disc_radiance(atmosphere, &mut sun_spectrum);
-        let grid = table.grid();
+        let grid = table.grid(altitude_m);
         let ground_below = grid.elevation_min;
         Self::with_maps(
             atmosphere,

@@ -501,18 +501,19 @@ impl SkylightTable {
         let (sun, altitude) = (settings.sun_axis(), settings.altitude_axis());
         let transmittance = Arc::new(TransmittanceTable::new(atmosphere));
         let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
-        let min_elevation = direction_grid(atmosphere, settings).elevation_min;
         let total = sun.count * altitude.count;
         let done = AtomicUsize::new(0);
         // Per altitude, the maps of every sun: [sun][direction].
         let maps: Vec<Vec<[f32; 3]>> = (0..altitude.count)
             .into_par_iter()
             .map(|a| {
+                let h = altitude.value(a);
+                let min_elevation = direction_grid(atmosphere, settings, h).elevation_min;
                 let model = SkyModel::with_grid(
                     atmosphere,
                     transmittance.clone(),
                     &settings.sky,
-                    altitude.value(a),
+                    h,
                     min_elevation,
                 )?;
                 let mut out = Vec::new();
@@ -594,9 +595,10 @@ impl SkylightTable {
         &self.settings
     }
 
-    /// The view directions of its skylight maps (`L x L`, from `-phi(h0)` to the zenith).
-    pub fn grid(&self) -> DirectionGrid {
-        direction_grid(&self.atmosphere, &self.settings)
+    /// The view directions of its skylight maps seen from `altitude_m`: `L x L`, from
+    /// the horizon (its dip below the horizontal) to the zenith.
+    pub fn grid(&self, altitude_m: f64) -> DirectionGrid {
+        direction_grid(&self.atmosphere, &self.settings, altitude_m)
     }
 
     /// The sun elevation axis, rad.
@@ -692,7 +694,7 @@ impl SkylightTable {
             Arc::new(TransmittanceTable::new(&self.atmosphere)),
             &self.settings.sky,
             altitude_m,
-            self.grid().elevation_min,
+            self.grid(altitude_m).elevation_min,
         )
     }
 
@@ -746,11 +748,20 @@ impl SkylightTable {
     }
 }
 
-/// The `L x L` view grid of a table: elevations from `-phi(h0)` (the horizon's dip at the
-/// highest altitude, sky (12), (15)) to the zenith.
-fn direction_grid(atmosphere: &Atmosphere, settings: &TableSettings) -> DirectionGrid {
+/// The `L x L` view grid of a table at `altitude_m`: elevations from the horizon
+/// (`-phi(h)`, sky (15)) to the zenith. Unlike sky (12), whose rows start at the dip of the
+/// highest altitude for every altitude, the rows follow the horizon: in the paper's grid
+/// the rows between `-phi(h0)` and `-phi(h)` look at the ground from low altitudes and at
+/// the sky from high ones, a jump that moves with altitude, which no interpolation
+/// between altitudes can follow (up to 100 epsilon off near the horizon, measured) and
+/// which costs the SVD terms.
+fn direction_grid(
+    atmosphere: &Atmosphere,
+    settings: &TableSettings,
+    altitude_m: f64,
+) -> DirectionGrid {
     let l = settings.sky.directions;
-    let dip = horizon_dip(atmosphere.bottom_radius_m, settings.max_altitude_m);
+    let dip = horizon_dip(atmosphere.bottom_radius_m, altitude_m);
     DirectionGrid::new(l, l, -dip, std::f64::consts::FRAC_PI_2)
 }
 
