@@ -183,7 +183,9 @@ impl Default for TableSettings {
             min_sun_elevation: (-10f64).to_radians(),
             altitude_steps: 32,
             max_altitude_m: 13_000.0,
-            altitude_power: 1.0,
+            // Measured against 1.0 and 2.0 (docs/sky-table.md): the most even error over
+            // altitude, the aerosols near the ground changing the sky fastest.
+            altitude_power: 1.5,
             bound: ErrorBound {
                 epsilon: 1.0 / 255.0,
                 display: Display {
