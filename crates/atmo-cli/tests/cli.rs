@@ -386,3 +386,26 @@ fn bad_tables_and_ranges_exit_2_and_write_nothing() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn an_interrupted_precompute_leaves_no_table() {
+    let dir = scratch("interrupted");
+    let table = dir.join("big.atmo-sky");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_atmo"))
+        .args(["precompute", "sky", "-o", table.to_str().unwrap()])
+        .args(["--sun-steps", "64", "--altitude-steps", "16"])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let finished = child.try_wait().unwrap().is_some();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!finished, "the precompute should take longer than 1.5 s");
+    assert!(
+        !table.exists(),
+        "a killed precompute left {}",
+        table.display()
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

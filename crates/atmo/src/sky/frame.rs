@@ -110,7 +110,9 @@ impl Camera {
 /// cannot tell it from the exact function.
 #[inline]
 fn fast_acos(x: f32) -> f32 {
-    let a = x.abs().min(1.0);
+    // Not `min`, which would turn NaN into 1: NaN in, NaN out.
+    let a = x.abs();
+    let a = if a > 1.0 { 1.0 } else { a };
     let r =
         (1.0 - a).sqrt() * (1.570_728_8 + a * (-0.212_114_4 + a * (0.074_261 - 0.018_729_3 * a)));
     if x < 0.0 {
@@ -321,12 +323,13 @@ impl SkyPicture {
         }
         for (k, o) in out.iter_mut().enumerate() {
             let elevation = elevations[k];
+            // No ray (outside the fisheye's circle) has a NaN elevation: black.
             let map = if elevation >= self.ground_below {
                 Some(&self.sky)
-            } else if zs[k].is_nan() {
-                None
-            } else {
+            } else if elevation < self.ground_below {
                 self.ground.as_ref()
+            } else {
+                None
             };
             let mut rgb = map.map_or(Vec3A::ZERO, |m| m.sample(azimuths[k], elevation));
             if sun_disc && suns[k] >= self.sun_cos_radius {
@@ -434,6 +437,7 @@ mod tests {
             .map(|x| (fast_acos(x) - x.acos()).abs())
             .fold(0.0, f32::max);
         assert!(worst < 7e-5, "{worst}");
+        assert!(fast_acos(f32::NAN).is_nan());
     }
 
     #[test]
