@@ -76,9 +76,10 @@ pub fn bench_sky_table(quick: bool, json: bool) -> Result<()> {
     let params = json!({
         "directions": settings.sky.directions, "sun_steps": settings.sun_steps,
         "altitude_steps": settings.altitude_steps,
-        "sun_range_deg": [sun_axis.min.to_degrees(), sun_axis.max.to_degrees()],
-        "altitude_range_m": [altitude_axis.min, altitude_axis.max],
-        "altitude_power": settings.altitude_power, "epsilon": settings.bound.epsilon,
+        "sun_range_deg": [sun_axis.min().to_degrees(), sun_axis.max().to_degrees()],
+        "altitude_range_m": [altitude_axis.min(), altitude_axis.max()],
+        "altitude_power": settings.altitude_power,
+        "sun_horizon_density": settings.sun_horizon_density, "epsilon": settings.bound.epsilon,
         "exposure": settings.bound.display.exposure, "srgb": settings.bound.srgb,
         "shells": settings.sky.shells, "order": settings.sky.order,
         "threads": rayon::current_num_threads(),
@@ -108,10 +109,10 @@ pub fn bench_sky_table(quick: bool, json: bool) -> Result<()> {
     // compressed) and at quasi-random off-grid pairs, several suns per altitude.
     let pairs: Vec<(f64, f64)> = (0..altitudes)
         .flat_map(|a| {
-            let h = altitude_axis.max * van_der_corput(a + 1, 3);
+            let h = altitude_axis.max() * van_der_corput(a + 1, 3);
             (0..suns_each).map(move |s| {
                 let u = van_der_corput(a * suns_each + s + 1, 2);
-                (sun_axis.min + (sun_axis.max - sun_axis.min) * u, h)
+                (sun_axis.min() + (sun_axis.max() - sun_axis.min()) * u, h)
             })
         })
         .collect();

@@ -53,8 +53,8 @@ pub fn run(args: InspectArgs) -> Result<()> {
 fn print_summary(table: &SkylightTable, path: &Path, bytes: u64) {
     let s = table.settings();
     let (sun, altitude) = (table.sun_axis(), table.altitude_axis());
-    let grid = table.grid(altitude.max);
-    let raw = grid.azimuths * grid.elevations * sun.count * altitude.count * CHANNELS;
+    let grid = table.grid(altitude.max());
+    let raw = grid.azimuths * grid.elevations * sun.count() * altitude.count() * CHANNELS;
     let a = table.atmosphere();
     println!(
         "{}: {bytes} bytes, {:.2} % of the {raw} bytes of the table in 8-bit RGB",
@@ -81,16 +81,18 @@ fn print_summary(table: &SkylightTable, path: &Path, bytes: u64) {
     println!(
         "grid: {} x {} directions (azimuth from the sun 0 to 180 deg, elevation from the \
          horizon, down to {:.2} deg at the highest altitude, to 90 deg), {} sun elevations \
-         ({} to {} deg), {} altitudes (0 to {} m, spacing power {})",
+         ({} to {} deg, {}x denser at the horizon), {} altitudes (0 to {} m, spacing power \
+         {})",
         grid.azimuths,
         grid.elevations,
         grid.elevation_min.to_degrees(),
-        sun.count,
-        sun.min.to_degrees(),
-        sun.max.to_degrees(),
-        altitude.count,
-        altitude.max,
-        altitude.power
+        sun.count(),
+        sun.min().to_degrees(),
+        sun.max().to_degrees(),
+        s.sun_horizon_density,
+        altitude.count(),
+        altitude.max(),
+        s.altitude_power
     );
     let b = s.bound;
     println!(

@@ -39,6 +39,10 @@ pub struct SkyTableArgs {
     /// Lowest sun elevation, degrees (the paper: 0; below 0 covers dusk and dawn).
     #[arg(long, default_value_t = -10.0, allow_negative_numbers = true)]
     min_sun_elevation: f64,
+    /// How many times denser sun elevations are at the horizon than far from it (1:
+    /// even, as the paper); the sky changes fastest there.
+    #[arg(long, default_value_t = TableSettings::default().sun_horizon_density)]
+    sun_horizon_density: f64,
     /// Viewpoint altitudes N, from the ground to --max-altitude (sky (14)).
     #[arg(long, default_value_t = 32)]
     altitude_steps: usize,
@@ -89,6 +93,7 @@ pub fn run(args: PrecomputeArgs) -> Result<()> {
         altitude_steps: args.altitude_steps,
         max_altitude_m: args.max_altitude,
         altitude_power: args.altitude_power,
+        sun_horizon_density: args.sun_horizon_density,
         bound: ErrorBound {
             epsilon: args.epsilon,
             display: Display {

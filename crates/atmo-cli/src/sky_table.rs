@@ -55,11 +55,11 @@ impl Animation {
         let u = k as f64 / (self.frames - 1) as f64;
         match self.what {
             Animate::Sun => {
-                let end = table.sun_axis().min;
+                let end = table.sun_axis().min();
                 (self.sun.elevation * (1.0 - u) + end * u, self.altitude_m)
             }
             Animate::Altitude => {
-                let end = table.altitude_axis().max;
+                let end = table.altitude_axis().max();
                 (self.sun.elevation, self.altitude_m * (1.0 - u) + end * u)
             }
         }

@@ -44,47 +44,98 @@ const MAX_RANK: usize = 768;
 /// Largest magnitude of the 16-bit fixed-point values `s_k`, `t_k` are stored in.
 const Q_MAX: f32 = 32767.0;
 
+/// Half-width of the band around the horizon where sun elevations are denser (the extra
+/// density falls to 1/e there), deg: the off-grid error of evenly spaced suns peaks
+/// within 5 deg of the horizon (docs/sky-table.md).
+const SUN_HORIZON_WIDTH_DEG: f64 = 5.0;
+
 /// The term counts aim this fraction below `epsilon`, so rounding in the inverse display
 /// transform can never carry an error over the bound.
 const BOUND_MARGIN: f32 = 1e-3;
 
-/// One axis of the (sun elevation, altitude) grid: `count` points from `min` to `max`
-/// (both included), at `min + (max - min) u^power` for `u = i / (count - 1)`; `power > 1`
-/// puts more points near `min`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// One axis of the (sun elevation, altitude) grid: increasing values, both ends
+/// included, spaced as a density asks (more points where the sky changes fastest).
+#[derive(Debug, Clone, PartialEq)]
 pub struct TableAxis {
-    /// First grid value.
-    pub min: f64,
-    /// Last grid value.
-    pub max: f64,
-    /// Grid points, at least 2.
-    pub count: usize,
-    /// Spacing exponent, 1 for even spacing.
-    pub power: f64,
+    values: Vec<f64>,
 }
 
+/// Points of the fine grid on which [`TableAxis::with_density`] integrates the density.
+const DENSITY_SAMPLES: usize = 1 << 16;
+
 impl TableAxis {
+    /// `count` points from `min` to `max` at `min + (max - min) u^power`,
+    /// `u = i / (count - 1)`: even for `power = 1`, denser near `min` above it.
+    pub fn power(min: f64, max: f64, count: usize, power: f64) -> Self {
+        let values = (0..count)
+            .map(|i| {
+                let u = i as f64 / (count - 1) as f64;
+                min + (max - min) * u.powf(power)
+            })
+            .collect();
+        TableAxis { values }
+    }
+
+    /// `count` points from `min` to `max` with as many points per unit near `v` as
+    /// `density(v)` says (relative): point `i` is where the integral of the density
+    /// from `min` reaches `i / (count - 1)` of the whole.
+    pub fn with_density(min: f64, max: f64, count: usize, density: impl Fn(f64) -> f64) -> Self {
+        let h = (max - min) / DENSITY_SAMPLES as f64;
+        let mut cumulative = vec![0.0; DENSITY_SAMPLES + 1];
+        for k in 0..DENSITY_SAMPLES {
+            let v = min + (k as f64 + 0.5) * h;
+            cumulative[k + 1] = cumulative[k] + density(v) * h;
+        }
+        let total = cumulative[DENSITY_SAMPLES];
+        let mut values: Vec<f64> = (0..count)
+            .map(|i| {
+                let target = total * i as f64 / (count - 1) as f64;
+                let k = cumulative
+                    .partition_point(|&c| c < target)
+                    .clamp(1, DENSITY_SAMPLES);
+                let (c0, c1) = (cumulative[k - 1], cumulative[k]);
+                let f = if c1 > c0 {
+                    (target - c0) / (c1 - c0)
+                } else {
+                    0.0
+                };
+                min + (k as f64 - 1.0 + f) * h
+            })
+            .collect();
+        (values[0], values[count - 1]) = (min, max);
+        TableAxis { values }
+    }
+
+    /// Grid points.
+    pub fn count(&self) -> usize {
+        self.values.len()
+    }
+
+    /// First grid value.
+    pub fn min(&self) -> f64 {
+        self.values[0]
+    }
+
+    /// Last grid value.
+    pub fn max(&self) -> f64 {
+        self.values[self.values.len() - 1]
+    }
+
     /// The value of grid point `i`.
     pub fn value(&self, i: usize) -> f64 {
-        let u = i as f64 / (self.count - 1) as f64;
-        self.min + (self.max - self.min) * u.powf(self.power)
+        self.values[i]
     }
 
     /// The grid interval `[value(i), value(i + 1)]` holding `v` and the weight of its
-    /// upper end for linear interpolation, or `None` outside `[min, max]`.
+    /// upper end for linear interpolation (exactly 0 or 1 at grid points), or `None`
+    /// outside `[min, max]`.
     pub fn locate(&self, v: f64) -> Option<(usize, f32)> {
-        if !(v >= self.min && v <= self.max) {
+        if !(v >= self.min() && v <= self.max()) {
             return None;
         }
-        let u = ((v - self.min) / (self.max - self.min)).powf(self.power.recip());
-        let mut i = ((u * (self.count - 1) as f64) as usize).min(self.count - 2);
-        // Rounding in the power may land one interval off; step to the one holding v.
-        if v < self.value(i) && i > 0 {
-            i -= 1;
-        } else if v > self.value(i + 1) && i + 2 < self.count {
-            i += 1;
-        }
-        let (a, b) = (self.value(i), self.value(i + 1));
+        let n = self.values.len();
+        let i = self.values.partition_point(|&x| x <= v).clamp(1, n - 1) - 1;
+        let (a, b) = (self.values[i], self.values[i + 1]);
         Some((i, ((v - a) / (b - a)).clamp(0.0, 1.0) as f32))
     }
 }
@@ -165,6 +216,9 @@ pub struct TableSettings {
     pub sun_steps: usize,
     /// Lowest sun elevation, rad; the highest is the zenith.
     pub min_sun_elevation: f64,
+    /// How many times denser sun elevations are at the horizon than far from it (1:
+    /// even, as the paper).
+    pub sun_horizon_density: f64,
     /// Viewpoint altitudes `N`, sky (14).
     pub altitude_steps: usize,
     /// Highest viewpoint altitude `h0`, m (paper: 13 km); the lowest is the ground.
@@ -181,6 +235,7 @@ impl Default for TableSettings {
             sky: SkySettings::default(),
             sun_steps: 128,
             min_sun_elevation: (-10f64).to_radians(),
+            sun_horizon_density: 4.0,
             altitude_steps: 32,
             max_altitude_m: 13_000.0,
             // Measured against 1.0 and 2.0 (docs/sky-table.md): the most even error over
@@ -219,6 +274,7 @@ impl TableSettings {
             ));
         }
         check_range("altitude_power", self.altitude_power, 0.25, 4.0)?;
+        check_range("sun_horizon_density", self.sun_horizon_density, 1.0, 20.0)?;
         if !(self.bound.epsilon > 0.0 && self.bound.epsilon < 1.0) {
             return Err(Error::out_of_range(
                 "epsilon",
@@ -249,24 +305,28 @@ impl TableSettings {
         entries * (12 + 12 + 24) + 2 * self.sky.memory_bytes(spectral_channels)
     }
 
-    /// The sun elevation axis, rad.
+    /// The sun elevation axis, rad: `sun_horizon_density` times denser at the horizon
+    /// than far from it, where the glow at the horizon follows the sun faster than
+    /// interpolation between evenly spaced suns can (docs/sky-table.md).
     pub fn sun_axis(&self) -> TableAxis {
-        TableAxis {
-            min: self.min_sun_elevation,
-            max: std::f64::consts::FRAC_PI_2,
-            count: self.sun_steps,
-            power: 1.0,
-        }
+        let ratio = self.sun_horizon_density;
+        let width = SUN_HORIZON_WIDTH_DEG.to_radians();
+        TableAxis::with_density(
+            self.min_sun_elevation,
+            std::f64::consts::FRAC_PI_2,
+            self.sun_steps,
+            |e| 1.0 + (ratio - 1.0) * (-(e / width).powi(2)).exp(),
+        )
     }
 
     /// The altitude axis, m.
     pub fn altitude_axis(&self) -> TableAxis {
-        TableAxis {
-            min: 0.0,
-            max: self.max_altitude_m,
-            count: self.altitude_steps,
-            power: self.altitude_power,
-        }
+        TableAxis::power(
+            0.0,
+            self.max_altitude_m,
+            self.altitude_steps,
+            self.altitude_power,
+        )
     }
 }
 
@@ -476,6 +536,9 @@ pub struct SkylightTable {
     pub(crate) settings: TableSettings,
     /// Largest display error at the grid points, in units of epsilon (at most 1).
     pub(crate) grid_error: f32,
+    /// The axes the settings describe, kept: drawing looks them up every time.
+    pub(crate) sun: TableAxis,
+    pub(crate) altitude: TableAxis,
     pub(crate) factors: Factors,
 }
 
@@ -503,10 +566,10 @@ impl SkylightTable {
         let (sun, altitude) = (settings.sun_axis(), settings.altitude_axis());
         let transmittance = Arc::new(TransmittanceTable::new(atmosphere));
         let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
-        let total = sun.count * altitude.count;
+        let total = sun.count() * altitude.count();
         let done = AtomicUsize::new(0);
         // Per altitude, the maps of every sun: [sun][direction].
-        let maps: Vec<Vec<[f32; 3]>> = (0..altitude.count)
+        let maps: Vec<Vec<[f32; 3]>> = (0..altitude.count())
             .into_par_iter()
             .map(|a| {
                 let h = altitude.value(a);
@@ -519,7 +582,7 @@ impl SkylightTable {
                     min_elevation,
                 )?;
                 let mut out = Vec::new();
-                for s in 0..sun.count {
+                for s in 0..sun.count() {
                     out.extend(model.skylight_map(sun.value(s)).to_rgb(&colour));
                     progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
                 }
@@ -531,7 +594,7 @@ impl SkylightTable {
             let mut m = vec![0.0f32; rows * total];
             m.par_chunks_mut(total).enumerate().for_each(|(d, row)| {
                 for (column, v) in row.iter_mut().enumerate() {
-                    let (a, s) = (column / sun.count, column % sun.count);
+                    let (a, s) = (column / sun.count(), column % sun.count());
                     *v = maps[a][s * rows + d][c];
                 }
             });
@@ -558,6 +621,8 @@ impl SkylightTable {
             atmosphere: atmosphere.clone(),
             settings: settings.clone(),
             grid_error: 0.0,
+            sun: settings.sun_axis(),
+            altitude: settings.altitude_axis(),
             factors,
         };
         table.grid_error = table.error_against(values);
@@ -568,11 +633,11 @@ impl SkylightTable {
     /// every grid point, drawn as [`SkylightTable::map_into`] draws.
     pub fn error_against(&self, values: &[Vec<f32>; CHANNELS]) -> f32 {
         let (sun, altitude) = (self.sun_axis(), self.altitude_axis());
-        let cols = sun.count * altitude.count;
+        let cols = sun.count() * altitude.count();
         (0..cols)
             .into_par_iter()
             .map(|column| {
-                let (a, s) = (column / sun.count, column % sun.count);
+                let (a, s) = (column / sun.count(), column % sun.count());
                 let map = self
                     .map(sun.value(s), altitude.value(a))
                     .expect("grid points lie in the table");
@@ -604,13 +669,13 @@ impl SkylightTable {
     }
 
     /// The sun elevation axis, rad.
-    pub fn sun_axis(&self) -> TableAxis {
-        self.settings.sun_axis()
+    pub fn sun_axis(&self) -> &TableAxis {
+        &self.sun
     }
 
     /// The altitude axis, m.
-    pub fn altitude_axis(&self) -> TableAxis {
-        self.settings.altitude_axis()
+    pub fn altitude_axis(&self) -> &TableAxis {
+        &self.altitude
     }
 
     /// The largest display error at the grid points, in units of epsilon.
@@ -665,8 +730,8 @@ impl SkylightTable {
                 (sun_elevation.to_degrees() * 1e9).round() / 1e9,
                 &format!(
                     "the table's [{}, {}]",
-                    sun.min.to_degrees(),
-                    sun.max.to_degrees()
+                    sun.min().to_degrees(),
+                    sun.max().to_degrees()
                 ),
             )
         })?;
@@ -674,10 +739,10 @@ impl SkylightTable {
             Error::out_of_range(
                 "altitude (m)",
                 altitude_m,
-                &format!("the table's [{}, {}]", altitude.min, altitude.max),
+                &format!("the table's [{}, {}]", altitude.min(), altitude.max()),
             )
         })?;
-        let m = sun.count;
+        let m = sun.count();
         let corners = [
             (a * m + s, (1.0 - ws) * (1.0 - wa)),
             (a * m + s + 1, ws * (1.0 - wa)),
@@ -685,7 +750,7 @@ impl SkylightTable {
             ((a + 1) * m + s + 1, ws * wa),
         ];
         self.factors
-            .draw(&corners, m * altitude.count, scratch, out);
+            .draw(&corners, m * altitude.count(), scratch, out);
         Ok(())
     }
 
@@ -773,18 +838,18 @@ mod tests {
 
     #[test]
     fn axes_locate_their_own_points_and_refuse_outside() {
-        for power in [1.0, 1.7, 2.0] {
-            let axis = TableAxis {
-                min: -0.2,
-                max: 13.0,
-                count: 9,
-                power,
-            };
+        let dense = |v: f64| 1.0 + 4.0 * (-(v - 2.0f64).powi(2)).exp();
+        let axes = [
+            TableAxis::power(-0.2, 13.0, 9, 1.0),
+            TableAxis::power(-0.2, 13.0, 9, 1.7),
+            TableAxis::with_density(-0.2, 13.0, 9, dense),
+        ];
+        for axis in &axes {
+            assert_eq!((axis.count(), axis.min(), axis.max()), (9, -0.2, 13.0));
             for i in 0..9 {
                 let (j, w) = axis.locate(axis.value(i)).unwrap();
-                let at = axis.value(j) * (1.0 - w as f64) + axis.value(j + 1) * w as f64;
-                assert!((at - axis.value(i)).abs() < 1e-9, "{power} {i}: {j} {w}");
-                assert!(w == 0.0 || w == 1.0, "{power} {i}: {w}");
+                assert!(w == 0.0 || w == 1.0, "{axis:?} {i}: {w}");
+                assert_eq!(if w == 0.0 { j } else { j + 1 }, i);
             }
             let (j, w) = axis.locate(0.5 * (axis.value(3) + axis.value(4))).unwrap();
             assert_eq!(j, 3);
@@ -792,6 +857,14 @@ mod tests {
             assert!(axis.locate(-0.21).is_none() && axis.locate(13.01).is_none());
             assert!(axis.locate(f64::NAN).is_none());
         }
+        // The density puts the points where it is high: steps near 2 are ~5x shorter.
+        let d = &axes[2];
+        let steps: Vec<f64> = (0..8).map(|i| d.value(i + 1) - d.value(i)).collect();
+        let near = (0..8)
+            .find(|&i| d.value(i) <= 2.0 && d.value(i + 1) > 2.0)
+            .unwrap();
+        assert!(steps[near] * 3.0 < steps[7], "{steps:?}");
+        assert!(steps.iter().all(|&s| s > 0.0), "{steps:?}");
     }
 
     #[test]

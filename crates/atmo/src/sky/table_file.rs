@@ -12,7 +12,7 @@
 //! | shells, directions L, scattering directions, sun bins, order | 5 x `u32` |
 //! | multiple Mie | `u8` 0 or 1 |
 //! | longest interval, m | `f64` |
-//! | sun steps M, lowest sun elevation (rad) | `u32`, `f64` |
+//! | sun steps M, lowest sun elevation (rad), density at the horizon | `u32`, `f64`, `f64` |
 //! | altitude steps N, highest altitude (m), spacing power | `u32`, `f64`, `f64` |
 //! | epsilon, exposure, tone map (0 clamp, 1 exponential, 2 ACES), sRGB-encoded (0, 1) | `f32`, `f32`, `u8`, `u8` |
 //! | largest error at the grid points, units of epsilon | `f32` |
@@ -62,6 +62,7 @@ impl SkylightTable {
         put_f64(&mut w, sky.max_interval_m);
         put_u32(&mut w, s.sun_steps as u32);
         put_f64(&mut w, s.min_sun_elevation);
+        put_f64(&mut w, s.sun_horizon_density);
         put_u32(&mut w, s.altitude_steps as u32);
         put_f64(&mut w, s.max_altitude_m);
         put_f64(&mut w, s.altitude_power);
@@ -181,6 +182,7 @@ impl SkylightTable {
         sky.max_interval_m = r.f64("longest interval")?;
         let sun_steps = r.u32("sun steps")? as usize;
         let min_sun_elevation = r.f64("lowest sun elevation")?;
+        let sun_horizon_density = r.f64("sun density at the horizon")?;
         let altitude_steps = r.u32("altitude steps")? as usize;
         let max_altitude_m = r.f64("highest altitude")?;
         let altitude_power = r.f64("altitude spacing power")?;
@@ -201,6 +203,7 @@ impl SkylightTable {
             sky,
             sun_steps,
             min_sun_elevation,
+            sun_horizon_density,
             altitude_steps,
             max_altitude_m,
             altitude_power,
@@ -227,6 +230,8 @@ impl SkylightTable {
             )));
         }
         Ok(SkylightTable {
+            sun: settings.sun_axis(),
+            altitude: settings.altitude_axis(),
             atmosphere,
             settings,
             grid_error,
