@@ -9,11 +9,13 @@
 //! display (see [`ErrorBound`]). Drawing interpolates `t_k` bilinearly at the wanted sun
 //! and altitude and sums `T(theta, phi)` products per direction (sky 4.2).
 //!
-//! Beyond the paper: the sun grid may start below the horizon (dusk and dawn), both
-//! grids include their ends, the altitude grid may be denser near the ground
-//! (`altitude_power`), the SVD is truncated and randomized ([`super::svd`]), the term
-//! counts are measured on the factors as stored (f16), and the table holds linear sRGB
-//! radiance rather than 8-bit values, so any exposure can be drawn from it.
+//! Beyond the paper (docs/sky-table.md has the measurements): the rows follow each
+//! altitude's horizon; the sun grid starts below the horizon (dusk and dawn) and is
+//! denser near it, the altitude grid denser near the ground, both including their ends;
+//! the SVD sees the square root of radiance, runs on the three channels stacked (they
+//! share `t_k`), and is truncated and randomized ([`super::svd`]); factors are stored in
+//! 16-bit fixed point and the term counts measured on them as stored; and the table holds
+//! linear sRGB radiance rather than 8-bit values, so any exposure can be drawn from it.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
