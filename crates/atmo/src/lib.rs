@@ -3,8 +3,10 @@
 //! - [`atmosphere`]: the medium (planet, densities, phase functions, optical depth,
 //!   spectrum to colour).
 //! - [`sky`]: the sky with multiple scattering by sampling shells and scattering maps
-//!   (Iwasaki, Yanagita, Dobashi, Nishita 2004), cited as `sky (n)`.
-//! - [`reference`]: slow, obviously-correct integrators the fast methods are tested
+//!   (Iwasaki, Yanagita, Dobashi, Nishita 2004), cited as `sky (n)`, and the skylight
+//!   table over sun and altitude compressed by SVD for real-time drawing
+//!   ([`sky::table`]).
+//! - [`reference`](mod@reference): slow, obviously-correct integrators the fast methods are tested
 //!   against.
 //! - [`image`]: float frame buffers, exposure, tone mapping, PNG/EXR written atomically.
 
