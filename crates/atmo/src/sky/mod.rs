@@ -5,7 +5,9 @@
 //! altitude: the sampling shells, the density x attenuation maps of the view rays, and
 //! the light maps; [`SkyModel::skylight_map`] then gives the skylight map for any sun
 //! elevation with lookups only. See docs/sky.md for the derivation and the choices made
-//! beyond the paper.
+//! beyond the paper. [`table::SkylightTable`] (section 4) tabulates the maps over sun
+//! elevation and altitude, compressed by SVD, for drawing in well under a millisecond
+//! (docs/sky-table.md).
 
 pub mod frame;
 pub mod grid;
