@@ -5,7 +5,9 @@
 //! are ever used, so we compute just those with the randomized range finder of Halko,
 //! Martinsson and Tropp (2011, algorithms 4.4 and 5.1): sample the range of `A` with a
 //! random block, sharpen it with power iterations, and decompose the small projection
-//! exactly with faer. With power iterations the leading terms match the exact SVD to
+//! exactly with faer (built without its thread pool: its parallel products round
+//! differently with the number of threads, and the table must not depend on the machine;
+//! sequential, the SVD of the default table takes under 7 s). With power iterations the leading terms match the exact SVD to
 //! working precision for a matrix whose singular values fall as fast as the sky's; the
 //! term counts of [`super::table`] are measured on the factors actually stored, so the
 //! error bound never rests on that claim.
