@@ -281,7 +281,7 @@ impl TableSettings {
             return Err(Error::out_of_range(
                 "epsilon",
                 self.bound.epsilon,
-                "(0, 1), in displayed sRGB values",
+                "(0, 1), in displayed values",
             ));
         }
         check_positive("exposure", self.bound.display.exposure as f64, 1e9)?;
