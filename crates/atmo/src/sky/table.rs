@@ -574,14 +574,11 @@ impl SkylightTable {
         let maps: Vec<Vec<[f32; 3]>> = (0..altitude.count())
             .into_par_iter()
             .map(|a| {
-                let h = altitude.value(a);
-                let min_elevation = direction_grid(atmosphere, settings, h).elevation_min;
-                let model = SkyModel::with_grid(
+                let model = shell_model(
                     atmosphere,
+                    settings,
                     transmittance.clone(),
-                    &settings.sky,
-                    h,
-                    min_elevation,
+                    altitude.value(a),
                 )?;
                 let mut out = Vec::new();
                 for s in 0..sun.count() {
@@ -758,13 +755,8 @@ impl SkylightTable {
 
     /// The shell-method model at `altitude_m` on this table's grid, to compare with.
     pub fn direct_model(&self, altitude_m: f64) -> Result<SkyModel> {
-        SkyModel::with_grid(
-            &self.atmosphere,
-            Arc::new(TransmittanceTable::new(&self.atmosphere)),
-            &self.settings.sky,
-            altitude_m,
-            self.grid(altitude_m).elevation_min,
-        )
+        let transmittance = Arc::new(TransmittanceTable::new(&self.atmosphere));
+        shell_model(&self.atmosphere, &self.settings, transmittance, altitude_m)
     }
 
     /// The display errors (units of epsilon) of the table against the shell method at
@@ -774,10 +766,12 @@ impl SkylightTable {
         let mut altitudes: Vec<f64> = pairs.iter().map(|p| p.1).collect();
         altitudes.sort_by(f64::total_cmp);
         altitudes.dedup();
+        let transmittance = Arc::new(TransmittanceTable::new(&self.atmosphere));
         let per_altitude = altitudes
             .par_iter()
             .map(|&h| {
-                let model = self.direct_model(h)?;
+                let model =
+                    shell_model(&self.atmosphere, &self.settings, transmittance.clone(), h)?;
                 pairs
                     .iter()
                     .enumerate()
@@ -815,6 +809,24 @@ impl SkylightTable {
             .map(Vec3::from)
             .collect()
     }
+}
+
+/// The shell method at `altitude_m` on the table's grid, with a transmittance table
+/// shared between altitudes.
+fn shell_model(
+    atmosphere: &Atmosphere,
+    settings: &TableSettings,
+    transmittance: Arc<TransmittanceTable>,
+    altitude_m: f64,
+) -> Result<SkyModel> {
+    let min_elevation = direction_grid(atmosphere, settings, altitude_m).elevation_min;
+    SkyModel::with_grid(
+        atmosphere,
+        transmittance,
+        &settings.sky,
+        altitude_m,
+        min_elevation,
+    )
 }
 
 /// The `L x L` view grid of a table at `altitude_m`: elevations from the horizon
