@@ -65,6 +65,21 @@ pub fn check_range(field: &str, value: f64, min: f64, max: f64) -> Result<()> {
     }
 }
 
+/// Checks that `needed_bytes` fits `budget_bytes`, else an [`Error::OverBudget`] naming
+/// `what` needs it and the `setting` to lower.
+pub fn check_budget(what: &str, needed_bytes: u64, budget_bytes: u64, setting: &str) -> Result<()> {
+    if needed_bytes <= budget_bytes {
+        Ok(())
+    } else {
+        Err(Error::OverBudget {
+            what: what.to_string(),
+            needed_bytes,
+            budget_bytes,
+            setting: setting.to_string(),
+        })
+    }
+}
+
 /// Checks that `value` is finite and `> 0` (and at most `max`), naming `field` otherwise.
 pub fn check_positive(field: &str, value: f64, max: f64) -> Result<()> {
     if value.is_finite() && value > 0.0 && value <= max {

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use image::{ExtendedColorType, ImageEncoder};
 
-use crate::error::{check_range, Error, Result};
+use crate::error::{check_budget, check_range, Error, Result};
 
 /// Largest frame atmo allocates, bytes (a 16k x 16k float RGB image is 3 GiB).
 pub const FRAME_BUDGET_BYTES: u64 = 1 << 30;
@@ -139,16 +139,12 @@ impl Frame {
     pub fn check_size(width: u32, height: u32) -> Result<()> {
         check_range("width", width as f64, 1.0, 16384.0)?;
         check_range("height", height as f64, 1.0, 16384.0)?;
-        let bytes = width as u64 * height as u64 * 12;
-        if bytes > FRAME_BUDGET_BYTES {
-            return Err(Error::OverBudget {
-                what: format!("a {width} x {height} frame"),
-                needed_bytes: bytes,
-                budget_bytes: FRAME_BUDGET_BYTES,
-                setting: "width or height".into(),
-            });
-        }
-        Ok(())
+        check_budget(
+            &format!("a {width} x {height} frame"),
+            width as u64 * height as u64 * 12,
+            FRAME_BUDGET_BYTES,
+            "width or height",
+        )
     }
 
     /// A black frame.

@@ -26,7 +26,7 @@ use serde::Deserialize;
 use crate::atmosphere::geometry::horizon_dip;
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::{Atmosphere, TransmittanceTable};
-use crate::error::{check_range, Error, Result};
+use crate::error::{check_budget, check_range, Error, Result};
 pub use grid::DirectionGrid;
 use light_map::{LightMap, ScatteredLightMap};
 use maps::{Orders, ScatteringMaps, Sources, SunGeometry};
@@ -97,16 +97,12 @@ impl SkySettings {
         check_range("sun_bins", self.sun_bins as f64, 4.0, 4096.0)?;
         check_range("order", self.order as f64, 1.0, 3.0)?;
         check_range("max_interval_m", self.max_interval_m, 100.0, 1e7)?;
-        let needed = self.memory_bytes(channels);
-        if needed > MEMORY_BUDGET_BYTES {
-            return Err(Error::OverBudget {
-                what: "the sky maps".into(),
-                needed_bytes: needed,
-                budget_bytes: MEMORY_BUDGET_BYTES,
-                setting: "directions, shells, scattering_directions or sun_bins".into(),
-            });
-        }
-        Ok(())
+        check_budget(
+            "the sky maps",
+            self.memory_bytes(channels),
+            MEMORY_BUDGET_BYTES,
+            "directions, shells, scattering_directions or sun_bins",
+        )
     }
 
     /// An upper bound of the bytes the maps of one model take.

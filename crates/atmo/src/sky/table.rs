@@ -30,7 +30,7 @@ use super::{SkyModel, SkySettings, MEMORY_BUDGET_BYTES};
 use crate::atmosphere::geometry::horizon_dip;
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::{Atmosphere, TransmittanceTable};
-use crate::error::{check_positive, check_range, Error, Result};
+use crate::error::{check_budget, check_positive, check_range, Error, Result};
 use crate::image::{srgb_decode, srgb_encode, Display, ToneMap};
 
 /// Colour channels of the table: linear sRGB, as the paper decomposed R, G and B.
@@ -285,16 +285,12 @@ impl TableSettings {
             ));
         }
         check_positive("exposure", self.bound.display.exposure as f64, 1e9)?;
-        let needed = self.memory_bytes(atmosphere.channels());
-        if needed > MEMORY_BUDGET_BYTES {
-            return Err(Error::OverBudget {
-                what: "the skylight table's precompute".into(),
-                needed_bytes: needed,
-                budget_bytes: MEMORY_BUDGET_BYTES,
-                setting: "directions, sun_steps or altitude_steps".into(),
-            });
-        }
-        Ok(())
+        check_budget(
+            "the skylight table's precompute",
+            self.memory_bytes(atmosphere.channels()),
+            MEMORY_BUDGET_BYTES,
+            "directions, sun_steps or altitude_steps",
+        )
     }
 
     /// An upper bound of the bytes the precompute holds at once: the table as maps and
