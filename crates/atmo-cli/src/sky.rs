@@ -170,9 +170,6 @@ impl AtmosphereArgs {
 
 pub fn run(args: SkyArgs) -> Result<()> {
     // Everything is validated before any work or any file is written.
-    let atmosphere = args.medium.load()?;
-    let settings = args.method.settings();
-    settings.validate(atmosphere.channels())?;
     let sun = Sun::from_degrees(args.sun_elevation, args.sun_azimuth)?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         return Err(Error::out_of_range("exposure", args.exposure, "(0, inf)").into());
@@ -221,6 +218,10 @@ pub fn run(args: SkyArgs) -> Result<()> {
             }
         };
     }
+    // Without a table: the atmosphere and the shell method's settings.
+    let atmosphere = args.medium.load()?;
+    let settings = args.method.settings();
+    settings.validate(atmosphere.channels())?;
     let start = Instant::now();
     // Light maps take 0.3 s at the defaults and seconds with --order 3 --multiple-mie.
     let spinner = ProgressBar::new_spinner().with_message("computing the sampling-shell maps");
