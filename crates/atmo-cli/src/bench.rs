@@ -23,6 +23,12 @@ pub struct BenchArgs {
     /// One JSON object per case on its own line, instead of a table.
     #[arg(long)]
     json: bool,
+    /// shafts: the folder holding spotlight-sphere.toml and stage.toml.
+    #[arg(long, default_value = "scenes")]
+    scenes: std::path::PathBuf,
+    /// shafts: where the plane sweep's shafts-sweep.csv and .svg are written.
+    #[arg(long, default_value = ".")]
+    sweep_dir: std::path::PathBuf,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -32,12 +38,19 @@ enum Area {
     /// The SVD skylight table: precompute, size, error against the shell method, and
     /// drawing a map and a 1920 x 1080 frame from it.
     SkyTable,
+    /// Shafts of light: sample planes against ray marching on the paper's Fig. 6 scene,
+    /// the five-light stage, and the sweep of plane and sub-plane counts.
+    Shafts,
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
     match args.area {
         Area::Sky => bench_sky(args.quick, args.json),
         Area::SkyTable => crate::bench_table::bench_sky_table(args.quick, args.json),
+        Area::Shafts => {
+            atmo::image::check_folder(&args.sweep_dir.join("shafts-sweep.csv"))?;
+            crate::bench_shafts::bench_shafts(args.quick, args.json, &args.scenes, &args.sweep_dir)
+        }
     }
 }
 

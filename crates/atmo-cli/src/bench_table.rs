@@ -33,7 +33,7 @@ fn quantile(v: &mut [f32], q: f64) -> f32 {
     v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
-fn emit(json: bool, line: Value, text: String) {
+pub fn emit(json: bool, line: Value, text: String) {
     if json {
         println!("{line}");
     } else {

@@ -4,9 +4,11 @@
 //! allowed range; no output file is left behind), 1 for anything else.
 
 mod bench;
+mod bench_shafts;
 mod bench_table;
 mod inspect;
 mod precompute;
+mod shafts;
 mod sky;
 mod sky_table;
 
@@ -16,7 +18,7 @@ use clap::{Parser, Subcommand};
 #[command(
     name = "atmo",
     version,
-    about = "Light scattered in the air: the sky with multiple scattering (light shafts and clouds to come)"
+    about = "Light scattered in the air: the sky with multiple scattering, shafts of light from spotlights in haze (clouds to come)"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -27,6 +29,12 @@ struct Cli {
 enum Command {
     /// Render the sky with multiple scattering (sampling shells and scattering maps).
     Sky(sky::SkyArgs),
+    /// Render spotlights in haze: beams, volumetric shadows, gobos (sample planes, or
+    /// --reference ray marching).
+    Shafts(shafts::ShaftsArgs),
+    /// How far two .exr renders are apart: RMS and max in 8-bit levels, and a
+    /// difference image.
+    Compare(shafts::CompareArgs),
     /// Precompute tables for real-time drawing: `atmo precompute sky -o earth.atmo-sky`.
     Precompute(precompute::PrecomputeArgs),
     /// What a skylight table holds (parameters, size, terms, error), and with --plots
@@ -40,6 +48,8 @@ fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Sky(args) => sky::run(args),
+        Command::Shafts(args) => shafts::run(args),
+        Command::Compare(args) => shafts::compare(args),
         Command::Precompute(args) => precompute::run(args),
         Command::Inspect(args) => inspect::run(args),
         Command::Bench(args) => bench::run(args),

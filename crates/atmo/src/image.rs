@@ -197,6 +197,60 @@ impl Frame {
     }
 }
 
+/// How far two pictures are apart as a display shows them, in 8-bit levels (0-255,
+/// not rounded): after the same exposure, tone map and sRGB curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LevelErrors {
+    /// Root mean square over all pixels and channels.
+    pub rms: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+impl Frame {
+    /// Reads linear radiance from an OpenEXR file (as [`Frame::write`] writes it).
+    pub fn read_exr(path: &Path) -> Result<Frame> {
+        if ImageKind::of(path)? != ImageKind::Exr {
+            return Err(Error::out_of_range(
+                "input file extension",
+                path.display(),
+                ".exr (linear radiance; 8-bit PNG has lost it)",
+            ));
+        }
+        let rgb = image::open(path)
+            .map_err(|e| Error::Invalid(format!("{}: cannot read the image: {e}", path.display())))?
+            .to_rgb32f();
+        Ok(Frame {
+            width: rgb.width(),
+            height: rgb.height(),
+            pixels: rgb.pixels().map(|p| Vec3::from(p.0)).collect(),
+        })
+    }
+
+    /// The difference from `other` (same size) in 8-bit levels under `display`.
+    pub fn level_errors(&self, other: &Frame, display: Display) -> Result<LevelErrors> {
+        if (self.width, self.height) != (other.width, other.height) {
+            return Err(Error::Invalid(format!(
+                "the pictures differ in size: {} x {} and {} x {}",
+                self.width, self.height, other.width, other.height
+            )));
+        }
+        let (mut sum, mut max) = (0.0f64, 0.0f64);
+        for (a, b) in self.pixels.iter().zip(&other.pixels) {
+            for c in 0..3 {
+                let d = 255.0 * (display.value(a[c]) - display.value(b[c])) as f64;
+                sum += d * d;
+                max = max.max(d.abs());
+            }
+        }
+        let n = 3.0 * self.pixels.len().max(1) as f64;
+        Ok(LevelErrors {
+            rms: (sum / n).sqrt(),
+            max,
+        })
+    }
+}
+
 fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
     move |source| Error::Io {
         path: path.to_path_buf(),

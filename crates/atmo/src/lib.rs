@@ -6,6 +6,8 @@
 //!   (Iwasaki, Yanagita, Dobashi, Nishita 2004), cited as `sky (n)`, and the skylight
 //!   table over sun and altitude compressed by SVD for real-time drawing
 //!   ([`sky::table`]).
+//! - [`shafts`]: shafts of light from spotlights in haze, with volumetric shadows and
+//!   gobos, by sample planes (Dobashi, Yamamoto, Nishita 2002), cited as `shafts (n)`.
 //! - [`reference`](mod@reference): slow, obviously-correct integrators the fast methods are tested
 //!   against.
 //! - [`image`]: float frame buffers, exposure, tone mapping, PNG/EXR written atomically.
@@ -15,6 +17,7 @@ pub mod error;
 pub mod image;
 pub mod quadrature;
 pub mod reference;
+pub mod shafts;
 pub mod sky;
 
 pub use atmosphere::Atmosphere;

@@ -30,6 +30,31 @@ const XYZ_TO_SRGB: [[f64; 3]; 3] = [
     [0.0556434, -0.2040259, 1.0572252],
 ];
 
+/// The colour of a black body at `kelvin` (Planck's law integrated against the CIE 1931
+/// functions from 360 to 830 nm), in linear sRGB scaled to luminance Y = 1. Colours
+/// outside the sRGB gamut (deep red below about 1900 K) are clipped to it.
+pub fn blackbody_srgb(kelvin: f64) -> [f64; 3] {
+    // Planck's law up to constant factors: lambda^-5 / (exp(c2 / (lambda T)) - 1).
+    const C2: f64 = 1.438_776_9e-2; // m K
+    let mut xyz = [0.0f64; 3];
+    for step in 360..=830 {
+        let lambda = step as f64 * 1e-9;
+        let planck = lambda.powi(-5) / (C2 / (lambda * kelvin)).exp_m1();
+        let cmf = cie_1931(step as f64);
+        for c in 0..3 {
+            xyz[c] += planck * cmf[c];
+        }
+    }
+    let rgb: [f64; 3] = std::array::from_fn(|r| {
+        (0..3)
+            .map(|c| XYZ_TO_SRGB[r][c] * xyz[c] / xyz[1])
+            .sum::<f64>()
+            .max(0.0)
+    });
+    let luminance = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    rgb.map(|v| v / luminance)
+}
+
 /// A linear map from radiance at the atmosphere's wavelengths to linear sRGB.
 #[derive(Debug, Clone)]
 pub struct SpectrumToRgb {
@@ -97,6 +122,26 @@ mod tests {
         let peak = peak.unwrap();
         assert!((550..=560).contains(&peak), "{peak}");
         assert!((cie_1931(555.0)[1] - 1.0).abs() < 0.02);
+    }
+
+    #[test]
+    fn black_bodies_go_from_orange_through_white_to_blue() {
+        let tungsten = blackbody_srgb(3200.0);
+        let daylight = blackbody_srgb(6500.0);
+        let sky = blackbody_srgb(12000.0);
+        assert!(
+            tungsten[0] > tungsten[1] && tungsten[1] > tungsten[2],
+            "{tungsten:?}"
+        );
+        assert!(sky[2] > sky[1] && sky[1] > sky[0], "{sky:?}");
+        // 6500 K is close to D65, the sRGB white (within the fit's 1-3 %).
+        for c in daylight {
+            assert!((c - 1.0).abs() < 0.06, "{daylight:?}");
+        }
+        for rgb in [tungsten, daylight, sky] {
+            let y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+            assert!((y - 1.0).abs() < 1e-9);
+        }
     }
 
     #[test]

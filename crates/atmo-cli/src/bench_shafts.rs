@@ -1,0 +1,282 @@
+//! `atmo bench shafts`: the sample-plane method (shafts 4) against the paper's
+//! conventional ray marcher (shafts 5.1) in the same run, its error against the
+//! converged reference in 8-bit levels, the five-light stage, and the sweep of plane and
+//! sub-plane counts (the paper's Figs. 4 and 5) as CSV and SVG.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use atmo::image::{write_atomically, Frame};
+use atmo::reference::shafts::RayMarcher;
+use atmo::shafts::{SamplePlanes, Scene};
+use serde_json::json;
+
+use crate::bench::{median, time_ms};
+use crate::bench_table::emit;
+
+/// Median time of `runs` renders by the plane method after one warm-up, and the last
+/// frame.
+fn time_planes(scene: &Scene, runs: usize) -> (f64, Frame) {
+    let mut frame = SamplePlanes::new(scene).render();
+    let ms = median(
+        (0..runs)
+            .map(|_| time_ms(|| frame = SamplePlanes::new(scene).render()))
+            .collect(),
+    );
+    (ms, frame)
+}
+
+pub fn bench_shafts(quick: bool, json: bool, scenes: &Path, sweep: &Path) -> Result<()> {
+    let fig6 = Scene::from_file(&scenes.join("spotlight-sphere.toml"))?;
+    let stage = Scene::from_file(&scenes.join("stage.toml"))?;
+    let runs = if quick { 5 } else { 21 };
+    let threads = rayon::current_num_threads();
+
+    // The converged reference, and that doubling its samples changes it by < 0.1 % RMS.
+    let reference = RayMarcher::CONVERGED.render(&fig6);
+    let doubling = if quick {
+        None
+    } else {
+        let doubled = RayMarcher {
+            samples: 2 * RayMarcher::CONVERGED.samples,
+            ..RayMarcher::CONVERGED
+        }
+        .render(&fig6);
+        Some(relative_rms(&reference, &doubled))
+    };
+
+    let (ms, frame) = time_planes(&fig6, runs);
+    let baseline = RayMarcher::baseline(&fig6);
+    let mut baseline_frame = Frame::new(1, 1);
+    let baseline_ms = median(
+        (0..if quick { 1 } else { 3 })
+            .map(|_| time_ms(|| baseline_frame = baseline.render(&fig6)))
+            .collect(),
+    );
+    let error = frame.level_errors(&reference, fig6.display)?;
+    let baseline_error = baseline_frame.level_errors(&reference, fig6.display)?;
+    let params = |scene: &Scene| {
+        json!({
+            "width": scene.camera.width, "height": scene.camera.height,
+            "lights": scene.lights.len(), "planes": scene.planes.planes,
+            "sub_planes": scene.planes.sub_planes, "shadow_map": scene.planes.shadow_map,
+            "threads": threads,
+        })
+    };
+    emit(
+        json,
+        json!({
+            "bench": "shafts.fig6", "params": params(&fig6), "median_ms": ms,
+            "baseline": "shafts.ray-march", "baseline_median_ms": baseline_ms,
+            "baseline_samples": baseline.samples, "ratio": baseline_ms / ms,
+            "error": {"rms_levels": error.rms, "max_levels": error.max},
+            "baseline_error": {"rms_levels": baseline_error.rms, "max_levels": baseline_error.max},
+            "reference": {"samples": RayMarcher::CONVERGED.samples, "doubling_change_rms": doubling},
+        }),
+        format!(
+            "shafts.fig6   {ms:>8.2} ms   baseline ({} samples) {baseline_ms:>8.0} ms   ratio {:>6.1}   \
+             error rms {:.3} max {:.2} levels (baseline: rms {:.3} max {:.2})\n\
+             reference: {} samples per ray; doubling them changes it by {}",
+            baseline.samples,
+            baseline_ms / ms,
+            error.rms,
+            error.max,
+            baseline_error.rms,
+            baseline_error.max,
+            RayMarcher::CONVERGED.samples,
+            doubling.map_or("(not checked with --quick)".into(), |d| format!("{:.4} % RMS", 100.0 * d)),
+        ),
+    );
+
+    let (stage_ms, _) = time_planes(&stage, runs);
+    emit(
+        json,
+        json!({"bench": "shafts.stage", "params": params(&stage), "median_ms": stage_ms}),
+        format!(
+            "shafts.stage  {stage_ms:>8.2} ms   ({} lights)",
+            stage.lights.len()
+        ),
+    );
+
+    // Linearity: time against lights (the stage with its first k lights) and planes.
+    let mut lines = Vec::new();
+    for k in 1..=stage.lights.len() {
+        let mut scene = stage.clone();
+        scene.lights.truncate(k);
+        lines.push(("lights", k as u32, time_planes(&scene, runs.min(7)).0));
+    }
+    for text in lines
+        .iter()
+        .map(|(what, k, ms)| format!("  stage, {k} {what}: {ms:.2} ms"))
+    {
+        if !json {
+            println!("{text}");
+        }
+    }
+    if json {
+        println!(
+            "{}",
+            json!({"bench": "shafts.stage-lights", "median_ms_by_lights": lines.iter().map(|l| l.2).collect::<Vec<_>>()})
+        );
+    }
+
+    sweep_planes(&fig6, &reference, quick, json, sweep)
+}
+
+/// RMS of the difference relative to the RMS of `b`, linear radiance.
+fn relative_rms(a: &Frame, b: &Frame) -> f64 {
+    let (mut d, mut n) = (0.0f64, 0.0f64);
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        d += (*p - *q).length_squared() as f64;
+        n += q.length_squared() as f64;
+    }
+    (d / n.max(1e-300)).sqrt()
+}
+
+/// One row of the sweep.
+struct SweepRow {
+    planes: u32,
+    sub_planes: u32,
+    ms: f64,
+    rms_levels: f64,
+    max_levels: f64,
+}
+
+/// Planes with 6 sub-planes, then sub-planes with 30 planes: time and error against the
+/// converged reference, to `shafts-sweep.csv` and `shafts-sweep.svg` in `folder`.
+fn sweep_planes(
+    fig6: &Scene,
+    reference: &Frame,
+    quick: bool,
+    json: bool,
+    folder: &Path,
+) -> Result<()> {
+    let plane_counts: &[u32] = if quick {
+        &[10, 30, 60]
+    } else {
+        &[5, 10, 15, 20, 30, 40, 60, 80, 120, 160, 200]
+    };
+    let sub_counts: &[u32] = if quick {
+        &[1, 6, 12]
+    } else {
+        &[1, 2, 3, 4, 6, 8, 12, 16, 25]
+    };
+    let runs = if quick { 3 } else { 7 };
+    let settings = plane_counts
+        .iter()
+        .map(|&p| (p, 6))
+        .chain(sub_counts.iter().map(|&m| (30, m)));
+    let mut rows = Vec::new();
+    for (planes, sub_planes) in settings {
+        let mut scene = fig6.clone();
+        scene.planes.planes = planes;
+        scene.planes.sub_planes = sub_planes;
+        let (ms, frame) = time_planes(&scene, runs);
+        let e = frame.level_errors(reference, scene.display)?;
+        rows.push(SweepRow {
+            planes,
+            sub_planes,
+            ms,
+            rms_levels: e.rms,
+            max_levels: e.max,
+        });
+    }
+    let mut csv = String::from("planes,sub_planes,median_ms,rms_levels,max_levels\n");
+    for r in &rows {
+        writeln!(
+            csv,
+            "{},{},{:.3},{:.4},{:.3}",
+            r.planes, r.sub_planes, r.ms, r.rms_levels, r.max_levels
+        )?;
+    }
+    let csv_path: PathBuf = folder.join("shafts-sweep.csv");
+    let svg_path: PathBuf = folder.join("shafts-sweep.svg");
+    write_atomically(&csv_path, |w| write_all(w, &csv_path, csv.as_bytes()))?;
+    let svg = plot(&rows, plane_counts.len());
+    write_atomically(&svg_path, |w| write_all(w, &svg_path, svg.as_bytes()))?;
+    if json {
+        println!(
+            "{}",
+            json!({"bench": "shafts.sweep", "csv": csv_path, "plot": svg_path,
+                   "rows": rows.iter().map(|r| json!({"planes": r.planes, "sub_planes": r.sub_planes,
+                   "median_ms": r.ms, "rms_levels": r.rms_levels, "max_levels": r.max_levels})).collect::<Vec<_>>()})
+        );
+    } else {
+        print!(
+            "sweep ({} and {}):\n{csv}",
+            csv_path.display(),
+            svg_path.display()
+        );
+    }
+    Ok(())
+}
+
+fn write_all(w: &mut impl std::io::Write, path: &Path, bytes: &[u8]) -> atmo::Result<()> {
+    w.write_all(bytes).map_err(|source| atmo::Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Two panels side by side, as the paper's Figs. 4 and 5: error (levels, solid) and
+/// time (ms, dashed) against the plane count, then against the sub-plane count.
+fn plot(rows: &[SweepRow], split: usize) -> String {
+    let (w, h, pad) = (900.0, 380.0, 60.0);
+    let panel_w = (w - 3.0 * pad) / 2.0;
+    let mut svg = format!(
+        "<svg xmlns='http://www.w3.org/2000/svg' width='{w}' height='{h}' font-family='sans-serif' font-size='12'>\
+         <rect width='100%' height='100%' fill='white'/>"
+    );
+    let panels = [
+        (&rows[..split], "sample planes (6 sub-planes)", true),
+        (&rows[split..], "sub-sample planes (30 planes)", false),
+    ];
+    for (k, (part, title, by_planes)) in panels.into_iter().enumerate() {
+        let x0 = pad + k as f64 * (panel_w + pad);
+        let (y0, y1) = (h - pad, pad);
+        let xs: Vec<f64> = part
+            .iter()
+            .map(|r| if by_planes { r.planes } else { r.sub_planes } as f64)
+            .collect();
+        let x_max = xs.iter().cloned().fold(1.0, f64::max);
+        let e_max = part.iter().map(|r| r.rms_levels).fold(0.1, f64::max) * 1.1;
+        let t_max = part.iter().map(|r| r.ms).fold(0.1, f64::max) * 1.1;
+        let px = |x: f64| x0 + x / x_max * panel_w;
+        let line = |values: Vec<f64>, max: f64, colour: &str, dash: &str| {
+            let points: Vec<String> = xs
+                .iter()
+                .zip(values)
+                .map(|(x, v)| format!("{:.1},{:.1}", px(*x), y0 - v / max * (y0 - y1)))
+                .collect();
+            format!(
+                "<polyline fill='none' stroke='{colour}' stroke-width='2' stroke-dasharray='{dash}' points='{}'/>",
+                points.join(" ")
+            )
+        };
+        let _ = write!(
+            svg,
+            "<rect x='{x0}' y='{y1}' width='{panel_w}' height='{}' fill='none' stroke='black'/>\
+             <text x='{}' y='{}' text-anchor='middle'>{title}</text>\
+             <text x='{}' y='{}' fill='#c0392b'>RMS error, levels (max {:.2})</text>\
+             <text x='{}' y='{}' fill='#2471a3' text-anchor='end'>time, ms (max {:.1})</text>\
+             <text x='{x0}' y='{}' text-anchor='middle'>0</text><text x='{}' y='{}' text-anchor='middle'>{x_max}</text>{}{}",
+            y0 - y1,
+            x0 + panel_w / 2.0,
+            h - pad / 3.0,
+            x0 + 4.0,
+            y1 - 8.0,
+            e_max,
+            x0 + panel_w - 4.0,
+            y1 - 8.0,
+            t_max,
+            y0 + 16.0,
+            x0 + panel_w,
+            y0 + 16.0,
+            line(part.iter().map(|r| r.rms_levels).collect(), e_max, "#c0392b", "none"),
+            line(part.iter().map(|r| r.ms).collect(), t_max, "#2471a3", "6,4"),
+        );
+    }
+    svg.push_str("</svg>\n");
+    svg
+}

@@ -1,0 +1,277 @@
+//! The paper's method (shafts 4.2-4.3): sample planes parallel to the screen through
+//! the lit volume of each light; on each, `g = F h` from the tables (5)-(6); between
+//! them, sub-sample planes that average `H I_l` over the plane's interval (7)-(9).
+//!
+//! The GPU draws every plane over the whole screen and lets blending add them up. The
+//! CPU version keeps that arithmetic exactly, pixel by pixel, and skips only what
+//! cannot contribute: sub-samples where `I_l = 0` (outside the light's field cone, found
+//! per ray by [`Spotlight::cone_interval`]), beyond the surface the ray meets (the
+//! GPU's depth test), outside the haze, and planes whose whole interval is such. The
+//! result is the same sum; the work follows the lit part of each ray.
+//!
+//! For light `l`, with planes at camera depths `z_i = z_near + (i + 1/2) dz`
+//! (`i < n`) and sub-planes at `z_ij = z_near + (i + (j + 1/2)/m) dz` (`j < m`), a
+//! camera ray `r` (unit length along the view axis, `|r| = 1 / cos` of its angle off
+//! the axis) receives
+//!
+//! ```text
+//! I_s = sum_i J_i F(alpha_i) h(s_i, t_i) dz |r|,   J_i = 1/m sum_j H(z_ij) I_l(z_ij)
+//! ```
+//!
+//! `dz |r|` is shafts' `Delta t`, the length of ray between two planes.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::objects::Aabb;
+use super::render_rays;
+use super::shadow_map::ShadowMap;
+use super::spotlight::Spotlight;
+use super::surface::{first_hit, surface_radiance, SurfacePoint};
+use super::tables::{AttenuationTable, PhaseTable};
+use super::Scene;
+use crate::image::Frame;
+
+/// Nearest camera depth a plane is put at, m.
+const NEAR_PLANE: f32 = 1e-3;
+
+/// One light's shadow map and the depths its planes span.
+#[derive(Debug, Clone)]
+pub struct LightPlanes {
+    /// `H` for this light.
+    pub shadow: ShadowMap,
+    /// Camera depth where the first plane interval starts, m.
+    pub z_near: f32,
+    /// Camera depth where the last plane interval ends, m.
+    pub z_far: f32,
+    /// A box around the lit volume (the lamp and its shadow map's ray ends): rays that
+    /// miss it skip the light.
+    pub bounds: Aabb,
+    /// Whether the lamp is in the haze: then its in-haze distance to any point in the
+    /// (convex) haze is the whole distance.
+    lamp_in_haze: bool,
+}
+
+/// Everything the plane method prepares once a frame: shadow maps, the lit volumes'
+/// depth ranges, and the `F` and `h` tables.
+#[derive(Debug, Clone)]
+pub struct SamplePlanes<'a> {
+    scene: &'a Scene,
+    /// Per light, in scene order.
+    pub lights: Vec<LightPlanes>,
+    phase: PhaseTable,
+    attenuation: AttenuationTable,
+}
+
+impl<'a> SamplePlanes<'a> {
+    /// Builds the shadow maps, finds where each light's lit volume lies in camera depth
+    /// (the lamp and the ends of its shadow map's rays), and tabulates `F` and `h`.
+    pub fn new(scene: &'a Scene) -> SamplePlanes<'a> {
+        let camera = &scene.camera;
+        let size = scene.planes.shadow_map as usize;
+        let mut s_max = 0.0f32;
+        let mut t_max = 0.0f32;
+        let lights = scene
+            .lights
+            .iter()
+            .map(|light| {
+                let shadow = ShadowMap::new(light, &scene.objects, size);
+                // Farther than this from the lamp is beyond the far plane anyway.
+                let reach = camera.far * 2.0 + (light.position - camera.position).length();
+                let lamp = camera.depth(light.position);
+                // Per row: camera depth range, farthest from the lamp, farthest from the eye.
+                let start = (lamp, lamp, 0.0f32, 0.0f32, Aabb::EMPTY.grow(light.position));
+                let extent = (0..size)
+                    .into_par_iter()
+                    .map(|row| {
+                        shadow
+                            .ray_ends(light, reach, row)
+                            .fold(start, |(lo, hi, s, t, b), end| {
+                                let z = camera.depth(end);
+                                (
+                                    lo.min(z),
+                                    hi.max(z),
+                                    s.max((end - light.position).length()),
+                                    t.max((end - camera.position).length()),
+                                    b.grow(end),
+                                )
+                            })
+                    })
+                    .reduce(
+                        || start,
+                        |a, b| {
+                            (
+                                a.0.min(b.0),
+                                a.1.max(b.1),
+                                a.2.max(b.2),
+                                a.3.max(b.3),
+                                a.4.union(b.4),
+                            )
+                        },
+                    );
+                let (mut lo, mut hi) = (extent.0, extent.1);
+                s_max = s_max.max(extent.2);
+                t_max = t_max.max(extent.3);
+                if let Some(b) = &scene.haze.bounds {
+                    let corners = (0..8).map(|k| {
+                        Vec3::select(
+                            glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+                            b.max,
+                            b.min,
+                        )
+                    });
+                    let (bl, bh) = corners
+                        .map(|c| camera.depth(c))
+                        .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), z| {
+                            (l.min(z), h.max(z))
+                        });
+                    lo = lo.max(bl);
+                    hi = hi.min(bh);
+                }
+                LightPlanes {
+                    shadow,
+                    z_near: lo.max(NEAR_PLANE),
+                    z_far: hi.min(camera.far),
+                    bounds: extent.4,
+                    lamp_in_haze: scene
+                        .haze
+                        .bounds
+                        .map_or(true, |b| b.contains(light.position)),
+                }
+            })
+            .collect();
+        // The longest camera ray per unit depth: to the image's corners.
+        let corner = (1.0 + camera.tan_half_width.powi(2) + camera.tan_half_height.powi(2)).sqrt();
+        let t_max = t_max.min(camera.far * corner);
+        SamplePlanes {
+            scene,
+            lights,
+            phase: PhaseTable::new(&scene.haze),
+            attenuation: AttenuationTable::new(&scene.haze, s_max, t_max),
+        }
+    }
+
+    /// The picture: surfaces lit through shadow maps plus the scattered light.
+    pub fn render(&self) -> Frame {
+        render_rays(&self.scene.camera, |ray| self.radiance(ray))
+    }
+
+    /// The radiance along one camera ray (unit length along the view axis).
+    pub fn radiance(&self, ray: Vec3) -> Vec3 {
+        let scene = self.scene;
+        let length = ray.length();
+        let dir = ray / length;
+        let hit = first_hit(scene, dir, scene.camera.far * length);
+        let mut radiance = match &hit {
+            Some(point) => {
+                surface_radiance(scene, point, |k, light| self.visibility(k, light, point))
+            }
+            None => Vec3::ZERO,
+        };
+        let end = hit.map_or(scene.camera.far * length, |p| p.distance);
+        for (light, planes) in scene.lights.iter().zip(&self.lights) {
+            radiance += self.scattered(light, planes, ray, length, end);
+        }
+        radiance
+    }
+
+    /// How much of `light` the surface point sees: its shadow map, filtered, looked up a
+    /// little off the surface (one and a half texels along the normal, against acne).
+    fn visibility(&self, k: usize, light: &Spotlight, point: &SurfacePoint) -> f32 {
+        let shadow = &self.lights[k].shadow;
+        let z = light.to_light(point.position).z;
+        let lifted = point.position + point.normal * (1.5 * shadow.texel_size(z) + 1e-4);
+        shadow.visibility(light.to_light(lifted))
+    }
+
+    /// `I_s` of shafts (7) for one light along the ray `ray` (unit length along the view
+    /// axis, `length = |ray|`) up to `end` m from the eye.
+    fn scattered(
+        &self,
+        light: &Spotlight,
+        planes: &LightPlanes,
+        ray: Vec3,
+        length: f32,
+        end: f32,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let haze = &scene.haze;
+        let eye = scene.camera.position;
+        let dir = ray / length;
+        let Some((ta, tb)) = planes
+            .bounds
+            .clip(eye, dir.recip(), 0.0, end)
+            .and_then(|(a, b)| light.cone_interval(eye, dir, a, b))
+            .and_then(|(a, b)| haze.clip(eye, dir, a, b))
+        else {
+            return Vec3::ZERO;
+        };
+        // Where the ray enters the haze: a point inside it at distance t has t - entry
+        // of its path to the eye in the haze (the haze is convex).
+        let entry = haze
+            .clip(eye, dir, 0.0, f32::INFINITY)
+            .map_or(0.0, |(a, _)| a);
+        // The lit stretch of the ray in camera depth, and the planes whose intervals meet it.
+        let (za, zb) = (
+            (ta / length).max(planes.z_near),
+            (tb / length).min(planes.z_far),
+        );
+        if za >= zb {
+            return Vec3::ZERO;
+        }
+        let n = scene.planes.planes as usize;
+        let m = scene.planes.sub_planes as usize;
+        let dz = (planes.z_far - planes.z_near) / n as f32;
+        let first = (((za - planes.z_near) / dz) as usize).min(n - 1);
+        let last = ((((zb - planes.z_near) / dz).ceil()) as usize).clamp(first + 1, n);
+        // Light-space position along the ray is affine in camera depth.
+        let origin = light.to_light(eye);
+        let step = light.light_from_world * ray;
+        let inv_tan = 1.0 / light.tan_field();
+        let sub = dz / m as f32;
+        let mut sum = Vec3::ZERO;
+        for i in first..last {
+            let z0 = planes.z_near + i as f32 * dz;
+            // J_i, shafts (9), times m.
+            let mut j_sum = Vec3::ZERO;
+            for j in 0..m {
+                let z = z0 + (j as f32 + 0.5) * sub;
+                if z < za || z > zb {
+                    continue;
+                }
+                let local = origin + z * step;
+                if local.z <= 0.0 {
+                    continue;
+                }
+                let scale = inv_tan / local.z;
+                let (u, v) = (local.x * scale, local.y * scale);
+                if planes.shadow.lit_at(u, v, local.z) {
+                    j_sum += light.intensity_at(u, v);
+                }
+            }
+            if j_sum == Vec3::ZERO {
+                continue;
+            }
+            // g at the sample plane, shafts (6).
+            let z = z0 + 0.5 * dz;
+            let point = eye + z * ray;
+            let from_lamp = point - light.position;
+            let s = from_lamp.length();
+            let cos_alpha = -from_lamp.dot(dir) / s;
+            let s_haze = if planes.lamp_in_haze {
+                s
+            } else {
+                haze.length_inside(light.position, point)
+            };
+            let t_haze = (z * length - entry).max(0.0);
+            let g = self.phase.get(cos_alpha) * self.attenuation.get(s_haze, t_haze, s);
+            sum += j_sum * g;
+        }
+        sum * (dz * length / m as f32)
+    }
+}
+
+/// The scene by the plane method.
+pub fn render(scene: &Scene) -> Frame {
+    SamplePlanes::new(scene).render()
+}

@@ -1,0 +1,708 @@
+//! The scene file: camera, haze, spotlights and objects in physical units (TOML, see
+//! docs/shafts.md for every key and convention). Parsed with `deny_unknown_fields` so a
+//! misspelt key is an error with its line and column, validated once here into the
+//! types the renderers use, with messages naming the field and its allowed range.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use super::camera::Camera;
+use super::haze::{Haze, HazePhase};
+use super::objects::{Aabb, Mesh, Object, Objects, Shape};
+use super::spotlight::{light_frame, Falloff, Gobo, Sampling, Spotlight};
+use super::PlaneSettings;
+use crate::atmosphere::spectrum::blackbody_srgb;
+use crate::error::{check_positive, check_range, Error, Result};
+use crate::image::{Display, Frame, ToneMap};
+
+/// A validated scene: everything a renderer needs.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The camera.
+    pub camera: Camera,
+    /// The haze.
+    pub haze: Haze,
+    /// The spotlights.
+    pub lights: Vec<Spotlight>,
+    /// The opaque objects.
+    pub objects: Objects,
+    /// Sample planes, sub-planes and shadow maps of the plane method.
+    pub planes: PlaneSettings,
+    /// How the picture is shown in 8-bit files.
+    pub display: Display,
+    /// The unit of the lights' intensities, and so of the pixels' radiance.
+    pub unit: IntensityUnit,
+}
+
+/// What a light's `intensity` means; pixels are radiance in the same unit per m^2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+pub enum IntensityUnit {
+    /// Luminous intensity, candela: pixels in cd/m^2 (nits).
+    #[serde(rename = "cd")]
+    Candela,
+    /// Radiant intensity, W/sr: pixels in W/(sr m^2).
+    #[serde(rename = "W/sr")]
+    WattPerSteradian,
+}
+
+impl IntensityUnit {
+    /// The unit of a pixel's radiance.
+    pub fn radiance_unit(self) -> &'static str {
+        match self {
+            IntensityUnit::Candela => "cd/m^2",
+            IntensityUnit::WattPerSteradian => "W/(sr m^2)",
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneSpec {
+    camera: CameraSpec,
+    haze: HazeSpec,
+    #[serde(default)]
+    render: RenderSpec,
+    #[serde(default)]
+    display: DisplaySpec,
+    #[serde(default)]
+    spotlight: Vec<SpotlightSpec>,
+    #[serde(default)]
+    object: Vec<ObjectSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraSpec {
+    position: [f32; 3],
+    look_at: [f32; 3],
+    #[serde(default = "y_up")]
+    up: [f32; 3],
+    fov_deg: f32,
+    #[serde(default)]
+    fov_axis: FovAxis,
+    width: u32,
+    height: u32,
+    #[serde(default = "one")]
+    supersampling: u32,
+    #[serde(default = "default_far")]
+    far_m: f32,
+}
+
+fn y_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+fn one() -> u32 {
+    1
+}
+fn default_far() -> f32 {
+    1000.0
+}
+
+#[derive(Deserialize, Default, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum FovAxis {
+    #[default]
+    Vertical,
+    Horizontal,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HazeSpec {
+    extinction: f32,
+    #[serde(default = "one_f")]
+    albedo: f32,
+    #[serde(default)]
+    phase: PhaseSpec,
+    #[serde(rename = "box")]
+    bounds: Option<BoxSpec>,
+}
+
+fn one_f() -> f32 {
+    1.0
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+enum PhaseSpec {
+    Paper {
+        #[serde(default = "sixteen")]
+        exponent: f32,
+    },
+    HenyeyGreenstein {
+        g: f32,
+    },
+}
+
+fn sixteen() -> f32 {
+    16.0
+}
+
+impl Default for PhaseSpec {
+    fn default() -> Self {
+        PhaseSpec::Paper { exponent: 16.0 }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoxSpec {
+    min: [f32; 3],
+    max: [f32; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderSpec {
+    #[serde(default = "default_planes")]
+    planes: u32,
+    #[serde(default = "default_sub_planes")]
+    sub_planes: u32,
+    #[serde(default = "default_shadow_map")]
+    shadow_map: u32,
+}
+
+fn default_planes() -> u32 {
+    PlaneSettings::default().planes
+}
+fn default_sub_planes() -> u32 {
+    PlaneSettings::default().sub_planes
+}
+fn default_shadow_map() -> u32 {
+    PlaneSettings::default().shadow_map
+}
+
+impl Default for RenderSpec {
+    fn default() -> Self {
+        RenderSpec {
+            planes: default_planes(),
+            sub_planes: default_sub_planes(),
+            shadow_map: default_shadow_map(),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DisplaySpec {
+    #[serde(default = "one_f")]
+    exposure: f32,
+    #[serde(default)]
+    tone_map: ToneMapSpec,
+}
+
+impl Default for DisplaySpec {
+    fn default() -> Self {
+        DisplaySpec {
+            exposure: 1.0,
+            tone_map: ToneMapSpec::Exponential,
+        }
+    }
+}
+
+#[derive(Deserialize, Default, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum ToneMapSpec {
+    #[default]
+    Exponential,
+    Aces,
+    Clamp,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpotlightSpec {
+    position: [f32; 3],
+    aim: Option<[f32; 3]>,
+    direction: Option<[f32; 3]>,
+    up: Option<[f32; 3]>,
+    color: Option<[f32; 3]>,
+    kelvin: Option<f32>,
+    intensity: f32,
+    #[serde(default = "candela")]
+    intensity_unit: IntensityUnit,
+    beam_deg: f32,
+    field_deg: f32,
+    #[serde(default)]
+    falloff: FalloffSpec,
+    gobo: Option<PathBuf>,
+    #[serde(default)]
+    gobo_sampling: SamplingSpec,
+}
+
+fn candela() -> IntensityUnit {
+    IntensityUnit::Candela
+}
+
+#[derive(Deserialize, Default, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum FalloffSpec {
+    Linear,
+    #[default]
+    Smooth,
+}
+
+#[derive(Deserialize, Default, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum SamplingSpec {
+    Nearest,
+    #[default]
+    Bilinear,
+}
+
+/// An albedo: one grey value or linear RGB.
+#[derive(Deserialize, Clone, Copy)]
+#[serde(untagged)]
+enum AlbedoSpec {
+    Grey(f32),
+    Rgb([f32; 3]),
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+enum ObjectSpec {
+    Plane {
+        point: [f32; 3],
+        normal: [f32; 3],
+        albedo: AlbedoSpec,
+    },
+    Rect {
+        corner: [f32; 3],
+        edge_a: [f32; 3],
+        edge_b: [f32; 3],
+        albedo: AlbedoSpec,
+    },
+    Sphere {
+        center: [f32; 3],
+        radius: f32,
+        albedo: AlbedoSpec,
+    },
+    Box {
+        min: [f32; 3],
+        max: [f32; 3],
+        albedo: AlbedoSpec,
+    },
+    Mesh {
+        file: PathBuf,
+        #[serde(default = "one_f")]
+        scale: f32,
+        #[serde(default)]
+        rotate_y_deg: f32,
+        #[serde(default)]
+        translate: [f32; 3],
+        albedo: AlbedoSpec,
+    },
+}
+
+impl Scene {
+    /// Loads and validates the scene file at `path`; gobo and OBJ paths in it are
+    /// relative to its folder.
+    pub fn from_file(path: &Path) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let folder = path.parent().unwrap_or(Path::new("."));
+        Scene::from_toml_str(&text, &path.display().to_string(), folder)
+    }
+
+    /// Parses and validates scene TOML; `origin` names it in messages, `folder` is where
+    /// relative gobo and OBJ paths start.
+    pub fn from_toml_str(text: &str, origin: &str, folder: &Path) -> Result<Scene> {
+        let spec: SceneSpec = toml::from_str(text).map_err(|e| Error::Parse {
+            path: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        let camera = spec.camera.validate()?;
+        let haze = spec.haze.validate()?;
+        let planes = PlaneSettings {
+            planes: spec.render.planes,
+            sub_planes: spec.render.sub_planes,
+            shadow_map: spec.render.shadow_map,
+        };
+        planes.validate()?;
+        check_positive("display.exposure", spec.display.exposure as f64, 1e12)?;
+        let display = Display {
+            exposure: spec.display.exposure,
+            tone: match spec.display.tone_map {
+                ToneMapSpec::Exponential => ToneMap::Exponential,
+                ToneMapSpec::Aces => ToneMap::Aces,
+                ToneMapSpec::Clamp => ToneMap::Clamp,
+            },
+        };
+        let unit = spec
+            .spotlight
+            .first()
+            .map_or(IntensityUnit::Candela, |l| l.intensity_unit);
+        let lights = spec
+            .spotlight
+            .iter()
+            .enumerate()
+            .map(|(i, l)| l.validate(&format!("spotlight[{i}]"), unit, folder))
+            .collect::<Result<Vec<_>>>()?;
+        let list = spec
+            .object
+            .iter()
+            .enumerate()
+            .map(|(i, o)| o.validate(&format!("object[{i}]"), folder))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Scene {
+            camera,
+            haze,
+            lights,
+            objects: Objects { list },
+            planes,
+            display,
+            unit,
+        })
+    }
+}
+
+fn vec3(field: &str, v: [f32; 3]) -> Result<Vec3> {
+    let v = Vec3::from(v);
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Error::out_of_range(
+            field,
+            format!("{v:?}"),
+            "finite numbers",
+        ))
+    }
+}
+
+fn unit_vector(field: &str, v: [f32; 3]) -> Result<Vec3> {
+    vec3(field, v)?
+        .try_normalize()
+        .ok_or_else(|| Error::out_of_range(field, format!("{v:?}"), "a non-zero vector"))
+}
+
+fn albedo(field: &str, a: AlbedoSpec) -> Result<Vec3> {
+    let rgb = match a {
+        AlbedoSpec::Grey(g) => [g; 3],
+        AlbedoSpec::Rgb(rgb) => rgb,
+    };
+    for (c, v) in rgb.iter().enumerate() {
+        check_range(&format!("{field}[{c}]"), *v as f64, 0.0, 1.0)?;
+    }
+    Ok(Vec3::from(rgb))
+}
+
+impl CameraSpec {
+    fn validate(&self) -> Result<Camera> {
+        let position = vec3("camera.position", self.position)?;
+        let look_at = vec3("camera.look_at", self.look_at)?;
+        let forward = (look_at - position).try_normalize().ok_or_else(|| {
+            Error::Invalid(format!(
+                "camera.look_at = {look_at:?} equals camera.position: the camera has no view direction"
+            ))
+        })?;
+        let up = vec3("camera.up", self.up)?;
+        let right = forward.cross(up).try_normalize().ok_or_else(|| {
+            Error::Invalid(format!(
+                "camera.up = {up:?} is zero or parallel to the view direction {forward:?}"
+            ))
+        })?;
+        let up = right.cross(forward);
+        Frame::check_size(self.width, self.height)?;
+        check_range("camera.fov_deg", self.fov_deg as f64, 0.01, 179.0)?;
+        check_range("camera.supersampling", self.supersampling as f64, 1.0, 16.0)?;
+        check_positive("camera.far_m", self.far_m as f64, 1e7)?;
+        let tan = (0.5 * self.fov_deg.to_radians()).tan();
+        let aspect = self.width as f32 / self.height as f32;
+        let (tan_half_width, tan_half_height) = match self.fov_axis {
+            FovAxis::Vertical => (tan * aspect, tan),
+            FovAxis::Horizontal => (tan, tan / aspect),
+        };
+        Ok(Camera {
+            position,
+            forward,
+            right,
+            up,
+            tan_half_width,
+            tan_half_height,
+            width: self.width,
+            height: self.height,
+            supersampling: self.supersampling,
+            far: self.far_m,
+        })
+    }
+}
+
+impl HazeSpec {
+    fn validate(&self) -> Result<Haze> {
+        check_positive("haze.extinction", self.extinction as f64, 100.0)?;
+        check_range("haze.albedo", self.albedo as f64, 0.0, 1.0)?;
+        let phase = match self.phase {
+            PhaseSpec::Paper { exponent } => {
+                check_range("haze.phase.exponent", exponent as f64, 0.0, 1000.0)?;
+                HazePhase::Paper { exponent }
+            }
+            PhaseSpec::HenyeyGreenstein { g } => {
+                check_range("haze.phase.g", g as f64, -0.99, 0.99)?;
+                HazePhase::HenyeyGreenstein { g }
+            }
+        };
+        let bounds = match &self.bounds {
+            None => None,
+            Some(b) => {
+                let (min, max) = (vec3("haze.box.min", b.min)?, vec3("haze.box.max", b.max)?);
+                if !min.cmplt(max).all() {
+                    return Err(Error::out_of_range(
+                        "haze.box.max",
+                        format!("{max:?}"),
+                        &format!("greater than haze.box.min = {min:?} on every axis"),
+                    ));
+                }
+                Some(Aabb { min, max })
+            }
+        };
+        Ok(Haze {
+            extinction: self.extinction,
+            albedo: self.albedo,
+            phase,
+            bounds,
+        })
+    }
+}
+
+impl SpotlightSpec {
+    fn validate(&self, at: &str, unit: IntensityUnit, folder: &Path) -> Result<Spotlight> {
+        let position = vec3(&format!("{at}.position"), self.position)?;
+        let axis = match (self.aim, self.direction) {
+            (Some(aim), None) => {
+                let aim = vec3(&format!("{at}.aim"), aim)?;
+                (aim - position).try_normalize().ok_or_else(|| {
+                    Error::Invalid(format!(
+                        "{at}.aim equals {at}.position: the light has no axis"
+                    ))
+                })?
+            }
+            (None, Some(d)) => unit_vector(&format!("{at}.direction"), d)?,
+            _ => {
+                return Err(Error::Invalid(format!(
+                    "{at}: give exactly one of `aim` (a point) and `direction` (a vector)"
+                )))
+            }
+        };
+        // The light's up: the given one, else world y (z for a beam along y).
+        let up = match self.up {
+            Some(up) => unit_vector(&format!("{at}.up"), up)?,
+            None if axis.y.abs() > 0.999 => Vec3::Z,
+            None => Vec3::Y,
+        };
+        let light_from_world = light_frame(axis, up)
+            .ok_or_else(|| Error::Invalid(format!("{at}.up is parallel to the beam axis")))?;
+        let colour = match (self.color, self.kelvin) {
+            (Some(rgb), None) => {
+                for (c, v) in rgb.iter().enumerate() {
+                    check_range(&format!("{at}.color[{c}]"), *v as f64, 0.0, 1e6)?;
+                }
+                Vec3::from(rgb)
+            }
+            (None, Some(k)) => {
+                check_range(&format!("{at}.kelvin"), k as f64, 1000.0, 40000.0)?;
+                Vec3::from(blackbody_srgb(k as f64).map(|c| c as f32))
+            }
+            (None, None) => Vec3::ONE,
+            (Some(_), Some(_)) => {
+                return Err(Error::Invalid(format!(
+                    "{at}: give at most one of `color` (linear RGB) and `kelvin`"
+                )))
+            }
+        };
+        check_positive(&format!("{at}.intensity"), self.intensity as f64, 1e9)?;
+        if self.intensity_unit != unit {
+            return Err(Error::Invalid(format!(
+                "{at}.intensity_unit differs from spotlight[0]'s: all lights of a scene share one unit"
+            )));
+        }
+        check_range(
+            &format!("{at}.field_deg"),
+            self.field_deg as f64,
+            0.1,
+            170.0,
+        )?;
+        check_range(
+            &format!("{at}.beam_deg"),
+            self.beam_deg as f64,
+            0.0,
+            self.field_deg as f64,
+        )?;
+        let gobo = match &self.gobo {
+            None => None,
+            Some(file) => Some(load_gobo(
+                &folder.join(file),
+                match self.gobo_sampling {
+                    SamplingSpec::Nearest => Sampling::Nearest,
+                    SamplingSpec::Bilinear => Sampling::Bilinear,
+                },
+            )?),
+        };
+        Ok(Spotlight::new(
+            position,
+            light_from_world,
+            colour * self.intensity,
+            (
+                0.5 * self.beam_deg.to_radians(),
+                0.5 * self.field_deg.to_radians(),
+            ),
+            match self.falloff {
+                FalloffSpec::Linear => Falloff::Linear,
+                FalloffSpec::Smooth => Falloff::Smooth,
+            },
+            gobo,
+        ))
+    }
+}
+
+/// A gobo from an image file: its sRGB values decoded to linear transmittance.
+fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
+    let image = image::open(path)
+        .map_err(|e| Error::Invalid(format!("gobo {}: {e}", path.display())))?
+        .to_rgb32f();
+    let texels = image
+        .pixels()
+        .map(|p| Vec3::from(p.0.map(crate::image::srgb_decode)))
+        .collect();
+    Ok(Gobo {
+        width: image.width() as usize,
+        height: image.height() as usize,
+        texels,
+        sampling,
+    })
+}
+
+impl ObjectSpec {
+    fn validate(&self, at: &str, folder: &Path) -> Result<Object> {
+        let field = |name: &str| format!("{at}.{name}");
+        let (shape, a) = match self {
+            ObjectSpec::Plane {
+                point,
+                normal,
+                albedo,
+            } => (
+                Shape::Plane {
+                    point: vec3(&field("point"), *point)?,
+                    normal: unit_vector(&field("normal"), *normal)?,
+                },
+                albedo,
+            ),
+            ObjectSpec::Rect {
+                corner,
+                edge_a,
+                edge_b,
+                albedo,
+            } => {
+                let (ea, eb) = (
+                    vec3(&field("edge_a"), *edge_a)?,
+                    vec3(&field("edge_b"), *edge_b)?,
+                );
+                if ea.cross(eb).length() < 1e-9 {
+                    return Err(Error::Invalid(format!(
+                        "{at}: edge_a and edge_b are zero or parallel: the rectangle has no area"
+                    )));
+                }
+                (
+                    Shape::Rect {
+                        corner: vec3(&field("corner"), *corner)?,
+                        edge_a: ea,
+                        edge_b: eb,
+                    },
+                    albedo,
+                )
+            }
+            ObjectSpec::Sphere {
+                center,
+                radius,
+                albedo,
+            } => {
+                check_positive(&field("radius"), *radius as f64, 1e6)?;
+                (
+                    Shape::Sphere {
+                        center: vec3(&field("center"), *center)?,
+                        radius: *radius,
+                    },
+                    albedo,
+                )
+            }
+            ObjectSpec::Box { min, max, albedo } => {
+                let (min, max) = (vec3(&field("min"), *min)?, vec3(&field("max"), *max)?);
+                if !min.cmplt(max).all() {
+                    return Err(Error::out_of_range(
+                        &field("max"),
+                        format!("{max:?}"),
+                        &format!("greater than {at}.min = {min:?} on every axis"),
+                    ));
+                }
+                (Shape::Box(Aabb { min, max }), albedo)
+            }
+            ObjectSpec::Mesh {
+                file,
+                scale,
+                rotate_y_deg,
+                translate,
+                albedo,
+            } => {
+                check_positive(&field("scale"), *scale as f64, 1e6)?;
+                check_range(&field("rotate_y_deg"), *rotate_y_deg as f64, -360.0, 360.0)?;
+                let translate = vec3(&field("translate"), *translate)?;
+                let rotation = glam::Mat3::from_rotation_y(rotate_y_deg.to_radians());
+                let mesh = load_obj(&folder.join(file), |p| rotation * (p * *scale) + translate)?;
+                (Shape::Mesh(mesh), albedo)
+            }
+        };
+        Ok(Object {
+            shape,
+            albedo: albedo(&field("albedo"), *a)?,
+        })
+    }
+}
+
+/// The triangles of an OBJ file (all its objects; polygons fanned into triangles;
+/// materials ignored), each vertex mapped by `place`. Degenerate triangles are dropped;
+/// a file without any triangle, with indices out of range or with non-finite
+/// coordinates is an error, never a panic.
+pub fn load_obj(path: &Path, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
+    let fail = |why: String| Error::Invalid(format!("OBJ file {}: {why}", path.display()));
+    let file = std::fs::File::open(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ..Default::default()
+    };
+    let (models, _) = tobj::load_obj_buf(&mut std::io::BufReader::new(file), &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| fail(e.to_string()))?;
+    let mut triangles = Vec::new();
+    for model in &models {
+        let (p, idx) = (&model.mesh.positions, &model.mesh.indices);
+        let vertex = |i: u32| -> Result<Vec3> {
+            let i = i as usize * 3;
+            let v = p
+                .get(i..i + 3)
+                .ok_or_else(|| fail(format!("vertex index {} out of range", i / 3 + 1)))?;
+            let v = Vec3::new(v[0], v[1], v[2]);
+            if v.is_finite() {
+                Ok(place(v))
+            } else {
+                Err(fail(format!("vertex {} is not finite", i / 3 + 1)))
+            }
+        };
+        for t in idx.chunks_exact(3) {
+            let [a, b, c] = [vertex(t[0])?, vertex(t[1])?, vertex(t[2])?];
+            if (b - a).cross(c - a).length_squared() > 1e-20 {
+                triangles.push([a, b, c]);
+            }
+        }
+    }
+    if triangles.is_empty() {
+        return Err(fail("no triangles".into()));
+    }
+    Ok(Mesh::new(triangles))
+}

@@ -1,0 +1,367 @@
+//! Spotlights: a point source with a beam, a soft edge and an optional gobo, the
+//! "light map" the paper projects onto the sample planes (shafts 4.1). Together they give
+//! `I_l`, the intensity the light sends toward a point, in shafts (2) and (5).
+//!
+//! Light space: the origin at the lamp, `z` along the beam axis, `y` toward the light's
+//! `up` (made perpendicular to the axis), and `x = z x up` so that, seen from behind
+//! the lamp looking along the beam, `x` points right (a left-handed triple, as a
+//! screen's right, up and depth). A point `(x, y, z)` with
+//! `z > 0` projects to `(u, v) = (x, y) / (z tan(field / 2))`, the square `[-1, 1]^2`
+//! circumscribing the field cone; that square carries the gobo image (its top row at
+//! `v = 1`) and the shadow map.
+
+use glam::{DVec3, Mat3, Vec3};
+
+/// How the intensity falls from full at the beam edge to zero at the field edge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Falloff {
+    /// Linear in the off-axis angle.
+    Linear,
+    /// Smoothstep (`3x^2 - 2x^3`) in the off-axis angle: no visible edge at either end.
+    Smooth,
+}
+
+/// How a gobo image is looked up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sampling {
+    /// The texel under the point: hard-edged patterns as they are in the image.
+    Nearest,
+    /// Bilinear between the four nearest texels.
+    Bilinear,
+}
+
+/// A gobo: the pattern a spotlight projects, linear RGB transmittance in [0, 1].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Gobo {
+    /// Width in texels.
+    pub width: usize,
+    /// Height in texels.
+    pub height: usize,
+    /// Row-major texels, top row first.
+    pub texels: Vec<Vec3>,
+    /// Lookup.
+    pub sampling: Sampling,
+}
+
+impl Gobo {
+    /// The transmittance at `(u, v)` in `[-1, 1]^2` (`v = 1` at the image's top).
+    #[inline]
+    pub fn sample(&self, u: f32, v: f32) -> Vec3 {
+        let x = (0.5 * (u + 1.0)) * self.width as f32;
+        let y = (0.5 * (1.0 - v)) * self.height as f32;
+        let (w, h) = (self.width as isize, self.height as isize);
+        let at =
+            |i: isize, j: isize| self.texels[(j.clamp(0, h - 1) * w + i.clamp(0, w - 1)) as usize];
+        match self.sampling {
+            Sampling::Nearest => at(x.floor() as isize, y.floor() as isize),
+            Sampling::Bilinear => {
+                let (fx, fy) = (x - 0.5, y - 0.5);
+                let (i, j) = (fx.floor(), fy.floor());
+                let (a, b) = (fx - i, fy - j);
+                let (i, j) = (i as isize, j as isize);
+                (at(i, j) * (1.0 - a) + at(i + 1, j) * a) * (1.0 - b)
+                    + (at(i, j + 1) * (1.0 - a) + at(i + 1, j + 1) * a) * b
+            }
+        }
+    }
+}
+
+/// One spotlight, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Spotlight {
+    /// Lamp position, m.
+    pub position: Vec3,
+    /// World to light space: rows are the light's `x`, `y` and `z` (beam axis).
+    pub light_from_world: Mat3,
+    /// On-axis intensity per channel (colour times intensity): cd or W/sr.
+    pub intensity: Vec3,
+    /// Half the beam angle (full intensity inside), radians.
+    pub beam_half: f32,
+    /// Half the field angle (zero outside), radians, below pi/2.
+    pub field_half: f32,
+    /// Edge between beam and field.
+    pub falloff: Falloff,
+    /// Projected pattern, if any.
+    pub gobo: Option<Gobo>,
+    /// `tan(beam / 2)`.
+    tan_beam: f32,
+    /// `tan(field / 2)`.
+    tan_field: f32,
+}
+
+impl Spotlight {
+    /// A spotlight at `position` whose beam is the light-space `z` of
+    /// `light_from_world` (see [`light_frame`]); angles are half angles in radians with
+    /// `0 <= beam_half <= field_half < pi/2`.
+    pub fn new(
+        position: Vec3,
+        light_from_world: Mat3,
+        intensity: Vec3,
+        (beam_half, field_half): (f32, f32),
+        falloff: Falloff,
+        gobo: Option<Gobo>,
+    ) -> Spotlight {
+        Spotlight {
+            position,
+            light_from_world,
+            intensity,
+            beam_half,
+            field_half,
+            falloff,
+            gobo,
+            tan_beam: beam_half.tan(),
+            tan_field: field_half.tan(),
+        }
+    }
+
+    /// `tan(field / 2)`: the half-width of the light's `(u, v)` square at `z = 1`.
+    #[inline]
+    pub fn tan_field(&self) -> f32 {
+        self.tan_field
+    }
+
+    /// The light-space position of the world point `p`.
+    #[inline]
+    pub fn to_light(&self, p: Vec3) -> Vec3 {
+        self.light_from_world * (p - self.position)
+    }
+
+    /// `I_l`: the intensity sent toward the light-space point `local` (any distance),
+    /// per channel; zero outside the field cone.
+    #[inline]
+    pub fn intensity_toward(&self, local: Vec3) -> Vec3 {
+        if local.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let scale = 1.0 / (local.z * self.tan_field);
+        self.intensity_at(local.x * scale, local.y * scale)
+    }
+
+    /// `I_l` toward the light-space projection `(u, v)` (see the module doc).
+    #[inline]
+    pub fn intensity_at(&self, u: f32, v: f32) -> Vec3 {
+        let q = u * u + v * v;
+        if q >= 1.0 {
+            return Vec3::ZERO;
+        }
+        let r2 = q * self.tan_field * self.tan_field;
+        let profile = if r2 <= self.tan_beam * self.tan_beam {
+            1.0
+        } else {
+            let x = (self.field_half - fast_atan(r2.sqrt())) / (self.field_half - self.beam_half);
+            let x = x.clamp(0.0, 1.0);
+            match self.falloff {
+                Falloff::Linear => x,
+                Falloff::Smooth => x * x * (3.0 - 2.0 * x),
+            }
+        };
+        match &self.gobo {
+            None => self.intensity * profile,
+            Some(gobo) => self.intensity * profile * gobo.sample(u, v),
+        }
+    }
+
+    /// The interval `[t0, t1]` within `[t_min, t_max]` where the ray
+    /// `origin + t dir` is inside the field cone, or `None`. The cone's forward half is
+    /// convex (field below 180 degrees), so this is one interval. In double precision:
+    /// the roots of a quadratic lose digits in single.
+    pub fn cone_interval(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(f32, f32)> {
+        if t_min >= t_max {
+            return None;
+        }
+        let m = self.light_from_world.as_dmat3();
+        let o: DVec3 = m * (origin.as_dvec3() - self.position.as_dvec3());
+        let d: DVec3 = m * dir.as_dvec3();
+        let k = (self.tan_field as f64).powi(2);
+        // Inside: z > 0 and x^2 + y^2 - k z^2 <= 0, a quadratic a t^2 + b t + c.
+        let a = d.x * d.x + d.y * d.y - k * d.z * d.z;
+        let b = 2.0 * (o.x * d.x + o.y * d.y - k * o.z * d.z);
+        let c = o.x * o.x + o.y * o.y - k * o.z * o.z;
+        let inside = |t: f64| {
+            let p = o + t * d;
+            p.z > 0.0 && p.x * p.x + p.y * p.y <= k * p.z * p.z
+        };
+        let (lo, hi) = (t_min as f64, t_max as f64);
+        // The ends, where z = 0, and the quadratic's roots: at most five cuts.
+        let mut cuts = [hi; 5];
+        cuts[0] = lo;
+        let mut count = 2;
+        let mut cut = |t: f64| {
+            if t > lo && t < hi {
+                cuts[count] = t;
+                count += 1;
+            }
+        };
+        if d.z != 0.0 {
+            cut(-o.z / d.z);
+        }
+        if a.abs() > 1e-12 * (b.abs() + c.abs()).max(1e-30) {
+            let disc = b * b - 4.0 * a * c;
+            if disc >= 0.0 {
+                // The stable pair of roots.
+                let q = -0.5 * (b + b.signum() * disc.sqrt());
+                cut(q / a);
+                if q != 0.0 {
+                    cut(c / q);
+                }
+            }
+        } else if b != 0.0 {
+            cut(-c / b);
+        }
+        let cuts = &mut cuts[..count];
+        cuts.sort_unstable_by(f64::total_cmp);
+        let mut span: Option<(f64, f64)> = None;
+        for w in cuts.windows(2) {
+            if w[1] > w[0] && inside(0.5 * (w[0] + w[1])) {
+                span = Some(span.map_or((w[0], w[1]), |(s, _)| (s, w[1])));
+            }
+        }
+        span.map(|(s, e)| (s as f32, e as f32))
+    }
+
+    /// The world direction of light-space `(u, v)` on the `z = 1` plane, not normalised.
+    #[inline]
+    pub fn world_direction(&self, u: f32, v: f32) -> Vec3 {
+        self.light_from_world.transpose() * Vec3::new(u * self.tan_field, v * self.tan_field, 1.0)
+    }
+}
+
+/// `atan(x)` for `x >= 0` within 2e-5 rad (0.001 degree): the off-axis angle in the beam's soft edge,
+/// where `f32::atan` was a tenth of the frame time. Range-reduced to [0, 1] by
+/// `atan x = pi/2 - atan(1/x)`, then a degree-9 odd minimax polynomial (Abramowitz and
+/// Stegun 4.4.49).
+#[inline]
+fn fast_atan(x: f32) -> f32 {
+    let (y, flip) = if x > 1.0 { (1.0 / x, true) } else { (x, false) };
+    let y2 = y * y;
+    let p = y
+        * (0.999_866
+            + y2 * (-0.330_299_5 + y2 * (0.180_141 + y2 * (-0.085_133_0 + y2 * 0.020_835_1))));
+    if flip {
+        std::f32::consts::FRAC_PI_2 - p
+    } else {
+        p
+    }
+}
+
+/// The rows of the world-to-light rotation for a beam along `axis` with `up` as the
+/// light's `y` (made perpendicular); `None` when they are parallel.
+pub fn light_frame(axis: Vec3, up: Vec3) -> Option<Mat3> {
+    let z = axis.try_normalize()?;
+    // Seen from behind the lamp, x right and y up: (x, y, z) is a left-handed triple,
+    // like a screen's (right, up, into the screen).
+    let x = z.cross(up).try_normalize()?;
+    let y = x.cross(z);
+    Some(Mat3::from_cols(x, y, z).transpose())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn light(falloff: Falloff) -> Spotlight {
+        Spotlight::new(
+            Vec3::new(0.0, 5.0, 0.0),
+            light_frame(Vec3::NEG_Y, Vec3::Z).unwrap(),
+            Vec3::new(100.0, 90.0, 80.0),
+            (10f32.to_radians(), 20f32.to_radians()),
+            falloff,
+            None,
+        )
+    }
+
+    #[test]
+    fn the_profile_is_full_in_the_beam_and_zero_beyond_the_field() {
+        for falloff in [Falloff::Linear, Falloff::Smooth] {
+            let l = light(falloff);
+            let at = |deg: f32| {
+                let a = deg.to_radians();
+                l.intensity_toward(Vec3::new(a.sin(), 0.0, a.cos())).x
+            };
+            assert_eq!(at(0.0), 100.0);
+            assert_eq!(at(9.9), 100.0);
+            assert!((at(15.0) - 50.0).abs() < 0.1, "{falloff:?} {}", at(15.0));
+            assert!(at(19.0) < 15.0 && at(19.0) > 0.0);
+            assert_eq!(at(20.1), 0.0);
+            assert_eq!(l.intensity_toward(Vec3::new(0.0, 0.0, -1.0)), Vec3::ZERO);
+        }
+        // Past the middle of the edge (16.7 degrees) the smooth edge is the darker one.
+        let outer = Vec3::new(0.3, 0.0, 1.0);
+        let (linear, smooth) = (light(Falloff::Linear), light(Falloff::Smooth));
+        assert!(smooth.intensity_toward(outer).x < linear.intensity_toward(outer).x - 5.0);
+    }
+
+    #[test]
+    fn fast_atan_is_within_its_stated_error() {
+        let worst = (0..=100_000)
+            .map(|k| k as f32 * 1e-4)
+            .map(|x| (fast_atan(x) - x.atan()).abs())
+            .fold(0.0, f32::max);
+        assert!(worst < 2e-5, "{worst}");
+    }
+
+    #[test]
+    fn the_light_frame_looks_along_the_axis_with_x_to_the_right() {
+        let m = light_frame(Vec3::Z, Vec3::Y).unwrap();
+        assert!((m * Vec3::Z - Vec3::Z).length() < 1e-6);
+        assert!((m * Vec3::Y - Vec3::Y).length() < 1e-6);
+        // Looking along +z with y up, the viewer's right is world -x.
+        assert!((m * Vec3::NEG_X - Vec3::X).length() < 1e-6);
+        assert!(light_frame(Vec3::Y, Vec3::Y).is_none());
+    }
+
+    #[test]
+    fn cone_intervals_agree_with_point_tests() {
+        let l = light(Falloff::Linear);
+        let tan_f = l.tan_field();
+        let mut rays = 0;
+        for k in 0..400 {
+            let f = k as f32;
+            let origin = Vec3::new(
+                (f * 0.37).sin() * 6.0,
+                (f * 0.11).cos() * 6.0,
+                (f * 0.53).sin() * 6.0,
+            );
+            let dir = Vec3::new((f * 1.7).cos(), (f * 0.9).sin(), (f * 2.3).cos()).normalize();
+            let interval = l.cone_interval(origin, dir, 0.0, 20.0);
+            for s in 0..2000 {
+                let t = (s as f32 + 0.5) * 0.01;
+                let p = l.to_light(origin + t * dir);
+                let inside = p.z > 0.0 && p.x.hypot(p.y) < tan_f * p.z;
+                let margin = 1e-3;
+                match interval {
+                    Some((a, b)) if t > a + margin && t < b - margin => assert!(inside, "{k} {t}"),
+                    Some((a, b)) if t < a - margin || t > b + margin => assert!(!inside, "{k} {t}"),
+                    None => assert!(!inside, "{k} {t}"),
+                    _ => {}
+                }
+            }
+            rays += interval.is_some() as usize;
+        }
+        assert!(rays > 50, "{rays}");
+    }
+
+    #[test]
+    fn gobo_sampling_orients_the_image_as_seen_from_behind_the_lamp() {
+        // 2 x 2: top-left red, top-right green, bottom-left blue, bottom-right white.
+        let gobo = |sampling| Gobo {
+            width: 2,
+            height: 2,
+            texels: vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE],
+            sampling,
+        };
+        let g = gobo(Sampling::Nearest);
+        assert_eq!(g.sample(-0.5, 0.5), Vec3::X);
+        assert_eq!(g.sample(0.5, 0.5), Vec3::Y);
+        assert_eq!(g.sample(-0.5, -0.5), Vec3::Z);
+        let b = gobo(Sampling::Bilinear);
+        assert!((b.sample(0.0, 0.5) - Vec3::new(0.5, 0.5, 0.0)).length() < 1e-6);
+        assert!((b.sample(0.0, 0.0) - Vec3::splat(0.5)).length() < 1e-6);
+    }
+}

@@ -1,0 +1,134 @@
+//! The two tables of shafts (6): `g(alpha, s, t) = F(alpha) h(s, t)` split into a 1-D
+//! table of the phase `F` over the scattering angle and a 2-D table of the attenuation
+//! `h` over the light's and the eye's distances, built once a frame and looked up with
+//! linear interpolation (what the paper's texture units did).
+//!
+//! Two choices differ from the paper, both for accuracy in float buffers:
+//! - `F` is tabulated over `sin(alpha/2)` in [0, 1] rather than `alpha`: as even in
+//!   `alpha` near 0 (where forward peaks are), and no arc-cosine at lookup.
+//! - The table holds `s^2 h = sigma_s exp(-sigma_t (s + t))` and the lookup divides by
+//!   `s^2` exactly: linear interpolation of `1/s^2` errs by tens of percent near the
+//!   lamp, where the beam is brightest. Inside a haze box `s` and `t` in the exponent
+//!   are the lengths inside the haze.
+
+use super::haze::Haze;
+
+/// `F(alpha)`, the haze's phase function in 1/sr, tabulated.
+#[derive(Debug, Clone)]
+pub struct PhaseTable {
+    values: Vec<f32>,
+}
+
+impl PhaseTable {
+    /// Entries of the table.
+    pub const SIZE: usize = 1024;
+
+    /// The table of `haze`'s phase function.
+    pub fn new(haze: &Haze) -> PhaseTable {
+        let values = (0..Self::SIZE)
+            .map(|k| {
+                let half_sin = k as f32 / (Self::SIZE - 1) as f32;
+                // cos alpha = 1 - 2 sin^2(alpha/2)
+                haze.phase.eval(1.0 - 2.0 * half_sin * half_sin)
+            })
+            .collect();
+        PhaseTable { values }
+    }
+
+    /// `F` at the scattering angle whose cosine is `cos_alpha`.
+    #[inline]
+    pub fn get(&self, cos_alpha: f32) -> f32 {
+        let half_sin = (0.5 * (1.0 - cos_alpha)).clamp(0.0, 1.0).sqrt();
+        lerp_1d(&self.values, half_sin * (Self::SIZE - 1) as f32)
+    }
+}
+
+#[inline]
+fn lerp_1d(values: &[f32], x: f32) -> f32 {
+    let i = (x as usize).min(values.len() - 2);
+    let f = x - i as f32;
+    values[i] + f * (values[i + 1] - values[i])
+}
+
+/// `s^2 h(s, t)` of shafts (6) over `s` in `[0, s_max]` and `t` in `[0, t_max]`, m.
+#[derive(Debug, Clone)]
+pub struct AttenuationTable {
+    values: Vec<f32>,
+    s_scale: f32,
+    t_scale: f32,
+}
+
+impl AttenuationTable {
+    /// Samples along each axis.
+    pub const SIZE: usize = 256;
+
+    /// The table of `haze` up to `s_max` and `t_max` (beyond them the last entries hold).
+    pub fn new(haze: &Haze, s_max: f32, t_max: f32) -> AttenuationTable {
+        let n = Self::SIZE;
+        let step = |max: f32| max.max(1e-3) / (n - 1) as f32;
+        let (ds, dt) = (step(s_max), step(t_max));
+        let values = (0..n * n)
+            .map(|k| {
+                let (j, i) = (k / n, k % n);
+                haze.scattering() * (-haze.extinction * (i as f32 * ds + j as f32 * dt)).exp()
+            })
+            .collect();
+        AttenuationTable {
+            values,
+            s_scale: 1.0 / ds,
+            t_scale: 1.0 / dt,
+        }
+    }
+
+    /// `h(s, t)`, 1/m^3, from the in-haze lengths `s_haze` and `t_haze` and the
+    /// lamp's distance `s` (for the exact `1/s^2`).
+    #[inline]
+    pub fn get(&self, s_haze: f32, t_haze: f32, s: f32) -> f32 {
+        let n = Self::SIZE;
+        let last = (n - 1) as f32;
+        let x = (s_haze * self.s_scale).clamp(0.0, last);
+        let y = (t_haze * self.t_scale).clamp(0.0, last);
+        let (i, j) = ((x as usize).min(n - 2), (y as usize).min(n - 2));
+        let (a, b) = (x - i as f32, y - j as f32);
+        let row = |j: usize| &self.values[j * n + i..j * n + i + 2];
+        let (r0, r1) = (row(j), row(j + 1));
+        let v = (r0[0] + a * (r0[1] - r0[0])) * (1.0 - b) + (r1[0] + a * (r1[1] - r1[0])) * b;
+        v / (s * s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shafts::haze::HazePhase;
+
+    #[test]
+    fn tables_match_the_functions_they_hold() {
+        for phase in [
+            HazePhase::Paper { exponent: 16.0 },
+            HazePhase::HenyeyGreenstein { g: 0.8 },
+        ] {
+            let haze = Haze {
+                extinction: 0.05,
+                albedo: 0.8,
+                phase,
+                bounds: None,
+            };
+            let f = PhaseTable::new(&haze);
+            for k in 0..=1000 {
+                let c = -1.0 + k as f32 / 500.0;
+                let want = phase.eval(c);
+                assert!(
+                    (f.get(c) - want).abs() <= 2e-3 * want,
+                    "{phase:?} {c} {} {want}",
+                    f.get(c)
+                );
+            }
+            let h = AttenuationTable::new(&haze, 40.0, 60.0);
+            for (s, t) in [(0.05, 0.0), (1.0, 3.3), (17.2, 41.9), (40.0, 60.0)] {
+                let want = 0.04 * (-0.05f32 * (s + t)).exp() / (s * s);
+                assert!((h.get(s, t, s) - want).abs() <= 5e-5 * want, "{s} {t}");
+            }
+        }
+    }
+}
