@@ -58,7 +58,7 @@ impl RayMarcher {
 
     /// The picture.
     pub fn render(&self, scene: &Scene) -> Frame {
-        render_rays(&scene.camera, |ray| self.radiance(scene, ray))
+        render_rays(&scene.camera, |ray, _| self.radiance(scene, ray))
     }
 
     /// The radiance along one camera ray (unit length along the view axis).

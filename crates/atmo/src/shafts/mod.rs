@@ -76,10 +76,11 @@ impl PlaneSettings {
     }
 }
 
-/// A frame made by calling `shade` on each camera ray (scaled to unit length along the
-/// view axis, see [`Camera::ray`]) and averaging each pixel's rays; rows in parallel,
-/// each pixel on its own, so the result does not depend on the thread count.
-pub fn render_rays(camera: &Camera, shade: impl Fn(Vec3) -> Vec3 + Sync) -> Frame {
+/// A frame made by calling `shade(ray, offset)` on each camera ray (scaled to unit
+/// length along the view axis, see [`Camera::ray`]) and averaging each pixel's rays;
+/// rows in parallel, each pixel on its own, so the result does not depend on the thread
+/// count. `offset` in [0, 1) is the pixel's [`interleaved_offset`].
+pub fn render_rays(camera: &Camera, shade: impl Fn(Vec3, f32) -> Vec3 + Sync) -> Frame {
     let mut frame = Frame::new(camera.width, camera.height);
     let offsets = camera.subpixel_offsets();
     let weight = 1.0 / offsets.len() as f32;
@@ -89,12 +90,23 @@ pub fn render_rays(camera: &Camera, shade: impl Fn(Vec3) -> Vec3 + Sync) -> Fram
         .enumerate()
         .for_each(|(y, row)| {
             for (x, pixel) in row.iter_mut().enumerate() {
+                let offset = interleaved_offset(x as u32, y as u32);
                 let sum: Vec3 = offsets
                     .iter()
-                    .map(|(dx, dy)| shade(camera.ray(x as f32 + dx, y as f32 + dy)))
+                    .map(|(dx, dy)| shade(camera.ray(x as f32 + dx, y as f32 + dy), offset))
                     .sum();
                 *pixel = sum * weight;
             }
         });
     frame
+}
+
+/// A per-pixel offset in [0, 1) that neighbouring pixels spread evenly: Jimenez's
+/// interleaved gradient noise (2014). The plane method shifts its sub-sample planes by
+/// it (interleaved sampling, Keller and Heidrich 2001), so that a gobo's thin beams,
+/// sampled too sparsely along the ray, give fine grain instead of bands.
+#[inline]
+pub fn interleaved_offset(x: u32, y: u32) -> f32 {
+    let f = (0.067_110_56 * x as f32 + 0.005_837_15 * y as f32).fract();
+    (52.982_918 * f).fract()
 }

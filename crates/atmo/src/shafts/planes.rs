@@ -153,11 +153,13 @@ impl<'a> SamplePlanes<'a> {
 
     /// The picture: surfaces lit through shadow maps plus the scattered light.
     pub fn render(&self) -> Frame {
-        render_rays(&self.scene.camera, |ray| self.radiance(ray))
+        render_rays(&self.scene.camera, |ray, offset| self.radiance(ray, offset))
     }
 
-    /// The radiance along one camera ray (unit length along the view axis).
-    pub fn radiance(&self, ray: Vec3) -> Vec3 {
+    /// The radiance along one camera ray (unit length along the view axis), its
+    /// sub-sample planes shifted by `offset` in [0, 1) of their spacing (1/2: the
+    /// paper's, centred in their slices).
+    pub fn radiance(&self, ray: Vec3, offset: f32) -> Vec3 {
         let scene = self.scene;
         let length = ray.length();
         let dir = ray / length;
@@ -170,7 +172,7 @@ impl<'a> SamplePlanes<'a> {
         };
         let end = hit.map_or(scene.camera.far * length, |p| p.distance);
         for (light, planes) in scene.lights.iter().zip(&self.lights) {
-            radiance += self.scattered(light, planes, ray, length, end);
+            radiance += self.scattered(light, planes, ray, length, end, offset);
         }
         radiance
     }
@@ -193,6 +195,7 @@ impl<'a> SamplePlanes<'a> {
         ray: Vec3,
         length: f32,
         end: f32,
+        offset: f32,
     ) -> Vec3 {
         let scene = self.scene;
         let haze = &scene.haze;
@@ -232,13 +235,14 @@ impl<'a> SamplePlanes<'a> {
         let mut sum = Vec3::ZERO;
         for i in first..last {
             let z0 = planes.z_near + i as f32 * dz;
-            // J_i, shafts (9), times m.
-            let mut j_sum = Vec3::ZERO;
-            for j in 0..m {
-                let z = z0 + (j as f32 + 0.5) * sub;
-                if z < za || z > zb {
-                    continue;
-                }
+            // J_i of shafts (9) times m, over the sub-samples in the lit stretch: the
+            // profile alone (times the colour below), or with the gobo's colour.
+            let j_first = ((za - z0) / sub - offset).ceil().max(0.0) as usize;
+            let j_last = (((zb - z0) / sub - offset).floor() + 1.0).clamp(0.0, m as f32) as usize;
+            let mut profile_sum = 0.0f32;
+            let mut gobo_sum = Vec3::ZERO;
+            for j in j_first..j_last {
+                let z = z0 + (j as f32 + offset) * sub;
                 let local = origin + z * step;
                 if local.z <= 0.0 {
                     continue;
@@ -246,9 +250,15 @@ impl<'a> SamplePlanes<'a> {
                 let scale = inv_tan / local.z;
                 let (u, v) = (local.x * scale, local.y * scale);
                 if planes.shadow.lit_at(u, v, local.z) {
-                    j_sum += light.intensity_at(u, v);
+                    let profile = light.profile_at(u, v);
+                    match &light.gobo {
+                        None => profile_sum += profile,
+                        Some(gobo) if profile > 0.0 => gobo_sum += profile * gobo.sample(u, v),
+                        Some(_) => {}
+                    }
                 }
             }
+            let j_sum = light.intensity * (gobo_sum + Vec3::splat(profile_sum));
             if j_sum == Vec3::ZERO {
                 continue;
             }

@@ -140,24 +140,30 @@ impl Spotlight {
     /// `I_l` toward the light-space projection `(u, v)` (see the module doc).
     #[inline]
     pub fn intensity_at(&self, u: f32, v: f32) -> Vec3 {
+        let profile = self.profile_at(u, v);
+        match &self.gobo {
+            Some(gobo) if profile > 0.0 => self.intensity * profile * gobo.sample(u, v),
+            _ => self.intensity * profile,
+        }
+    }
+
+    /// The beam profile at `(u, v)`: 1 inside the beam, 0 outside the field, the
+    /// falloff between; `I_l` is this times [`Spotlight::intensity`] and the gobo.
+    #[inline(always)]
+    pub fn profile_at(&self, u: f32, v: f32) -> f32 {
         let q = u * u + v * v;
         if q >= 1.0 {
-            return Vec3::ZERO;
+            return 0.0;
         }
         let r2 = q * self.tan_field * self.tan_field;
-        let profile = if r2 <= self.tan_beam * self.tan_beam {
-            1.0
-        } else {
-            let x = (self.field_half - fast_atan(r2.sqrt())) / (self.field_half - self.beam_half);
-            let x = x.clamp(0.0, 1.0);
-            match self.falloff {
-                Falloff::Linear => x,
-                Falloff::Smooth => x * x * (3.0 - 2.0 * x),
-            }
-        };
-        match &self.gobo {
-            None => self.intensity * profile,
-            Some(gobo) => self.intensity * profile * gobo.sample(u, v),
+        if r2 <= self.tan_beam * self.tan_beam {
+            return 1.0;
+        }
+        let x = (self.field_half - fast_atan(r2.sqrt())) / (self.field_half - self.beam_half);
+        let x = x.clamp(0.0, 1.0);
+        match self.falloff {
+            Falloff::Linear => x,
+            Falloff::Smooth => x * x * (3.0 - 2.0 * x),
         }
     }
 
