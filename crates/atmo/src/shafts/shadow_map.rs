@@ -80,9 +80,11 @@ impl ShadowMap {
     #[inline]
     pub fn lit_at(&self, u: f32, v: f32, z: f32) -> bool {
         let half = 0.5 * self.size as f32;
-        let last = self.size - 1;
-        let i = ((half + u * half) as usize).min(last);
-        let j = ((half - v * half) as usize).min(last);
+        let last = (self.size - 1) as i32;
+        // Through i32: a float to usize conversion costs several instructions more, and
+        // this is the innermost loop of the plane method.
+        let i = ((half + u * half) as i32).clamp(0, last) as usize;
+        let j = ((half - v * half) as i32).clamp(0, last) as usize;
         z < self.depth[j * self.size + i]
     }
 

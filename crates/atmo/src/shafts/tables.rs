@@ -12,6 +12,7 @@
 //!   are the lengths inside the haze.
 
 use super::haze::Haze;
+use super::spotlight::Spotlight;
 
 /// `F(alpha)`, the haze's phase function in 1/sr, tabulated.
 #[derive(Debug, Clone)]
@@ -43,11 +44,58 @@ impl PhaseTable {
     }
 }
 
-#[inline]
+#[inline(always)]
 fn lerp_1d(values: &[f32], x: f32) -> f32 {
-    let i = (x as usize).min(values.len() - 2);
+    let i = (x as i32).clamp(0, values.len() as i32 - 2) as usize;
     let f = x - i as f32;
     values[i] + f * (values[i + 1] - values[i])
+}
+
+/// The beam profile of a spotlight as a table over `q = u^2 + v^2` in [0, 1] (the
+/// square of the off-axis tangent over the field's): the radially symmetric part of the
+/// paper's light map (shafts 4.1), looked up at every sub-sample where the exact profile
+/// would need a square root and an arc-tangent. The gobo, if any, stays an image.
+#[derive(Debug, Clone)]
+pub struct LightMap {
+    values: Vec<f32>,
+    /// Below this `q` the profile is 1 (inside the beam).
+    q_beam: f32,
+    scale: f32,
+}
+
+impl LightMap {
+    /// Entries between the beam's edge and the field's.
+    pub const SIZE: usize = 1024;
+
+    /// The table of `light`'s profile.
+    pub fn new(light: &Spotlight) -> LightMap {
+        let ratio = light.beam_half.tan() / light.tan_field();
+        let q_beam = ratio * ratio;
+        let step = (1.0 - q_beam) / (Self::SIZE - 1) as f32;
+        let values = (0..Self::SIZE)
+            .map(|k| {
+                let q = (q_beam + k as f32 * step).min(1.0 - 1e-7);
+                light.profile_at(q.sqrt(), 0.0)
+            })
+            .collect();
+        LightMap {
+            values,
+            q_beam,
+            scale: 1.0 / step.max(1e-12),
+        }
+    }
+
+    /// The profile at `q = u^2 + v^2`: 0 from 1 on.
+    #[inline(always)]
+    pub fn get(&self, q: f32) -> f32 {
+        if q <= self.q_beam {
+            1.0
+        } else if q >= 1.0 {
+            0.0
+        } else {
+            lerp_1d(&self.values, (q - self.q_beam) * self.scale)
+        }
+    }
 }
 
 /// `s^2 h(s, t)` of shafts (6) over `s` in `[0, s_max]` and `t` in `[0, t_max]`, m.
@@ -101,6 +149,31 @@ impl AttenuationTable {
 mod tests {
     use super::*;
     use crate::shafts::haze::HazePhase;
+
+    #[test]
+    fn the_light_map_matches_the_exact_profile() {
+        use crate::shafts::spotlight::{light_frame, Falloff};
+        for falloff in [Falloff::Linear, Falloff::Smooth] {
+            let light = Spotlight::new(
+                glam::Vec3::ZERO,
+                light_frame(glam::Vec3::Z, glam::Vec3::Y).unwrap(),
+                glam::Vec3::ONE,
+                (12f32.to_radians(), 20f32.to_radians()),
+                falloff,
+                None,
+            );
+            let map = LightMap::new(&light);
+            for k in 0..=2000 {
+                let r = k as f32 / 1900.0;
+                let want = light.profile_at(r, 0.0);
+                assert!(
+                    (map.get(r * r) - want).abs() < 2e-4,
+                    "{falloff:?} {r}: {} {want}",
+                    map.get(r * r)
+                );
+            }
+        }
+    }
 
     #[test]
     fn tables_match_the_functions_they_hold() {
