@@ -240,6 +240,7 @@ impl<'a> SamplePlanes<'a> {
         let step = light.light_from_world * ray;
         let inv_tan = 1.0 / light.tan_field();
         let shadow = &planes.shadow;
+        let inv_length = 1.0 / length;
         // H I_l at sub-sample k, without the light's colour, and its (u, v) for the gobo.
         let sample = |k: usize| {
             let local = origin + (planes.z_near + (k as f32 + offset) * sub) * step;
@@ -259,11 +260,17 @@ impl<'a> SamplePlanes<'a> {
             let plane0 = k / m;
             let k_end = k_last.min((plane0 + BATCH) * m);
             let mut j_sums = [Vec3::ZERO; BATCH];
+            // Sub-samples k..k_end with their plane counted along (no division per sample).
+            let (mut plane, mut j) = (0, k - plane0 * m);
             match &light.gobo {
                 None => {
                     let mut profile = [0.0f32; BATCH];
                     for k in k..k_end {
-                        profile[k / m - plane0] += sample(k).2;
+                        profile[plane] += sample(k).2;
+                        j += 1;
+                        if j == m {
+                            (plane, j) = (plane + 1, 0);
+                        }
                     }
                     for (j, p) in j_sums.iter_mut().zip(profile) {
                         *j = Vec3::splat(p);
@@ -273,7 +280,11 @@ impl<'a> SamplePlanes<'a> {
                     for k in k..k_end {
                         let (u, v, weight) = sample(k);
                         if weight > 0.0 {
-                            j_sums[k / m - plane0] += weight * gobo.sample(u, v);
+                            j_sums[plane] += weight * gobo.sample(u, v);
+                        }
+                        j += 1;
+                        if j == m {
+                            (plane, j) = (plane + 1, 0);
                         }
                     }
                 }
@@ -285,15 +296,18 @@ impl<'a> SamplePlanes<'a> {
                 // g at the sample plane, shafts (6), from its light-space position.
                 let z = planes.z_near + ((plane0 + offset_i) as f32 + 0.5) * dz;
                 let local = origin + z * step;
+                let inv_s = local.length_recip();
                 let s = local.length();
-                let cos_alpha = -local.dot(step) / (s * length);
+                let cos_alpha = -local.dot(step) * inv_s * inv_length;
                 let s_haze = if planes.lamp_in_haze {
                     s
                 } else {
                     haze.length_inside(light.position, eye + z * ray)
                 };
                 let t_haze = (z * length - entry).max(0.0);
-                let g = self.phase.get(cos_alpha) * self.attenuation.get(s_haze, t_haze, s);
+                let g = self.phase.get(cos_alpha)
+                    * self.attenuation.get(s_haze, t_haze)
+                    * (inv_s * inv_s);
                 sum += *j_sum * g;
             }
             k = k_end;

@@ -128,20 +128,22 @@ impl AttenuationTable {
         }
     }
 
-    /// `h(s, t)`, 1/m^3, from the in-haze lengths `s_haze` and `t_haze` and the
-    /// lamp's distance `s` (for the exact `1/s^2`).
+    /// `s^2 h(s, t)`, 1/m, from the in-haze lengths `s_haze` and `t_haze`; the caller
+    /// divides by the lamp's distance squared.
     #[inline]
-    pub fn get(&self, s_haze: f32, t_haze: f32, s: f32) -> f32 {
+    pub fn get(&self, s_haze: f32, t_haze: f32) -> f32 {
         let n = Self::SIZE;
         let last = (n - 1) as f32;
         let x = (s_haze * self.s_scale).clamp(0.0, last);
         let y = (t_haze * self.t_scale).clamp(0.0, last);
-        let (i, j) = ((x as usize).min(n - 2), (y as usize).min(n - 2));
+        let (i, j) = (
+            (x as i32).min(n as i32 - 2) as usize,
+            (y as i32).min(n as i32 - 2) as usize,
+        );
         let (a, b) = (x - i as f32, y - j as f32);
         let row = |j: usize| &self.values[j * n + i..j * n + i + 2];
         let (r0, r1) = (row(j), row(j + 1));
-        let v = (r0[0] + a * (r0[1] - r0[0])) * (1.0 - b) + (r1[0] + a * (r1[1] - r1[0])) * b;
-        v / (s * s)
+        (r0[0] + a * (r0[1] - r0[0])) * (1.0 - b) + (r1[0] + a * (r1[1] - r1[0])) * b
     }
 }
 
@@ -200,7 +202,10 @@ mod tests {
             let h = AttenuationTable::new(&haze, 40.0, 60.0);
             for (s, t) in [(0.05, 0.0), (1.0, 3.3), (17.2, 41.9), (40.0, 60.0)] {
                 let want = 0.04 * (-0.05f32 * (s + t)).exp() / (s * s);
-                assert!((h.get(s, t, s) - want).abs() <= 5e-5 * want, "{s} {t}");
+                assert!(
+                    (h.get(s, t) / (s * s) - want).abs() <= 5e-5 * want,
+                    "{s} {t}"
+                );
             }
         }
     }
