@@ -241,78 +241,74 @@ impl<'a> SamplePlanes<'a> {
         let inv_tan = 1.0 / light.tan_field();
         let shadow = &planes.shadow;
         let inv_length = 1.0 / length;
-        // H I_l at sub-sample k, without the light's colour, and its (u, v) for the gobo.
-        let sample = |k: usize| {
-            let local = origin + (planes.z_near + (k as f32 + offset) * sub) * step;
-            // Inside the cone z > 0; the guard keeps rounding at the apex harmless.
-            let z = local.z.max(1e-6);
-            let scale = inv_tan / z;
-            let (u, v) = (local.x * scale, local.y * scale);
-            let lit = shadow.lit_at(u, v, z) as u8 as f32;
-            (u, v, lit * planes.light_map.get(u * u + v * v))
+        // g at plane i, shafts (6), from its light-space position.
+        let g = |i: usize| {
+            let z = planes.z_near + (i as f32 + 0.5) * dz;
+            let local = origin + z * step;
+            let inv_s = local.length_recip();
+            let s = local.length();
+            let cos_alpha = -local.dot(step) * inv_s * inv_length;
+            let s_haze = if planes.lamp_in_haze {
+                s
+            } else {
+                haze.length_inside(light.position, eye + z * ray)
+            };
+            let t_haze = (z * length - entry).max(0.0);
+            self.phase.get(cos_alpha) * self.attenuation.get(s_haze, t_haze) * (inv_s * inv_s)
         };
-        // Planes a batch at a time: first J_i of shafts (9) (times m) for the batch, then
-        // g at each plane with J_i > 0, so that the independent g's overlap in the CPU.
-        const BATCH: usize = 32;
+        // Sub-samples a chunk at a time: first their light-space projections (straight
+        // arithmetic, which the compiler vectorises), then the lookups, then J_i of
+        // shafts (9) (times m, without the light's colour) plane by plane.
+        const CHUNK: usize = 64;
+        let (mut u, mut v, mut z) = ([0.0f32; CHUNK], [0.0f32; CHUNK], [0.0f32; CHUNK]);
         let mut sum = Vec3::ZERO;
-        let mut k = k_first;
-        while k < k_last {
-            let plane0 = k / m;
-            let k_end = k_last.min((plane0 + BATCH) * m);
-            let mut j_sums = [Vec3::ZERO; BATCH];
-            // Sub-samples k..k_end with their plane counted along (no division per sample).
-            let (mut plane, mut j) = (0, k - plane0 * m);
-            match &light.gobo {
-                None => {
-                    let mut profile = [0.0f32; BATCH];
-                    for k in k..k_end {
-                        profile[plane] += sample(k).2;
-                        j += 1;
-                        if j == m {
-                            (plane, j) = (plane + 1, 0);
-                        }
-                    }
-                    for (j, p) in j_sums.iter_mut().zip(profile) {
-                        *j = Vec3::splat(p);
-                    }
+        let (mut plane, mut j) = (k_first / m, k_first % m);
+        let mut j_sum = Vec3::ZERO;
+        let mut k0 = k_first;
+        while k0 < k_last {
+            let count = (k_last - k0).min(CHUNK);
+            for c in 0..count {
+                let depth = planes.z_near + ((k0 + c) as f32 + offset) * sub;
+                // Inside the cone z > 0; the guard keeps rounding at the apex harmless.
+                let lz = (origin.z + depth * step.z).max(1e-6);
+                let scale = inv_tan / lz;
+                u[c] = (origin.x + depth * step.x) * scale;
+                v[c] = (origin.y + depth * step.y) * scale;
+                z[c] = lz;
+            }
+            for c in 0..count {
+                let lit = shadow.lit_at(u[c], v[c], z[c]) as u8 as f32;
+                let weight = lit * planes.light_map.get(u[c] * u[c] + v[c] * v[c]);
+                match &light.gobo {
+                    None => j_sum.x += weight,
+                    Some(gobo) if weight > 0.0 => j_sum += weight * gobo.sample(u[c], v[c]),
+                    Some(_) => {}
                 }
-                Some(gobo) => {
-                    for k in k..k_end {
-                        let (u, v, weight) = sample(k);
-                        if weight > 0.0 {
-                            j_sums[plane] += weight * gobo.sample(u, v);
-                        }
-                        j += 1;
-                        if j == m {
-                            (plane, j) = (plane + 1, 0);
-                        }
-                    }
+                j += 1;
+                if j == m {
+                    sum += self.flush(&mut j_sum, light.gobo.is_some(), || g(plane));
+                    (plane, j) = (plane + 1, 0);
                 }
             }
-            for (offset_i, j_sum) in j_sums.iter().enumerate() {
-                if *j_sum == Vec3::ZERO {
-                    continue;
-                }
-                // g at the sample plane, shafts (6), from its light-space position.
-                let z = planes.z_near + ((plane0 + offset_i) as f32 + 0.5) * dz;
-                let local = origin + z * step;
-                let inv_s = local.length_recip();
-                let s = local.length();
-                let cos_alpha = -local.dot(step) * inv_s * inv_length;
-                let s_haze = if planes.lamp_in_haze {
-                    s
-                } else {
-                    haze.length_inside(light.position, eye + z * ray)
-                };
-                let t_haze = (z * length - entry).max(0.0);
-                let g = self.phase.get(cos_alpha)
-                    * self.attenuation.get(s_haze, t_haze)
-                    * (inv_s * inv_s);
-                sum += *j_sum * g;
-            }
-            k = k_end;
+            k0 += count;
         }
+        sum += self.flush(&mut j_sum, light.gobo.is_some(), || g(plane));
         light.intensity * sum * (dz * length / m as f32)
+    }
+}
+
+impl SamplePlanes<'_> {
+    /// `J_i g_i` of a finished plane, resetting `j_sum`; `g` is evaluated only when
+    /// `J_i > 0`. Without a gobo the profile sum is kept in `x` alone.
+    #[inline]
+    fn flush(&self, j_sum: &mut Vec3, gobo: bool, g: impl FnOnce() -> f32) -> Vec3 {
+        let j = std::mem::take(j_sum);
+        let j = if gobo { j } else { Vec3::splat(j.x) };
+        if j == Vec3::ZERO {
+            Vec3::ZERO
+        } else {
+            j * g()
+        }
     }
 }
 
