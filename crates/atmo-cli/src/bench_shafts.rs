@@ -89,6 +89,24 @@ pub fn bench_shafts(quick: bool, json: bool, scenes: &Path, sweep: &Path) -> Res
         ),
     );
 
+    // The camera moves, the lights and objects do not: shadow maps kept.
+    let maps = atmo::shafts::planes::shadow_maps(&fig6);
+    let camera_ms = median(
+        (0..runs)
+            .map(|_| time_ms(|| drop(SamplePlanes::with_shadow_maps(&fig6, &maps).render())))
+            .collect(),
+    );
+    emit(
+        json,
+        json!({"bench": "shafts.fig6-camera", "params": params(&fig6), "median_ms": camera_ms,
+               "baseline": "shafts.ray-march", "baseline_median_ms": baseline_ms,
+               "ratio": baseline_ms / camera_ms}),
+        format!(
+            "shafts.fig6-camera {camera_ms:>8.2} ms   (shadow maps kept: only the camera moved)   ratio {:>6.1}",
+            baseline_ms / camera_ms
+        ),
+    );
+
     let (stage_ms, _) = time_planes(&stage, runs);
     emit(
         json,

@@ -336,6 +336,18 @@ fn lights_add_up() {
 }
 
 #[test]
+fn shadow_maps_kept_from_an_earlier_frame_give_the_same_picture() {
+    let mut scene = parse(&small_scene(SPHERE)).unwrap();
+    let maps = atmo::shafts::planes::shadow_maps(&scene);
+    // The camera moves; lights and objects do not.
+    scene.camera.position += Vec3::new(0.7, 0.2, -0.5);
+    let kept = SamplePlanes::with_shadow_maps(&scene, &maps).render();
+    let fresh = SamplePlanes::new(&scene).render();
+    assert_eq!(kept, fresh);
+    assert!(kept.pixels.iter().any(|p| p.max_element() > 0.0));
+}
+
+#[test]
 fn the_picture_does_not_depend_on_the_thread_count() {
     let scene = Scene::from_file(&scenes().join("stage.toml")).unwrap();
     let mut small = scene.clone();

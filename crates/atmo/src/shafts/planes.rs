@@ -20,6 +20,8 @@
 //!
 //! `dz |r|` is shafts' `Delta t`, the length of ray between two planes.
 
+use std::borrow::Cow;
+
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -37,9 +39,10 @@ const NEAR_PLANE: f32 = 1e-3;
 
 /// One light's shadow map and the depths its planes span.
 #[derive(Debug, Clone)]
-pub struct LightPlanes {
-    /// `H` for this light.
-    pub shadow: ShadowMap,
+pub struct LightPlanes<'a> {
+    /// `H` for this light: built here, or borrowed when the light and the objects have
+    /// not moved since it was built.
+    pub shadow: Cow<'a, ShadowMap>,
     /// Camera depth where the first plane interval starts, m.
     pub z_near: f32,
     /// Camera depth where the last plane interval ends, m.
@@ -60,7 +63,7 @@ pub struct LightPlanes {
 pub struct SamplePlanes<'a> {
     scene: &'a Scene,
     /// Per light, in scene order.
-    pub lights: Vec<LightPlanes>,
+    pub lights: Vec<LightPlanes<'a>>,
     phase: PhaseTable,
     attenuation: AttenuationTable,
 }
@@ -69,21 +72,35 @@ impl<'a> SamplePlanes<'a> {
     /// Builds the shadow maps, finds where each light's lit volume lies in camera depth
     /// (the lamp and the ends of its shadow map's rays), and tabulates `F` and `h`.
     pub fn new(scene: &'a Scene) -> SamplePlanes<'a> {
+        SamplePlanes::prepare(
+            scene,
+            shadow_maps(scene).into_iter().map(Cow::Owned).collect(),
+        )
+    }
+
+    /// As [`SamplePlanes::new`] with the shadow maps of an earlier frame (from
+    /// [`shadow_maps`]), for when only the camera moved: an interactive viewer rebuilds
+    /// a light's map only when that light or an object changes.
+    pub fn with_shadow_maps(scene: &'a Scene, maps: &'a [ShadowMap]) -> SamplePlanes<'a> {
+        assert_eq!(maps.len(), scene.lights.len(), "one shadow map a light");
+        SamplePlanes::prepare(scene, maps.iter().map(Cow::Borrowed).collect())
+    }
+
+    fn prepare(scene: &'a Scene, maps: Vec<Cow<'a, ShadowMap>>) -> SamplePlanes<'a> {
         let camera = &scene.camera;
-        let size = scene.planes.shadow_map as usize;
         let mut s_max = 0.0f32;
         let mut t_max = 0.0f32;
         let lights = scene
             .lights
             .iter()
-            .map(|light| {
-                let shadow = ShadowMap::new(light, &scene.objects, size);
+            .zip(maps)
+            .map(|(light, shadow)| {
                 // Farther than this from the lamp is beyond the far plane anyway.
                 let reach = camera.far * 2.0 + (light.position - camera.position).length();
                 let lamp = camera.depth(light.position);
                 // Per row: camera depth range, farthest from the lamp, farthest from the eye.
                 let start = (lamp, lamp, 0.0f32, 0.0f32, Aabb::EMPTY.grow(light.position));
-                let extent = (0..size)
+                let extent = (0..shadow.size)
                     .into_par_iter()
                     .map(|row| {
                         shadow
@@ -310,6 +327,16 @@ impl SamplePlanes<'_> {
             j * g()
         }
     }
+}
+
+/// The shadow map of each light of `scene`, in scene order.
+pub fn shadow_maps(scene: &Scene) -> Vec<ShadowMap> {
+    let size = scene.planes.shadow_map as usize;
+    scene
+        .lights
+        .iter()
+        .map(|light| ShadowMap::new(light, &scene.objects, size))
+        .collect()
 }
 
 /// The scene by the plane method.
