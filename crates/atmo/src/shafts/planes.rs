@@ -258,26 +258,22 @@ impl<'a> SamplePlanes<'a> {
         let inv_tan = 1.0 / light.tan_field();
         let shadow = &planes.shadow;
         let inv_length = 1.0 / length;
-        // g at plane i, shafts (6), from its light-space position.
-        let g = |i: usize| {
-            let z = planes.z_near + (i as f32 + 0.5) * dz;
-            let local = origin + z * step;
-            let inv_s = local.length_recip();
-            let s = local.length();
-            let cos_alpha = -local.dot(step) * inv_s * inv_length;
-            let s_haze = if planes.lamp_in_haze {
-                s
-            } else {
-                haze.length_inside(light.position, eye + z * ray)
-            };
-            let t_haze = (z * length - entry).max(0.0);
-            self.phase.get(cos_alpha) * self.attenuation.get(s_haze, t_haze) * (inv_s * inv_s)
-        };
         // Sub-samples a chunk at a time: first their light-space projections (straight
-        // arithmetic, which the compiler vectorises), then the lookups, then J_i of
-        // shafts (9) (times m, without the light's colour) plane by plane.
+        // arithmetic, which the compiler vectorises), then the lookups and J_i of
+        // shafts (9) (times m, without the light's colour) plane by plane, then g of
+        // shafts (6) for the planes the chunk finished, the same way.
         const CHUNK: usize = 64;
         let (mut u, mut v, mut z) = ([0.0f32; CHUNK], [0.0f32; CHUNK], [0.0f32; CHUNK]);
+        // Planes finished in a chunk, at most CHUNK + 1 (the last one at the end).
+        let mut finished = [0u32; CHUNK + 1];
+        let mut j_sums = [Vec3::ZERO; CHUNK + 1];
+        let (mut cos_alpha, mut s_haze, mut t_haze, mut inv_s2) = (
+            [0.0f32; CHUNK + 1],
+            [0.0f32; CHUNK + 1],
+            [0.0f32; CHUNK + 1],
+            [0.0f32; CHUNK + 1],
+        );
+        let gobo = light.gobo.is_some();
         let mut sum = Vec3::ZERO;
         let (mut plane, mut j) = (k_first / m, k_first % m);
         let mut j_sum = Vec3::ZERO;
@@ -293,6 +289,7 @@ impl<'a> SamplePlanes<'a> {
                 v[c] = (origin.y + depth * step.y) * scale;
                 z[c] = lz;
             }
+            let mut done = 0;
             for c in 0..count {
                 let lit = shadow.lit_at(u[c], v[c], z[c]) as u8 as f32;
                 let weight = lit * planes.light_map.get(u[c] * u[c] + v[c] * v[c]);
@@ -302,30 +299,48 @@ impl<'a> SamplePlanes<'a> {
                     Some(_) => {}
                 }
                 j += 1;
-                if j == m {
-                    sum += self.flush(&mut j_sum, light.gobo.is_some(), || g(plane));
+                let last = k0 + c + 1 == k_last;
+                if j == m || last {
+                    // A plane is finished (or the lit stretch ends inside it).
+                    let js = std::mem::take(&mut j_sum);
+                    if js != Vec3::ZERO {
+                        (finished[done], j_sums[done]) = (plane as u32, js);
+                        done += 1;
+                    }
                     (plane, j) = (plane + 1, 0);
                 }
             }
+            // g at the finished planes: positions first, then the table lookups.
+            for d in 0..done {
+                let depth = planes.z_near + (finished[d] as f32 + 0.5) * dz;
+                let local = origin + depth * step;
+                let s2 = local.length_squared();
+                let inv_s = s2.sqrt().recip();
+                cos_alpha[d] = -local.dot(step) * inv_s * inv_length;
+                s_haze[d] = s2 * inv_s;
+                t_haze[d] = (depth * length - entry).max(0.0);
+                inv_s2[d] = inv_s * inv_s;
+            }
+            if !planes.lamp_in_haze {
+                for d in 0..done {
+                    let depth = planes.z_near + (finished[d] as f32 + 0.5) * dz;
+                    s_haze[d] = haze.length_inside(light.position, eye + depth * ray);
+                }
+            }
+            for d in 0..done {
+                let g = self.phase.get(cos_alpha[d])
+                    * self.attenuation.get(s_haze[d], t_haze[d])
+                    * inv_s2[d];
+                let js = if gobo {
+                    j_sums[d]
+                } else {
+                    Vec3::splat(j_sums[d].x)
+                };
+                sum += js * g;
+            }
             k0 += count;
         }
-        sum += self.flush(&mut j_sum, light.gobo.is_some(), || g(plane));
         light.intensity * sum * (dz * length / m as f32)
-    }
-}
-
-impl SamplePlanes<'_> {
-    /// `J_i g_i` of a finished plane, resetting `j_sum`; `g` is evaluated only when
-    /// `J_i > 0`. Without a gobo the profile sum is kept in `x` alone.
-    #[inline]
-    fn flush(&self, j_sum: &mut Vec3, gobo: bool, g: impl FnOnce() -> f32) -> Vec3 {
-        let j = std::mem::take(j_sum);
-        let j = if gobo { j } else { Vec3::splat(j.x) };
-        if j == Vec3::ZERO {
-            Vec3::ZERO
-        } else {
-            j * g()
-        }
     }
 }
 
