@@ -67,16 +67,8 @@ impl ShadowMap {
         )
     }
 
-    /// `H`: whether the light-space point `local` (with `z > 0`, inside the field) is
-    /// nearer the light than the surface in its texel.
-    #[inline]
-    pub fn lit(&self, local: Vec3) -> bool {
-        let scale = 1.0 / (local.z * self.tan_field);
-        self.lit_at(local.x * scale, local.y * scale, local.z)
-    }
-
-    /// [`ShadowMap::lit`] of the point at light-space depth `z` projecting to `(u, v)`
-    /// (inside the `[-1, 1]^2` square), for callers that already have the projection.
+    /// `H`: whether the point at light-space depth `z` projecting to `(u, v)` (inside
+    /// the `[-1, 1]^2` square) is nearer the light than the surface in its texel.
     #[inline]
     pub fn lit_at(&self, u: f32, v: f32, z: f32) -> bool {
         let half = 0.5 * self.size as f32;
