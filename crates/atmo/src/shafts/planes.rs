@@ -25,8 +25,8 @@ use std::borrow::Cow;
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::interleaved_offset;
 use super::objects::Aabb;
-use super::render_rays;
 use super::shadow_map::ShadowMap;
 use super::spotlight::Spotlight;
 use super::surface::{first_hit, surface_radiance, SurfacePoint};
@@ -171,30 +171,79 @@ impl<'a> SamplePlanes<'a> {
         }
     }
 
-    /// The picture: surfaces lit through shadow maps plus the scattered light.
+    /// The picture: surfaces lit through shadow maps plus the scattered light. Rows in
+    /// parallel; within a row, [`LANES`] neighbouring pixels go through the sub-samples
+    /// together (see [`SamplePlanes::scattered`]).
     pub fn render(&self) -> Frame {
-        render_rays(&self.scene.camera, |ray, offset| self.radiance(ray, offset))
+        let camera = &self.scene.camera;
+        let width = camera.width as usize;
+        let mut frame = Frame::new(camera.width, camera.height);
+        let subpixels = camera.subpixel_offsets();
+        let weight = 1.0 / subpixels.len() as f32;
+        frame
+            .pixels
+            .par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(y, row)| {
+                let shifts: Vec<f32> = (0..width)
+                    .map(|x| interleaved_offset(x as u32, y as u32))
+                    .collect();
+                let mut rays = vec![Vec3::ZERO; width];
+                let mut radiance = vec![Vec3::ZERO; width];
+                for (dx, dy) in &subpixels {
+                    for (x, ray) in rays.iter_mut().enumerate() {
+                        *ray = camera.ray(x as f32 + dx, y as f32 + dy);
+                    }
+                    self.radiance_row(&rays, &shifts, &mut radiance);
+                    for (pixel, r) in row.iter_mut().zip(&radiance) {
+                        *pixel += *r;
+                    }
+                }
+                for pixel in row.iter_mut() {
+                    *pixel *= weight;
+                }
+            });
+        frame
     }
 
     /// The radiance along one camera ray (unit length along the view axis), its
     /// sub-sample planes shifted by `offset` in [0, 1) of their spacing (1/2: the
     /// paper's, centred in their slices).
     pub fn radiance(&self, ray: Vec3, offset: f32) -> Vec3 {
+        let mut out = [Vec3::ZERO];
+        self.radiance_row(&[ray], &[offset], &mut out);
+        out[0]
+    }
+
+    /// [`SamplePlanes::radiance`] of each ray of `rays` with its `offsets`, into `out`.
+    fn radiance_row(&self, rays: &[Vec3], offsets: &[f32], out: &mut [Vec3]) {
         let scene = self.scene;
-        let length = ray.length();
-        let dir = ray / length;
-        let hit = first_hit(scene, dir, scene.camera.far * length);
-        let mut radiance = match &hit {
-            Some(point) => {
-                surface_radiance(scene, point, |k, light| self.visibility(k, light, point))
+        for ((rays, offsets), out) in rays
+            .chunks(LANES)
+            .zip(offsets.chunks(LANES))
+            .zip(out.chunks_mut(LANES))
+        {
+            // Surfaces, and where each ray ends.
+            let mut ends = [0.0f32; LANES];
+            for ((ray, out), end) in rays.iter().zip(out.iter_mut()).zip(&mut ends) {
+                let length = ray.length();
+                let hit = first_hit(scene, *ray / length, scene.camera.far * length);
+                *out = match &hit {
+                    Some(point) => {
+                        surface_radiance(scene, point, |k, light| self.visibility(k, light, point))
+                    }
+                    None => Vec3::ZERO,
+                };
+                *end = hit.map_or(scene.camera.far * length, |p| p.distance);
             }
-            None => Vec3::ZERO,
-        };
-        let end = hit.map_or(scene.camera.far * length, |p| p.distance);
-        for (light, planes) in scene.lights.iter().zip(&self.lights) {
-            radiance += self.scattered(light, planes, ray, length, end, offset);
+            for (light, planes) in scene.lights.iter().zip(&self.lights) {
+                let lanes = Lanes::new(self, light, planes, rays, offsets, &ends);
+                let scattered = self.scattered(light, planes, &lanes);
+                for (out, s) in out.iter_mut().zip(scattered) {
+                    *out += s;
+                }
+            }
         }
-        radiance
     }
 
     /// How much of `light` the surface point sees: its shadow map, filtered, looked up a
@@ -206,141 +255,232 @@ impl<'a> SamplePlanes<'a> {
         shadow.visibility(light.to_light(lifted))
     }
 
-    /// `I_s` of shafts (7) for one light along the ray `ray` (unit length along the view
-    /// axis, `length = |ray|`) up to `end` m from the eye.
-    fn scattered(
+    /// `I_s` of shafts (7) for one light along the rays of `lanes`.
+    ///
+    /// All sub-samples of a ray form one progression in camera depth,
+    /// `z_k = z_near + (k + offset) sub` with `sub = dz / m`: sub-plane `k mod m` of plane
+    /// `k / m`. Sample `k` of every ray lies in the same plane's slice, so the lanes go
+    /// through `k` together, each counting only its own lit stretch: first the
+    /// light-space projections of the `LANES` samples (straight arithmetic, which the
+    /// compiler vectorises), then their shadow-map and light-map lookups into `J_i`
+    /// (shafts (9), times `m`, without the light's colour), and where a plane's slice
+    /// ends, `g` of shafts (6) for the lanes the same way.
+    fn scattered(&self, light: &Spotlight, planes: &LightPlanes, lanes: &Lanes) -> [Vec3; LANES] {
+        let scene = self.scene;
+        let eye = scene.camera.position;
+        let mut sum = [Vec3::ZERO; LANES];
+        let (first, last) = lanes.k_range();
+        if first >= last {
+            return sum;
+        }
+        let m = scene.planes.sub_planes as usize;
+        let dz = lanes.dz;
+        let sub = dz / m as f32;
+        let origin = light.to_light(eye);
+        let inv_tan = 1.0 / light.tan_field();
+        let shadow = &planes.shadow;
+        let [sx, sy, sz] = &lanes.step;
+        // J_i per lane: the profile alone (`jx`), or with the gobo's colour.
+        let mut j_sums = [Vec3::ZERO; LANES];
+        let (mut plane, mut j) = (first / m, first % m);
+        for k in first..last {
+            let (mut u, mut v, mut z, mut active) = (
+                [0.0f32; LANES],
+                [0.0f32; LANES],
+                [0.0f32; LANES],
+                [0.0f32; LANES],
+            );
+            for l in 0..LANES {
+                let depth = planes.z_near + (k as f32 + lanes.offset[l]) * sub;
+                // Inside the cone z > 0; the guard keeps rounding at the apex harmless.
+                let lz = (origin.z + depth * sz[l]).max(1e-6);
+                let scale = inv_tan / lz;
+                u[l] = (origin.x + depth * sx[l]) * scale;
+                v[l] = (origin.y + depth * sy[l]) * scale;
+                z[l] = lz;
+                active[l] =
+                    ((k as u32 >= lanes.k_first[l]) & ((k as u32) < lanes.k_last[l])) as u8 as f32;
+            }
+            for l in 0..lanes.count {
+                let lit = shadow.lit_at(u[l], v[l], z[l]) as u8 as f32;
+                let weight = active[l] * lit * planes.light_map.get(u[l] * u[l] + v[l] * v[l]);
+                match &light.gobo {
+                    None => j_sums[l].x += weight,
+                    Some(gobo) if weight > 0.0 => j_sums[l] += weight * gobo.sample(u[l], v[l]),
+                    Some(_) => {}
+                }
+            }
+            j += 1;
+            if j == m || k + 1 == last {
+                self.add_plane(light, planes, lanes, plane, &mut j_sums, &mut sum);
+                (plane, j) = (plane + 1, 0);
+            }
+        }
+        for (s, length) in sum.iter_mut().zip(&lanes.length).take(lanes.count) {
+            *s = light.intensity * *s * (dz * length / m as f32);
+        }
+        sum
+    }
+
+    /// Adds `J_i g_i` of plane `plane` to each lane's `sum` and clears `j_sums`: `g` of
+    /// shafts (6) from the plane's light-space position, positions first, then lookups.
+    fn add_plane(
         &self,
         light: &Spotlight,
         planes: &LightPlanes,
-        ray: Vec3,
-        length: f32,
-        end: f32,
-        offset: f32,
-    ) -> Vec3 {
-        let scene = self.scene;
+        lanes: &Lanes,
+        plane: usize,
+        j_sums: &mut [Vec3; LANES],
+        sum: &mut [Vec3; LANES],
+    ) {
+        let haze = &self.scene.haze;
+        let eye = self.scene.camera.position;
+        let origin = light.to_light(eye);
+        let [sx, sy, sz] = &lanes.step;
+        let depth = planes.z_near + (plane as f32 + 0.5) * lanes.dz;
+        let (mut cos_alpha, mut s_haze, mut t_haze, mut inv_s2) = (
+            [0.0f32; LANES],
+            [0.0f32; LANES],
+            [0.0f32; LANES],
+            [0.0f32; LANES],
+        );
+        for l in 0..LANES {
+            let local = Vec3::new(
+                origin.x + depth * sx[l],
+                origin.y + depth * sy[l],
+                origin.z + depth * sz[l],
+            );
+            let s2 = local.length_squared();
+            let inv_s = s2.sqrt().recip();
+            let dot = local.x * sx[l] + local.y * sy[l] + local.z * sz[l];
+            cos_alpha[l] = -dot * inv_s * lanes.inv_length[l];
+            s_haze[l] = s2 * inv_s;
+            t_haze[l] = (depth * lanes.length[l] - lanes.entry[l]).max(0.0);
+            inv_s2[l] = inv_s * inv_s;
+        }
+        let gobo = light.gobo.is_some();
+        for l in 0..lanes.count {
+            let js = std::mem::take(&mut j_sums[l]);
+            if js == Vec3::ZERO {
+                continue;
+            }
+            if !planes.lamp_in_haze {
+                s_haze[l] = haze.length_inside(light.position, eye + depth * lanes.ray[l]);
+            }
+            let g = self.phase.get(cos_alpha[l])
+                * self.attenuation.get(s_haze[l], t_haze[l])
+                * inv_s2[l];
+            sum[l] += if gobo { js } else { Vec3::splat(js.x) } * g;
+        }
+    }
+}
+
+/// Pixels that go through the sub-samples together: the width of the vector loops.
+pub const LANES: usize = 8;
+
+/// What [`SamplePlanes::scattered`] needs of up to [`LANES`] camera rays for one light.
+struct Lanes {
+    /// Rays in use (the rest are inactive padding).
+    count: usize,
+    /// Plane spacing of the light, m of camera depth.
+    dz: f32,
+    /// Camera rays (unit length along the view axis).
+    ray: [Vec3; LANES],
+    /// The rays in light space, per axis.
+    step: [[f32; LANES]; 3],
+    /// `|ray|` and its inverse.
+    length: [f32; LANES],
+    inv_length: [f32; LANES],
+    /// Each ray's sub-plane shift in [0, 1).
+    offset: [f32; LANES],
+    /// Where each ray enters the haze, m (0 without a haze box).
+    entry: [f32; LANES],
+    /// Each ray's lit sub-samples are `k_first..k_last` (empty: 0..0).
+    k_first: [u32; LANES],
+    k_last: [u32; LANES],
+}
+
+impl Lanes {
+    /// The rays' lit stretches for `light`: inside its field cone, its lit volume's box
+    /// and the haze, in front of `ends` (m from the eye) and between its first and last
+    /// plane.
+    fn new(
+        method: &SamplePlanes,
+        light: &Spotlight,
+        planes: &LightPlanes,
+        rays: &[Vec3],
+        offsets: &[f32],
+        ends: &[f32; LANES],
+    ) -> Lanes {
+        let scene = method.scene;
         let haze = &scene.haze;
         let eye = scene.camera.position;
-        let dir = ray / length;
-        let Some((ta, tb)) = planes
-            .bounds
-            .clip(eye, dir.recip(), 0.0, end)
-            .and_then(|(a, b)| light.cone_interval(eye, dir, a, b))
-            .and_then(|(a, b)| haze.clip(eye, dir, a, b))
-        else {
-            return Vec3::ZERO;
-        };
-        // Where the ray enters the haze: a point inside it at distance t has t - entry
-        // of its path to the eye in the haze (the haze is convex).
-        let entry = haze
-            .clip(eye, dir, 0.0, f32::INFINITY)
-            .map_or(0.0, |(a, _)| a);
-        // The lit stretch of the ray in camera depth, and the planes whose intervals meet it.
-        let (za, zb) = (
-            (ta / length).max(planes.z_near),
-            (tb / length).min(planes.z_far),
-        );
-        if za >= zb {
-            return Vec3::ZERO;
-        }
         let n = scene.planes.planes as usize;
         let m = scene.planes.sub_planes as usize;
         let dz = (planes.z_far - planes.z_near) / n as f32;
-        let sub = dz / m as f32;
-        let inv_sub = 1.0 / sub;
-        // All sub-samples of the ray form one progression in depth,
-        // z_k = z_near + (k + offset) sub, sub-plane j = k mod m of plane i = k / m;
-        // those in the lit stretch are k_first..k_last.
-        let k_first = ceil_nonnegative((za - planes.z_near) * inv_sub - offset);
-        let k_last = ceil_nonnegative((zb - planes.z_near) * inv_sub - offset).min(n * m);
-        // Light-space position along the ray is affine in camera depth.
-        let origin = light.to_light(eye);
-        let step = light.light_from_world * ray;
-        let inv_tan = 1.0 / light.tan_field();
-        let shadow = &planes.shadow;
-        let inv_length = 1.0 / length;
-        // Sub-samples a chunk at a time: first their light-space projections (straight
-        // arithmetic, which the compiler vectorises), then the lookups and J_i of
-        // shafts (9) (times m, without the light's colour) plane by plane, then g of
-        // shafts (6) for the planes the chunk finished, the same way.
-        const CHUNK: usize = 64;
-        let (mut u, mut v, mut z) = ([0.0f32; CHUNK], [0.0f32; CHUNK], [0.0f32; CHUNK]);
-        // Planes finished in a chunk, at most CHUNK + 1 (the last one at the end).
-        let mut finished = [0u32; CHUNK + 1];
-        let mut j_sums = [Vec3::ZERO; CHUNK + 1];
-        let (mut cos_alpha, mut s_haze, mut t_haze, mut inv_s2) = (
-            [0.0f32; CHUNK + 1],
-            [0.0f32; CHUNK + 1],
-            [0.0f32; CHUNK + 1],
-            [0.0f32; CHUNK + 1],
-        );
-        let gobo = light.gobo.is_some();
-        let mut sum = Vec3::ZERO;
-        let (mut plane, mut j) = (k_first / m, k_first % m);
-        let mut j_sum = Vec3::ZERO;
-        let mut k0 = k_first;
-        while k0 < k_last {
-            let count = (k_last - k0).min(CHUNK);
-            for c in 0..count {
-                let depth = planes.z_near + ((k0 + c) as f32 + offset) * sub;
-                // Inside the cone z > 0; the guard keeps rounding at the apex harmless.
-                let lz = (origin.z + depth * step.z).max(1e-6);
-                let scale = inv_tan / lz;
-                u[c] = (origin.x + depth * step.x) * scale;
-                v[c] = (origin.y + depth * step.y) * scale;
-                z[c] = lz;
+        let inv_sub = 1.0 / (dz / m as f32);
+        let mut lanes = Lanes {
+            count: rays.len(),
+            dz,
+            ray: [Vec3::ZERO; LANES],
+            step: [[0.0; LANES]; 3],
+            length: [1.0; LANES],
+            inv_length: [1.0; LANES],
+            offset: [0.0; LANES],
+            entry: [0.0; LANES],
+            k_first: [0; LANES],
+            k_last: [0; LANES],
+        };
+        for (l, (ray, offset)) in rays.iter().zip(offsets).enumerate() {
+            let length = ray.length();
+            let dir = *ray / length;
+            let step = light.light_from_world * *ray;
+            (
+                lanes.ray[l],
+                lanes.length[l],
+                lanes.inv_length[l],
+                lanes.offset[l],
+            ) = (*ray, length, 1.0 / length, *offset);
+            (lanes.step[0][l], lanes.step[1][l], lanes.step[2][l]) = (step.x, step.y, step.z);
+            let Some((ta, tb)) = planes
+                .bounds
+                .clip(eye, dir.recip(), 0.0, ends[l])
+                .and_then(|(a, b)| light.cone_interval(eye, dir, a, b))
+                .and_then(|(a, b)| haze.clip(eye, dir, a, b))
+            else {
+                continue;
+            };
+            // A point in the (convex) haze at distance t has t - entry of its path to
+            // the eye in it.
+            lanes.entry[l] = haze
+                .clip(eye, dir, 0.0, f32::INFINITY)
+                .map_or(0.0, |(a, _)| a);
+            // The lit stretch in camera depth, as sub-sample indices.
+            let (za, zb) = (
+                (ta / length).max(planes.z_near),
+                (tb / length).min(planes.z_far),
+            );
+            if za < zb {
+                lanes.k_first[l] = ceil_nonnegative((za - planes.z_near) * inv_sub - offset) as u32;
+                lanes.k_last[l] =
+                    ceil_nonnegative((zb - planes.z_near) * inv_sub - offset).min(n * m) as u32;
             }
-            let mut done = 0;
-            for c in 0..count {
-                let lit = shadow.lit_at(u[c], v[c], z[c]) as u8 as f32;
-                let weight = lit * planes.light_map.get(u[c] * u[c] + v[c] * v[c]);
-                match &light.gobo {
-                    None => j_sum.x += weight,
-                    Some(gobo) if weight > 0.0 => j_sum += weight * gobo.sample(u[c], v[c]),
-                    Some(_) => {}
-                }
-                j += 1;
-                let last = k0 + c + 1 == k_last;
-                if j == m || last {
-                    // A plane is finished (or the lit stretch ends inside it).
-                    let js = std::mem::take(&mut j_sum);
-                    if js != Vec3::ZERO {
-                        (finished[done], j_sums[done]) = (plane as u32, js);
-                        done += 1;
-                    }
-                    (plane, j) = (plane + 1, 0);
-                }
-            }
-            // g at the finished planes: positions first, then the table lookups.
-            for d in 0..done {
-                let depth = planes.z_near + (finished[d] as f32 + 0.5) * dz;
-                let local = origin + depth * step;
-                let s2 = local.length_squared();
-                let inv_s = s2.sqrt().recip();
-                cos_alpha[d] = -local.dot(step) * inv_s * inv_length;
-                s_haze[d] = s2 * inv_s;
-                t_haze[d] = (depth * length - entry).max(0.0);
-                inv_s2[d] = inv_s * inv_s;
-            }
-            if !planes.lamp_in_haze {
-                for d in 0..done {
-                    let depth = planes.z_near + (finished[d] as f32 + 0.5) * dz;
-                    s_haze[d] = haze.length_inside(light.position, eye + depth * ray);
-                }
-            }
-            for d in 0..done {
-                let g = self.phase.get(cos_alpha[d])
-                    * self.attenuation.get(s_haze[d], t_haze[d])
-                    * inv_s2[d];
-                let js = if gobo {
-                    j_sums[d]
-                } else {
-                    Vec3::splat(j_sums[d].x)
-                };
-                sum += js * g;
-            }
-            k0 += count;
         }
-        light.intensity * sum * (dz * length / m as f32)
+        lanes
+    }
+
+    /// The sub-samples any lane needs: from the smallest first to the largest last.
+    fn k_range(&self) -> (usize, usize) {
+        let mut range = (usize::MAX, 0);
+        for l in 0..self.count {
+            if self.k_first[l] < self.k_last[l] {
+                range = (
+                    range.0.min(self.k_first[l] as usize),
+                    range.1.max(self.k_last[l] as usize),
+                );
+            }
+        }
+        range
     }
 }
 
