@@ -106,8 +106,9 @@ impl ShadowMap {
     }
 
     /// World positions where the rays of the texels of `row` end: at the surface they
-    /// meet, or at `reach` m from the light where they meet nothing. Texels outside the
-    /// field cone are left out. With the lamp, the ends of all rows bound the lit volume.
+    /// meet, or at light-space depth `reach` m where they meet nothing. Texels outside
+    /// the field cone are left out. With the lamp, the ends of all rows bound the lit
+    /// volume.
     pub fn ray_ends<'a>(
         &'a self,
         light: &'a Spotlight,
@@ -116,14 +117,18 @@ impl ShadowMap {
     ) -> impl Iterator<Item = Vec3> + 'a {
         let n = self.size;
         let v = 1.0 - 2.0 * (row as f32 + 0.5) / n as f32;
+        // The texel directions along a row are affine in u.
+        let (left, right) = (
+            light.world_direction(-1.0, v),
+            light.world_direction(1.0, v),
+        );
         (0..n).filter_map(move |col| {
             let u = 2.0 * (col as f32 + 0.5) / n as f32 - 1.0;
             if !touches_disc(u, v, n) {
                 return None;
             }
-            let dir = light.world_direction(u, v);
-            let z = self.depth[row * n + col].min(reach / dir.length());
-            Some(light.position + z * dir)
+            let dir = left + (right - left) * (0.5 * (u + 1.0));
+            Some(light.position + self.depth[row * n + col].min(reach) * dir)
         })
     }
 }
