@@ -282,7 +282,7 @@ impl<'a> SamplePlanes<'a> {
         let inv_tan = 1.0 / light.tan_field();
         let shadow = &planes.shadow;
         let [sx, sy, sz] = &lanes.step;
-        // J_i per lane: the profile alone (`jx`), or with the gobo's colour.
+        // J_i per lane: the profile alone (in `x`), or with the gobo's colour.
         let mut j_sums = [Vec3::ZERO; LANES];
         let (mut plane, mut j) = (first / m, first % m);
         for k in first..last {
