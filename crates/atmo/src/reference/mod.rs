@@ -6,5 +6,6 @@
 //! with a resolution that the tests show converged; the shafts' are midpoint ray
 //! marching with shadow rays, converged by doubling.
 
+pub mod clouds;
 pub mod shafts;
 pub mod sky;

@@ -1,0 +1,12 @@
+//! Clouds lit by a moving sun, after Shimada, Shinya, Shiraishi and Harada, "Fast
+//! rendering of dynamic clouds using GPU shaders" (cited as `clouds (n)`): a cloud is a
+//! set of Gaussian particles ([`particles`], made by [`generator`]); the light reaching
+//! every part of it is kept in a 3-D intensity buffer oriented to the sun ([`buffer`]),
+//! filled in any particle order by the multiplicative form (7).
+//!
+//! Still to come (issue 5): the Harris baseline light pass, billboard rendering, the
+//! particle file formats, the command line and the benchmark.
+
+pub mod buffer;
+pub mod generator;
+pub mod particles;
