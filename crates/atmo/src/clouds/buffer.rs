@@ -21,7 +21,7 @@
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
-use super::particles::Particle;
+use super::particles::{erf_table, Particle};
 use crate::error::{check_budget, check_range, Error, Result};
 
 /// Largest buffer atmo allocates, bytes.
@@ -48,8 +48,11 @@ pub struct IntensityBuffer {
     pub min: Vec3,
     /// Voxel size along each buffer axis, m.
     pub voxel: Vec3,
-    /// `Gamma` at voxel centres, `[x][z][y]`.
-    pub gamma: Vec<f32>,
+    /// `ln Gamma` at voxel centres, `[x][z][y]`: a sum where the paper multiplies (it
+    /// added `log G` in its shaders too), and what [`IntensityBuffer::sample`]
+    /// interpolates, so that light falls off exponentially between voxels as it does
+    /// through the particles.
+    pub log_gamma: Vec<f32>,
 }
 
 impl IntensityBuffer {
@@ -76,6 +79,27 @@ impl IntensityBuffer {
             BUFFER_BUDGET_BYTES,
             "the buffer resolution",
         )?;
+        let mut buffer = IntensityBuffer {
+            resolution,
+            buffer_from_world: Mat3::IDENTITY,
+            min: Vec3::ZERO,
+            voxel: Vec3::ONE,
+            log_gamma: vec![0.0; resolution.pow(3)],
+        };
+        buffer.update(particles, to_sun, forward, splat)?;
+        Ok(buffer)
+    }
+
+    /// Recomputes the buffer for moved particles or a moved sun, in its own memory: the
+    /// light pass of a dynamic cloud, run whenever either changes. (A fresh allocation of
+    /// a 256^3 buffer each time costs more than filling it, in page faults.)
+    pub fn update(
+        &mut self,
+        particles: &[Particle],
+        to_sun: Vec3,
+        forward: f32,
+        splat: Splat,
+    ) -> Result<()> {
         check_range("forward scattering p(l,l)/4pi", forward as f64, 0.0, 1.0)?;
         if particles.is_empty() {
             return Err(Error::Invalid("the cloud has no particles".into()));
@@ -90,25 +114,18 @@ impl IntensityBuffer {
         };
         let x = helper.cross(light).normalize();
         let z = x.cross(light);
-        let buffer_from_world = Mat3::from_cols(x, light, z).transpose();
+        self.buffer_from_world = Mat3::from_cols(x, light, z).transpose();
         // The grid holds every particle whole.
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for p in particles {
-            let c = buffer_from_world * p.position;
+            let c = self.buffer_from_world * p.position;
             lo = lo.min(c - Vec3::splat(p.radius));
             hi = hi.max(c + Vec3::splat(p.radius));
         }
-        let n = resolution;
-        let voxel = (hi - lo) / n as f32;
-        let mut buffer = IntensityBuffer {
-            resolution: n,
-            buffer_from_world,
-            min: lo,
-            voxel,
-            gamma: vec![0.0; n * n * n],
-        };
-        buffer.fill(particles, forward, splat);
-        Ok(buffer)
+        self.min = lo;
+        self.voxel = (hi - lo) / self.resolution as f32;
+        self.fill(particles, forward, splat);
+        Ok(())
     }
 
     /// Voxel index range `[first, last)` along `axis` whose centres lie within
@@ -144,13 +161,15 @@ impl IntensityBuffer {
                 plane.push(k as u32);
             }
         }
+        let mut gamma = std::mem::take(&mut self.log_gamma);
+        gamma.resize(n * n * n, 0.0);
         let this = &*self;
-        let mut gamma = vec![0.0f32; n * n * n];
         gamma
             .par_chunks_mut(n * n)
             .zip(&planes)
             .enumerate()
             .for_each(|(ix, (plane, touching))| {
+                plane.fill(0.0);
                 let x = this.centre(0, ix);
                 for &k in touching {
                     let (p, c) = (&particles[k as usize], centres[k as usize]);
@@ -158,64 +177,75 @@ impl IntensityBuffer {
                     let (z0, z1) = this.centres_within(2, c.z - p.radius, c.z + p.radius);
                     for iz in z0..z1 {
                         let dz = this.centre(2, iz) - c.z;
-                        let b = ((dx * dx + dz * dz) as f64).sqrt();
-                        if b >= p.radius as f64 {
+                        let b2 = dx * dx + dz * dz;
+                        if b2 >= p.radius * p.radius {
                             continue;
                         }
                         let column = &mut plane[iz * n..(iz + 1) * n];
-                        this.splat_column(column, p, c.y, b, forward, splat);
+                        this.splat_column(column, p, c.y, b2, p.albedo * forward, splat);
                     }
                 }
-                // Prefix sums along y: Gamma at each centre.
+                // Prefix sums along y: ln Gamma at each centre.
                 for column in plane.chunks_mut(n) {
                     let mut sum = 0.0f64;
                     for v in column.iter_mut() {
                         sum += *v as f64;
-                        *v = sum.exp() as f32;
+                        *v = sum as f32;
                     }
                 }
             });
-        self.gamma = gamma;
+        self.log_gamma = gamma;
     }
 
-    /// One particle's `log G` into one column: cell `j` spans the light's path from the
-    /// centre of voxel `j - 1` to that of voxel `j` (cell 0 from the sun's side).
+    /// One particle's `log G` into one column `b` m from its axis: cell `j` spans the
+    /// light's path from the centre of voxel `j - 1` to that of voxel `j` (cell 0 from
+    /// the sun's side). Single precision and a tabulated `erf`: this is the light pass's
+    /// inner loop.
+    #[allow(clippy::too_many_arguments)]
     fn splat_column(
         &self,
         column: &mut [f32],
         p: &Particle,
         y: f32,
-        b: f64,
-        forward: f32,
+        b2: f32,
+        scatter: f32,
         splat: Splat,
     ) {
-        let r = p.radius as f64;
-        let h = (r * r - b * b).sqrt();
-        let factor = |tau: f64| ((-tau).exp() + p.albedo as f64 * forward as f64 * tau).ln();
+        let r = p.radius;
+        let s = p.sigma();
+        let h = (r * r - b2).sqrt();
+        let k = 1.0 / (s * std::f32::consts::SQRT_2);
+        // Optical depth per unit of erf difference along this column.
+        let scale =
+            p.density * (-b2 / (2.0 * s * s)).exp() * s * (std::f32::consts::PI / 2.0).sqrt();
         match splat {
             Splat::Whole => {
-                // From the sun-side edge of the particle on: the first centre at or past it.
-                let (first, _) = self.centres_within(1, y - p.radius, f32::INFINITY);
+                // log G, G = exp(-tau) + a tau p(l,l)/4pi, from the sun-side edge of the
+                // particle on: the first centre at or past it.
+                let tau = 2.0 * scale * erf_table(h * k);
+                let (first, _) = self.centres_within(1, y - r, f32::INFINITY);
                 if let Some(cell) = column.get_mut(first) {
-                    *cell += factor(p.column(b, -h, h)) as f32;
+                    *cell += ((-tau).exp() + scatter * tau).ln();
                 }
             }
             Splat::Pieces => {
-                let (first, last) = self.centres_within(1, y - p.radius, y + p.radius);
+                let (first, last) = self.centres_within(1, y - r, y + r);
                 // Cells first..=last: the last one takes what lies past the last centre
                 // inside the particle, if a centre follows.
                 let end = (last + 1).min(self.resolution);
-                for (j, cell) in column.iter_mut().enumerate().take(end).skip(first) {
-                    let from = if j == 0 {
-                        f64::NEG_INFINITY
-                    } else {
-                        self.centre(1, j - 1) as f64
-                    };
-                    let to = self.centre(1, j) as f64;
-                    let tau = p.column(b, from - y as f64, to - y as f64);
-                    if tau > 0.0 {
-                        *cell += factor(tau) as f32;
-                    }
+                // Split thin, the factors multiply into exp(-(1 - a p/4pi) tau): the
+                // forward-scattering transport the paper's G approximates per particle,
+                // solved exactly. Per cell: the depth since the previous centre.
+                let per_erf = -(1.0 - scatter) * scale;
+                // Cell `first` starts before the particle (at the previous centre).
+                let mut below = erf_table(-h * k);
+                let step = self.voxel.y * k;
+                let mut at = (self.centre(1, first) - y) * k;
+                for cell in &mut column[first..end] {
+                    let above = erf_table(at.clamp(-h * k, h * k));
+                    *cell += per_erf * (above - below);
+                    below = above;
+                    at += step;
                 }
             }
         }
@@ -224,8 +254,14 @@ impl IntensityBuffer {
     /// `Gamma` at voxel `(ix, iy, iz)`.
     #[inline]
     pub fn at(&self, ix: usize, iy: usize, iz: usize) -> f32 {
+        self.log_at(ix, iy, iz).exp()
+    }
+
+    /// `ln Gamma` at voxel `(ix, iy, iz)`.
+    #[inline]
+    fn log_at(&self, ix: usize, iy: usize, iz: usize) -> f32 {
         let n = self.resolution;
-        self.gamma[(ix * n + iz) * n + iy]
+        self.log_gamma[(ix * n + iz) * n + iy]
     }
 
     /// World position of the centre of voxel `(ix, iy, iz)`.
@@ -234,8 +270,8 @@ impl IntensityBuffer {
         self.buffer_from_world.transpose() * local
     }
 
-    /// `Gamma` at the world point `p`, trilinear between voxel centres (clamped to the
-    /// grid: 1 on the sun's side of it).
+    /// `Gamma` at the world point `p`: `ln Gamma` trilinear between voxel centres
+    /// (clamped to the grid: 1 on the sun's side of it), exponentiated.
     pub fn sample(&self, p: Vec3) -> f32 {
         let local = self.buffer_from_world * p;
         let n = self.resolution;
@@ -249,11 +285,13 @@ impl IntensityBuffer {
         let f = g - i.as_vec3();
         let (ix, iy, iz) = (i.x as usize, i.y as usize, i.z as usize);
         let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
-        let along_y = |x: usize, z: usize| lerp(self.at(x, iy, z), self.at(x, iy + 1, z), f.y);
+        let along_y =
+            |x: usize, z: usize| lerp(self.log_at(x, iy, z), self.log_at(x, iy + 1, z), f.y);
         lerp(
             lerp(along_y(ix, iz), along_y(ix + 1, iz), f.x),
             lerp(along_y(ix, iz + 1), along_y(ix + 1, iz + 1), f.x),
             f.z,
         )
+        .exp()
     }
 }

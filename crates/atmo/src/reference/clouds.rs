@@ -29,7 +29,7 @@ pub fn transmittance(particles: &[Particle], to_sun: Vec3, point: Vec3) -> f64 {
 /// particle, each slice perpendicular to `z` that it crosses gets a rectangle covering
 /// the particle's width and everything from its sun-side edge on, filled with its
 /// factor `G = a tau p(l,l)/4pi + T` at each voxel's distance from the particle's axis,
-/// and the rectangles are multiplied in. `[x][z][y]` like [`IntensityBuffer::gamma`].
+/// and the rectangles are multiplied in. `[x][z][y]` like [`IntensityBuffer::log_gamma`].
 pub fn shadow_polygons(grid: &IntensityBuffer, particles: &[Particle], forward: f32) -> Vec<f32> {
     let n = grid.resolution;
     let mut gamma = vec![1.0f64; n * n * n];
