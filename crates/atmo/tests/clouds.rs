@@ -168,3 +168,96 @@ fn bad_buffers_are_refused() {
         message(IntensityBuffer::new(&particles, up, 32, 1.5, Splat::Pieces)).contains("forward")
     );
 }
+
+#[test]
+fn the_harris_baseline_follows_its_recursion() {
+    use atmo::clouds::harris::light_per_particle;
+    // Four particles on a vertical line under an overhead sun, and one to the side whose
+    // axis passes 3 m from theirs; sun-side first: y decreasing.
+    let particle = |x: f32, y: f32| Particle {
+        position: Vec3::new(x, y, 0.0),
+        radius: 10.0,
+        density: 0.08,
+        albedo: 0.9,
+    };
+    let particles = vec![
+        particle(0.0, 40.0),
+        particle(0.0, 20.0),
+        particle(3.0, 10.0),
+        particle(0.0, 0.0),
+        particle(0.0, -20.0),
+    ];
+    let forward = 0.5;
+    let got = light_per_particle(&particles, Vec3::Y, 2048, forward).unwrap();
+    // Direct evaluation of clouds (3)-(4) along each particle's centre line.
+    let mut want = vec![0.0f64; particles.len()];
+    for k in 0..particles.len() {
+        let mut light = 1.0f64;
+        for j in 0..k {
+            let b = {
+                let d = particles[k].position - particles[j].position;
+                (d.x * d.x + d.z * d.z).sqrt() as f64
+            };
+            let tau = particles[j].column(b, f64::NEG_INFINITY, f64::INFINITY);
+            light =
+                particles[j].albedo as f64 * tau * forward as f64 * want[j] + (-tau).exp() * light;
+        }
+        want[k] = light;
+    }
+    for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+        assert!((*g as f64 - w).abs() < 0.01 * w, "particle {k}: {g} vs {w}");
+    }
+    assert!(want[4] < 0.6 * want[0], "{want:?}");
+}
+
+#[test]
+fn particle_files_round_trip_and_bad_ones_name_the_line() {
+    use atmo::clouds::files;
+    let dir = std::env::temp_dir().join(format!("atmo-particles-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let particles = cloud(300);
+    for name in ["cloud.csv", "cloud.atmo-particles"] {
+        let path = dir.join(name);
+        files::write(&path, &particles).unwrap();
+        assert_eq!(files::read(&path, 0.5).unwrap(), particles, "{name}");
+    }
+    let good = "# a test\nx,y,z,radius,density\n0,0,0,1,0.1\n\n1,2,3,2,0.2\n";
+    let read = files::parse_csv(good, "t.csv", 0.7).unwrap();
+    assert_eq!(read.len(), 2);
+    assert_eq!(read[1].albedo, 0.7);
+    let bad = [
+        (
+            "x,y,z,radius,density\n0,0,0,1,0.1\n0,0,0,-1,0.1\n",
+            "t.csv:3: radius",
+        ),
+        ("x,y,z,radius,density\n0,0,0,1,NaN\n", "t.csv:2: density"),
+        ("x,y,z,radius,density\n0,0,0,1,-0.5\n", "t.csv:2: density"),
+        ("x,y,z,radius,density\n0,0,zero,1,0.1\n", "t.csv:2: `zero`"),
+        ("x,y,z,radius,density\n0,0,0,1\n", "t.csv:2: 4 values"),
+        ("x,y,z,radius\n0,0,0,1\n", "t.csv:1: the header"),
+        ("x,y,z,radius,density\n", "no particles"),
+        ("", "no header"),
+    ];
+    for (text, wanted) in bad {
+        let message = files::parse_csv(text, "t.csv", 1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains(wanted), "{text:?}: {message}");
+    }
+    let binary = std::fs::read(dir.join("cloud.atmo-particles")).unwrap();
+    for (bytes, wanted) in [
+        (binary[..binary.len() - 3].to_vec(), "bytes of particles"),
+        (
+            b"ATMOPARX0000000000000".to_vec(),
+            "not an atmo particle file",
+        ),
+        (
+            [&binary[..8], &2u32.to_le_bytes(), &binary[12..]].concat(),
+            "version 2",
+        ),
+    ] {
+        let message = files::parse_binary(&bytes, "b").unwrap_err().to_string();
+        assert!(message.contains(wanted), "{message}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -4,9 +4,12 @@
 //! every part of it is kept in a 3-D intensity buffer oriented to the sun ([`buffer`]),
 //! filled in any particle order by the multiplicative form (7).
 //!
-//! Still to come (issue 5): the Harris baseline light pass, billboard rendering, the
-//! particle file formats, the command line and the benchmark.
+//! [`harris`] is the baseline light pass the buffer is measured against; [`files`]
+//! reads and writes particles. Still to come (issue 5): billboard rendering, the command
+//! line and the benchmark.
 
 pub mod buffer;
+pub mod files;
 pub mod generator;
+pub mod harris;
 pub mod particles;
