@@ -41,12 +41,16 @@ enum Area {
     /// Shafts of light: sample planes against ray marching on the paper's Fig. 6 scene,
     /// the five-light stage, and the sweep of plane and sub-plane counts.
     Shafts,
+    /// Clouds: the intensity buffer's light pass against the Harris baseline, its error,
+    /// and a frame.
+    Clouds,
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
     match args.area {
         Area::Sky => bench_sky(args.quick, args.json),
         Area::SkyTable => crate::bench_table::bench_sky_table(args.quick, args.json),
+        Area::Clouds => crate::bench_clouds::bench_clouds(args.quick, args.json),
         Area::Shafts => {
             atmo::image::check_folder(&args.sweep_dir.join("shafts-sweep.csv"))?;
             crate::bench_shafts::bench_shafts(args.quick, args.json, &args.scenes, &args.sweep_dir)

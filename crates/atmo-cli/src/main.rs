@@ -4,8 +4,10 @@
 //! allowed range; no output file is left behind), 1 for anything else.
 
 mod bench;
+mod bench_clouds;
 mod bench_shafts;
 mod bench_table;
+mod clouds;
 mod inspect;
 mod precompute;
 mod shafts;
@@ -18,7 +20,7 @@ use clap::{Parser, Subcommand};
 #[command(
     name = "atmo",
     version,
-    about = "Light scattered in the air: the sky with multiple scattering, shafts of light from spotlights in haze (clouds to come)"
+    about = "Light scattered in the air: the sky with multiple scattering, shafts of light from spotlights in haze, clouds"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -35,6 +37,9 @@ enum Command {
     /// How far two .exr renders are apart: RMS and max in 8-bit levels, and a
     /// difference image.
     Compare(shafts::CompareArgs),
+    /// Render a particle cloud lit by the sun through a 3-D intensity buffer; still, or
+    /// animated with the sun or the wind moving.
+    Clouds(clouds::CloudsArgs),
     /// Precompute tables for real-time drawing: `atmo precompute sky -o earth.atmo-sky`.
     Precompute(precompute::PrecomputeArgs),
     /// What a skylight table holds (parameters, size, terms, error), and with --plots
@@ -50,6 +55,7 @@ fn main() {
         Command::Sky(args) => sky::run(args),
         Command::Shafts(args) => shafts::run(args),
         Command::Compare(args) => shafts::compare(args),
+        Command::Clouds(args) => clouds::run(args),
         Command::Precompute(args) => precompute::run(args),
         Command::Inspect(args) => inspect::run(args),
         Command::Bench(args) => bench::run(args),

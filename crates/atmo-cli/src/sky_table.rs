@@ -87,33 +87,62 @@ pub fn animate(
         let (sun, altitude) = animation.at(table, k);
         table.map(sun, altitude)?;
     }
+    let start = Instant::now();
+    let size = (view.width, view.height);
+    let apng = write_animation(folder, animation.frames, size, display, |k, frame| {
+        let (elevation, altitude) = animation.at(table, k);
+        let sun = Sun {
+            elevation,
+            ..animation.sun
+        };
+        SkyPicture::from_table(table, sun, altitude)?.render_into(view, frame);
+        Ok(())
+    })?;
+    eprintln!(
+        "atmo: {} frames and {} in {:.1} s",
+        animation.frames,
+        apng.display(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Writes the frames `fill` draws (given the frame number and a `size` frame to draw
+/// into) into the folder `folder` (created) as `frame-0000.png` ... and
+/// `animation.png`, an animated PNG at 30 frames/s, each file atomically. Returns the
+/// animation's path.
+pub fn write_animation(
+    folder: &Path,
+    frames: usize,
+    (width, height): (u32, u32),
+    display: Display,
+    mut fill: impl FnMut(usize, &mut Frame) -> atmo::Result<()>,
+) -> atmo::Result<std::path::PathBuf> {
+    if folder.extension().is_some_and(|e| e == "png" || e == "exr") {
+        return Err(Error::Invalid(format!(
+            "{}: with --animate, -o names a folder for the frames",
+            folder.display()
+        )));
+    }
     std::fs::create_dir_all(folder).map_err(|source| Error::Io {
         path: folder.to_path_buf(),
         source,
     })?;
-    let start = Instant::now();
     let apng = folder.join("animation.png");
     let png_error = |e: png::EncodingError| Error::Image {
         path: apng.clone(),
         message: e.to_string(),
     };
     write_atomically(&apng, |w| {
-        let mut encoder = png::Encoder::new(w, view.width, view.height);
+        let mut encoder = png::Encoder::new(w, width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
-        encoder
-            .set_animated(animation.frames as u32, 0)
-            .map_err(png_error)?;
+        encoder.set_animated(frames as u32, 0).map_err(png_error)?;
         encoder.set_frame_delay(1, 30).map_err(png_error)?;
         let mut writer = encoder.write_header().map_err(png_error)?;
-        let mut frame = Frame::new(view.width, view.height);
-        for k in 0..animation.frames {
-            let (elevation, altitude) = animation.at(table, k);
-            let sun = Sun {
-                elevation,
-                ..animation.sun
-            };
-            SkyPicture::from_table(table, sun, altitude)?.render_into(view, &mut frame);
+        let mut frame = Frame::new(width, height);
+        for k in 0..frames {
+            fill(k, &mut frame)?;
             frame.write(
                 &folder.join(format!("frame-{k:04}.png")),
                 display.exposure,
@@ -125,11 +154,5 @@ pub fn animate(
         }
         writer.finish().map_err(png_error)
     })?;
-    eprintln!(
-        "atmo: {} frames and {} in {:.1} s",
-        animation.frames,
-        apng.display(),
-        start.elapsed().as_secs_f64()
-    );
-    Ok(())
+    Ok(apng)
 }

@@ -110,6 +110,20 @@ impl Cumulus {
                 radius: rng.range(0.12, 0.18) * w,
             });
         }
+        // Bulges on the upper surfaces of the big cells: the cauliflower's smaller scale.
+        let big = cells.clone();
+        for _ in 0..48 {
+            let cell = big[(rng.next_u64() % big.len() as u64) as usize];
+            // A direction on the cell's upper side.
+            let (a, up) = (rng.range(0.0, std::f32::consts::TAU), rng.range(0.05, 1.0));
+            let side = (1.0 - up * up).sqrt();
+            let dir = Vec3::new(side * a.cos(), up, side * a.sin());
+            let radius = rng.range(0.05, 0.1) * w;
+            cells.push(Cell {
+                centre: cell.centre + dir * (cell.radius - 0.4 * radius),
+                radius,
+            });
+        }
         // How deep inside the union of cells a point is, as a fraction of its cell.
         let depth = |p: Vec3| {
             cells
@@ -134,7 +148,7 @@ impl Cumulus {
             if d <= 0.0 || rng.unit() > 0.35 + 0.65 * (1.0 - d).powi(2) {
                 continue;
             }
-            let radius = base_radius * (0.6 + 1.6 * d) * rng.range(0.8, 1.2);
+            let radius = base_radius * (0.9 + 1.6 * d) * rng.range(0.8, 1.2);
             // The flat base: no particle reaches below it.
             if p.y < radius {
                 continue;

@@ -13,3 +13,4 @@ pub mod files;
 pub mod generator;
 pub mod harris;
 pub mod particles;
+pub mod render;

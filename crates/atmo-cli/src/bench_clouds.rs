@@ -1,0 +1,151 @@
+//! `atmo bench clouds`: the light pass of the 3-D intensity buffer (clouds 3) against
+//! the Harris baseline (clouds 2.1) on the paper's three particle counts and three
+//! buffer sizes, in the same run; the buffer's error against the exact transmittance;
+//! and the time to draw a 1280 x 720 frame.
+
+use anyhow::Result;
+use atmo::clouds::buffer::{IntensityBuffer, Splat};
+use atmo::clouds::generator::{Cumulus, SplitMix64};
+use atmo::clouds::harris::light_per_particle;
+use atmo::clouds::render::{render, CloudPhase, Lighting};
+use atmo::reference::clouds::transmittance;
+use atmo::shafts::camera::Camera;
+use glam::Vec3;
+use serde_json::json;
+
+use crate::bench::{median, time_ms};
+use crate::bench_table::emit;
+use crate::clouds::sun_direction;
+
+pub fn bench_clouds(quick: bool, json: bool) -> Result<()> {
+    let counts: &[usize] = if quick {
+        &[9_382]
+    } else {
+        &[9_382, 32_914, 60_134]
+    };
+    let sizes: &[usize] = if quick { &[128] } else { &[128, 256, 384] };
+    let runs = if quick { 3 } else { 7 };
+    let to_sun = sun_direction(20.0, 40.0);
+    let forward = 0.5;
+    for &count in counts {
+        let particles = Cumulus {
+            particles: count,
+            ..Cumulus::default()
+        }
+        .generate();
+        for &n in sizes {
+            // The baseline at the same lateral resolution, and the buffer updated in place.
+            let harris_ms = median(
+                (0..runs.min(3))
+                    .map(|_| time_ms(|| drop(light_per_particle(&particles, to_sun, n, forward))))
+                    .collect(),
+            );
+            let mut buffer = IntensityBuffer::new(&particles, to_sun, n, forward, Splat::Pieces)?;
+            let ms = median(
+                (0..runs)
+                    .map(|k| {
+                        let sun = sun_direction(20.0 + 0.01 * k as f32, 40.0);
+                        time_ms(|| {
+                            buffer
+                                .update(&particles, sun, forward, Splat::Pieces)
+                                .expect("validated")
+                        })
+                    })
+                    .collect(),
+            );
+            buffer.update(&particles, to_sun, 0.0, Splat::Pieces)?;
+            let (pieces_err, whole_err) = if n == 128 || !quick {
+                let whole = IntensityBuffer::new(&particles, to_sun, n, 0.0, Splat::Whole)?;
+                (
+                    mean_error(&buffer, &particles, to_sun),
+                    mean_error(&whole, &particles, to_sun),
+                )
+            } else {
+                (f64::NAN, f64::NAN)
+            };
+            emit(
+                json,
+                json!({"bench": "clouds.light-pass", "params": {"particles": count, "resolution": n, "splat": "pieces", "forward": forward},
+                       "median_ms": ms, "baseline": "clouds.harris", "baseline_median_ms": harris_ms, "ratio": harris_ms / ms,
+                       "error": {"mean_rel": pieces_err, "mean_rel_whole_particles": whole_err}}),
+                format!(
+                    "clouds.light-pass {count:>6} particles {n:>3}^3: {ms:>8.1} ms   harris {harris_ms:>8.1} ms   ratio {:>5.2}   mean error {:.2e} (paper's whole particles: {:.3})",
+                    harris_ms / ms,
+                    pieces_err,
+                    whole_err
+                ),
+            );
+        }
+    }
+    // A frame of the largest cloud.
+    let particles = Cumulus {
+        particles: *counts.last().expect("one count"),
+        ..Cumulus::default()
+    }
+    .generate();
+    let buffer = IntensityBuffer::new(&particles, to_sun, 256, forward, Splat::Pieces)?;
+    let camera = camera(&particles);
+    let light = Lighting {
+        to_sun,
+        sun: Vec3::ONE,
+        ambient: Vec3::splat(0.04),
+        phase: CloudPhase::CloudMie,
+    };
+    let frame_ms = median(
+        (0..runs.min(5))
+            .map(|_| time_ms(|| drop(render(&particles, &buffer, &camera, &light, None))))
+            .collect(),
+    );
+    emit(
+        json,
+        json!({"bench": "clouds.frame", "params": {"particles": particles.len(), "width": 1280, "height": 720}, "median_ms": frame_ms}),
+        format!(
+            "clouds.frame      {:>6} particles 1280 x 720: {frame_ms:.1} ms",
+            particles.len()
+        ),
+    );
+    Ok(())
+}
+
+/// Mean |Gamma - exact| / exact at 400 voxel centres where the exact value is above 1e-3
+/// (no forward scattering: Gamma is then a transmittance).
+fn mean_error(
+    buffer: &IntensityBuffer,
+    particles: &[atmo::clouds::particles::Particle],
+    to_sun: Vec3,
+) -> f64 {
+    let n = buffer.resolution;
+    let mut rng = SplitMix64::new(11);
+    let (mut sum, mut count) = (0.0, 0);
+    while count < 400 {
+        let pick = |rng: &mut SplitMix64| (rng.next_u64() % n as u64) as usize;
+        let (ix, iy, iz) = (pick(&mut rng), pick(&mut rng), pick(&mut rng));
+        let exact = transmittance(particles, to_sun, buffer.voxel_centre(ix, iy, iz));
+        if exact > 1e-3 && exact < 0.999 {
+            sum += (buffer.at(ix, iy, iz) as f64 - exact).abs() / exact;
+            count += 1;
+        }
+    }
+    sum / count as f64
+}
+
+/// The bench's camera: 1280 x 720, 40 degrees, looking at the cloud from 1.6 widths.
+fn camera(particles: &[atmo::clouds::particles::Particle]) -> Camera {
+    let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
+    let position = centre + Vec3::new(-700.0, -600.0, 1900.0);
+    let forward = (centre - position).normalize();
+    let right = forward.cross(Vec3::Y).normalize();
+    let tan = 20f32.to_radians().tan();
+    Camera {
+        position,
+        forward,
+        right,
+        up: right.cross(forward),
+        tan_half_width: tan * 1280.0 / 720.0,
+        tan_half_height: tan,
+        width: 1280,
+        height: 720,
+        supersampling: 1,
+        far: f32::INFINITY,
+    }
+}

@@ -1,0 +1,285 @@
+//! `atmo clouds`: a particle cloud lit by the sun through the 3-D intensity buffer,
+//! drawn as billboards; still or animated (the sun moving, or the wind).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Result;
+use atmo::clouds::buffer::{IntensityBuffer, Splat};
+use atmo::clouds::files;
+use atmo::clouds::generator::Cumulus;
+use atmo::clouds::particles::Particle;
+use atmo::clouds::render::{render, CloudPhase, Lighting};
+use atmo::error::check_range;
+use atmo::image::{check_folder, Display, Frame, ImageKind};
+use atmo::shafts::camera::Camera;
+use clap::{Args, ValueEnum};
+use glam::Vec3;
+
+use crate::sky::ToneMapArg;
+use crate::sky_table::write_animation;
+
+#[derive(Args)]
+pub struct CloudsArgs {
+    /// Make a cloud: `cumulus` (deterministic for a --seed).
+    #[arg(
+        long,
+        value_enum,
+        required_unless_present = "particles_file",
+        conflicts_with = "particles_file"
+    )]
+    generate: Option<Generator>,
+    /// Particles of the generated cloud (the paper's: 9382, 32914, 60134).
+    #[arg(long, default_value_t = 60_134)]
+    particles: usize,
+    /// Seed of the generator.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Read the particles from a file (CSV `x,y,z,radius,density[,albedo]`, or the binary
+    /// `.atmo-particles`; see docs/clouds.md).
+    #[arg(long, value_name = "FILE")]
+    particles_file: Option<PathBuf>,
+    /// Also write the particles to this file (.csv or .atmo-particles).
+    #[arg(long, value_name = "FILE")]
+    save_particles: Option<PathBuf>,
+    /// Sun elevation above the horizon, degrees, in (0, 90].
+    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
+    sun_elevation: f32,
+    /// Sun azimuth, degrees clockwise from north.
+    #[arg(long, default_value_t = 40.0, allow_negative_numbers = true)]
+    sun_azimuth: f32,
+    /// Intensity buffer voxels along each axis (the paper: 128, 256, 384).
+    #[arg(long, default_value_t = 256)]
+    resolution: usize,
+    /// The part of scattered light taken to go on along the light, the paper's
+    /// p(l,l)/4pi, in [0, 1].
+    #[arg(long, default_value_t = 0.5)]
+    forward: f32,
+    /// How particles enter the buffer: `pieces` (split exactly along the light) or
+    /// `whole` (the paper's one factor per particle).
+    #[arg(long, value_enum, default_value_t = SplatArg::Pieces)]
+    splat: SplatArg,
+    /// Phase function toward the eye: `mie` (two-lobe cloud fit) or `hg` (with --g).
+    #[arg(long, value_enum, default_value_t = PhaseArg::Mie)]
+    phase: PhaseArg,
+    /// Henyey-Greenstein asymmetry for --phase hg.
+    #[arg(long, default_value_t = 0.8, allow_negative_numbers = true)]
+    g: f32,
+    /// Camera distance from the cloud's centre, in cloud widths.
+    #[arg(long, default_value_t = 2.2)]
+    distance: f32,
+    /// Where the camera stands, degrees clockwise from north seen from the cloud.
+    #[arg(long, default_value_t = 200.0, allow_negative_numbers = true)]
+    view_azimuth: f32,
+    /// Camera height above the ground, m.
+    #[arg(long, default_value_t = 900.0, allow_negative_numbers = true)]
+    view_height: f32,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 40.0)]
+    fov: f32,
+    /// Image width, pixels.
+    #[arg(long, default_value_t = 1280)]
+    width: u32,
+    /// Image height, pixels.
+    #[arg(long, default_value_t = 720)]
+    height: u32,
+    /// Multiplies radiance before the tone map (PNG only).
+    #[arg(long, default_value_t = 10.0)]
+    exposure: f32,
+    /// Tone map for PNG output.
+    #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]
+    tone_map: ToneMapArg,
+    /// Animate: the sun going round (`sun`) or the wind moving the particles (`wind`),
+    /// the light pass run again every frame; -o is then a folder.
+    #[arg(long, value_enum)]
+    animate: Option<Animate>,
+    /// Frames of --animate.
+    #[arg(long, default_value_t = 120, requires = "animate")]
+    frames: usize,
+    /// Output picture: .png or .exr (linear radiance, sun irradiance 1 per channel);
+    /// with --animate, a folder.
+    #[arg(short, long, value_name = "FILE")]
+    output: PathBuf,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Generator {
+    Cumulus,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SplatArg {
+    Pieces,
+    Whole,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum PhaseArg {
+    Mie,
+    Hg,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq)]
+enum Animate {
+    Sun,
+    Wind,
+}
+
+/// Unit vector toward the sun in the cloud frame (x east, y up, z south).
+pub fn sun_direction(elevation_deg: f32, azimuth_deg: f32) -> Vec3 {
+    let (e, a) = (elevation_deg.to_radians(), azimuth_deg.to_radians());
+    Vec3::new(a.sin() * e.cos(), e.sin(), -a.cos() * e.cos())
+}
+
+/// The camera looking at `particles`' centre from `azimuth_deg`, `distance` widths
+/// away, at `height` m.
+fn camera_for(particles: &[Particle], args: &CloudsArgs) -> atmo::Result<Camera> {
+    check_range("--fov", args.fov as f64, 1.0, 170.0)?;
+    check_range("--distance", args.distance as f64, 0.1, 1000.0)?;
+    Frame::check_size(args.width, args.height)?;
+    let (lo, hi) = particles.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(l, h), p| (l.min(p.position), h.max(p.position)),
+    );
+    let centre = 0.5 * (lo + hi);
+    let width = (hi - lo).x.max((hi - lo).z).max(1.0);
+    let a = args.view_azimuth.to_radians();
+    let position = Vec3::new(
+        centre.x + a.sin() * width * args.distance,
+        args.view_height,
+        centre.z - a.cos() * width * args.distance,
+    );
+    let forward = (centre - position).normalize();
+    let right = forward.cross(Vec3::Y).normalize();
+    let up = right.cross(forward);
+    let tan = (0.5 * args.fov.to_radians()).tan();
+    Ok(Camera {
+        position,
+        forward,
+        right,
+        up,
+        tan_half_width: tan * args.width as f32 / args.height as f32,
+        tan_half_height: tan,
+        width: args.width,
+        height: args.height,
+        supersampling: 1,
+        far: f32::INFINITY,
+    })
+}
+
+pub fn run(args: CloudsArgs) -> Result<()> {
+    check_range(
+        "--sun-elevation (a sun at or below the horizon does not light a cloud from above)",
+        args.sun_elevation as f64,
+        0.5,
+        90.0,
+    )?;
+    check_range("--sun-azimuth", args.sun_azimuth as f64, -360.0, 360.0)?;
+    atmo::error::check_positive("--exposure", args.exposure as f64, 1e12)?;
+    match args.animate {
+        None => {
+            ImageKind::of(&args.output)?;
+            check_folder(&args.output)?;
+        }
+        Some(_) => check_range("--frames", args.frames as f64, 2.0, 10_000.0)?,
+    }
+    let mut particles = match &args.particles_file {
+        Some(path) => files::read(path, 0.99)?,
+        None => {
+            check_range("--particles", args.particles as f64, 1.0, 5e6)?;
+            Cumulus {
+                particles: args.particles,
+                seed: args.seed,
+                ..Cumulus::default()
+            }
+            .generate()
+        }
+    };
+    if let Some(path) = &args.save_particles {
+        files::write(path, &particles)?;
+    }
+    let camera = camera_for(&particles, &args)?;
+    let splat = match args.splat {
+        SplatArg::Pieces => Splat::Pieces,
+        SplatArg::Whole => Splat::Whole,
+    };
+    let phase = match args.phase {
+        PhaseArg::Mie => CloudPhase::CloudMie,
+        PhaseArg::Hg => {
+            check_range("--g", args.g as f64, -0.99, 0.99)?;
+            CloudPhase::HenyeyGreenstein { g: args.g }
+        }
+    };
+    let display = Display {
+        exposure: args.exposure,
+        tone: args.tone_map.into(),
+    };
+    let lighting = |to_sun: Vec3| Lighting {
+        to_sun,
+        sun: Vec3::ONE,
+        ambient: Vec3::new(0.03, 0.04, 0.06),
+        phase,
+    };
+    let to_sun = sun_direction(args.sun_elevation, args.sun_azimuth);
+    let start = Instant::now();
+    let mut buffer =
+        IntensityBuffer::new(&particles, to_sun, args.resolution, args.forward, splat)?;
+    let light_ms = start.elapsed().as_secs_f64() * 1e3;
+    match args.animate {
+        None => {
+            let start = Instant::now();
+            let frame = render(&particles, &buffer, &camera, &lighting(to_sun), None);
+            let draw_ms = start.elapsed().as_secs_f64() * 1e3;
+            frame.write(&args.output, display.exposure, display.tone)?;
+            eprintln!(
+                "{}: {} x {}, {} particles, {}^3 buffer: light pass {light_ms:.1} ms, drawing {draw_ms:.1} ms",
+                args.output.display(),
+                frame.width,
+                frame.height,
+                particles.len(),
+                args.resolution
+            );
+        }
+        Some(animate) => {
+            let start = Instant::now();
+            let apng = write_animation(
+                &args.output,
+                args.frames,
+                (args.width, args.height),
+                display,
+                |k, frame| {
+                    let to_sun = match animate {
+                        Animate::Sun => sun_direction(
+                            args.sun_elevation,
+                            args.sun_azimuth + 360.0 * k as f32 / args.frames as f32,
+                        ),
+                        Animate::Wind => {
+                            // A sheared breeze: 6 m/s at the base, faster aloft, 4 s a frame.
+                            if k > 0 {
+                                let base = particles
+                                    .iter()
+                                    .map(|p| p.position.y)
+                                    .fold(f32::INFINITY, f32::min);
+                                for p in &mut particles {
+                                    let speed = 6.0 + 0.01 * (p.position.y - base);
+                                    p.position += Vec3::new(speed, 0.0, 0.3 * speed) * 4.0;
+                                }
+                            }
+                            to_sun
+                        }
+                    };
+                    buffer.update(&particles, to_sun, args.forward, splat)?;
+                    *frame = render(&particles, &buffer, &camera, &lighting(to_sun), None);
+                    Ok(())
+                },
+            )?;
+            eprintln!(
+                "atmo: {} frames and {} in {:.1} s",
+                args.frames,
+                apng.display(),
+                start.elapsed().as_secs_f64()
+            );
+        }
+    }
+    Ok(())
+}
