@@ -145,45 +145,32 @@ impl IntensityBuffer {
     }
 
     /// Adds every particle's `log G` at the cells where it starts to shadow, then sums
-    /// along each column and exponentiates. Parallel over `x` planes, each particle in
-    /// the same order into each voxel, so the result does not depend on the thread count.
+    /// along each column. Parallel over `x` planes, each particle in the same order into
+    /// each voxel, so the result does not depend on the thread count.
     fn fill(&mut self, particles: &[Particle], forward: f32, splat: Splat) {
         let n = self.resolution;
+        let this = &*self;
+        let stamps: Vec<Stamp> = particles
+            .par_iter()
+            .map(|p| Stamp::new(this, p, forward, splat))
+            .collect();
         // The particles touching each x plane, in particle order.
         let mut planes: Vec<Vec<u32>> = vec![Vec::new(); n];
-        let centres: Vec<Vec3> = particles
-            .iter()
-            .map(|p| self.buffer_from_world * p.position)
-            .collect();
-        for (k, (p, c)) in particles.iter().zip(&centres).enumerate() {
-            let (first, last) = self.centres_within(0, c.x - p.radius, c.x + p.radius);
-            for plane in &mut planes[first..last] {
+        for (k, stamp) in stamps.iter().enumerate() {
+            for plane in &mut planes[stamp.x.0..stamp.x.1] {
                 plane.push(k as u32);
             }
         }
         let mut gamma = std::mem::take(&mut self.log_gamma);
         gamma.resize(n * n * n, 0.0);
-        let this = &*self;
         gamma
             .par_chunks_mut(n * n)
             .zip(&planes)
             .enumerate()
             .for_each(|(ix, (plane, touching))| {
                 plane.fill(0.0);
-                let x = this.centre(0, ix);
                 for &k in touching {
-                    let (p, c) = (&particles[k as usize], centres[k as usize]);
-                    let dx = x - c.x;
-                    let (z0, z1) = this.centres_within(2, c.z - p.radius, c.z + p.radius);
-                    for iz in z0..z1 {
-                        let dz = this.centre(2, iz) - c.z;
-                        let b2 = dx * dx + dz * dz;
-                        if b2 >= p.radius * p.radius {
-                            continue;
-                        }
-                        let column = &mut plane[iz * n..(iz + 1) * n];
-                        this.splat_column(column, p, c.y, b2, p.albedo * forward, splat);
-                    }
+                    stamps[k as usize].add_to(plane, ix, n);
                 }
                 // Prefix sums along y: ln Gamma at each centre.
                 for column in plane.chunks_mut(n) {
@@ -195,60 +182,6 @@ impl IntensityBuffer {
                 }
             });
         self.log_gamma = gamma;
-    }
-
-    /// One particle's `log G` into one column `b` m from its axis: cell `j` spans the
-    /// light's path from the centre of voxel `j - 1` to that of voxel `j` (cell 0 from
-    /// the sun's side). Single precision and a tabulated `erf`: this is the light pass's
-    /// inner loop.
-    #[allow(clippy::too_many_arguments)]
-    fn splat_column(
-        &self,
-        column: &mut [f32],
-        p: &Particle,
-        y: f32,
-        b2: f32,
-        scatter: f32,
-        splat: Splat,
-    ) {
-        let r = p.radius;
-        let s = p.sigma();
-        let h = (r * r - b2).sqrt();
-        let k = 1.0 / (s * std::f32::consts::SQRT_2);
-        // Optical depth per unit of erf difference along this column.
-        let scale =
-            p.density * (-b2 / (2.0 * s * s)).exp() * s * (std::f32::consts::PI / 2.0).sqrt();
-        match splat {
-            Splat::Whole => {
-                // log G, G = exp(-tau) + a tau p(l,l)/4pi, from the sun-side edge of the
-                // particle on: the first centre at or past it.
-                let tau = 2.0 * scale * erf_table(h * k);
-                let (first, _) = self.centres_within(1, y - r, f32::INFINITY);
-                if let Some(cell) = column.get_mut(first) {
-                    *cell += ((-tau).exp() + scatter * tau).ln();
-                }
-            }
-            Splat::Pieces => {
-                let (first, last) = self.centres_within(1, y - r, y + r);
-                // Cells first..=last: the last one takes what lies past the last centre
-                // inside the particle, if a centre follows.
-                let end = (last + 1).min(self.resolution);
-                // Split thin, the factors multiply into exp(-(1 - a p/4pi) tau): the
-                // forward-scattering transport the paper's G approximates per particle,
-                // solved exactly. Per cell: the depth since the previous centre.
-                let per_erf = -(1.0 - scatter) * scale;
-                // Cell `first` starts before the particle (at the previous centre).
-                let mut below = erf_table(-h * k);
-                let step = self.voxel.y * k;
-                let mut at = (self.centre(1, first) - y) * k;
-                for cell in &mut column[first..end] {
-                    let above = erf_table(at.clamp(-h * k, h * k));
-                    *cell += per_erf * (above - below);
-                    below = above;
-                    at += step;
-                }
-            }
-        }
     }
 
     /// `Gamma` at voxel `(ix, iy, iz)`.
@@ -293,5 +226,114 @@ impl IntensityBuffer {
             f.z,
         )
         .exp()
+    }
+}
+
+/// How far across the light a particle's footprint reaches, in its standard deviations
+/// `s`: a column 3.5 `s` from the axis carries 0.2 % of the axis's optical depth.
+pub const FOOTPRINT: f32 = 3.5;
+
+/// One particle's contribution to the buffer, prepared once per light pass. The blob is
+/// separable: across the light, the column through voxel centres `(x, z)` carries
+/// `across_x[x] * across_z[z]` of the depth of the particle's axis, and along it cell
+/// `j` (from the centre of voxel `j - 1` to that of voxel `j`; the first reaching back
+/// to the sun, the one after the particle on to infinity) takes the same share
+/// `along[j]` in every column. So adding it is a multiply-add down contiguous columns,
+/// with every `exp` and `erf` done here, once.
+struct Stamp {
+    /// Voxel index ranges `[first, last)` across (x, z) and, for `Pieces`, along y.
+    x: (usize, usize),
+    z: (usize, usize),
+    y: (usize, usize),
+    /// `across_x`, then `across_z`, then `along` (`Pieces`), concatenated.
+    factors: Vec<f32>,
+    /// `Pieces`: `-(1 - a p/4pi)` times the axis depth. `Whole`: the axis depth.
+    scale: f32,
+    /// `Whole`: `a p(l,l)/4pi`, for `log G` per column.
+    scatter: f32,
+    splat: Splat,
+}
+
+impl Stamp {
+    fn new(buffer: &IntensityBuffer, p: &Particle, forward: f32, splat: Splat) -> Stamp {
+        let s = p.sigma();
+        let c = buffer.buffer_from_world * p.position;
+        let reach = FOOTPRINT * s;
+        let inv_2s2 = 1.0 / (2.0 * s * s);
+        let x = buffer.centres_within(0, c.x - reach, c.x + reach);
+        let z = buffer.centres_within(2, c.z - reach, c.z + reach);
+        let across = |axis: usize, (a, b): (usize, usize), centre: f32| {
+            (a..b).map(move |i| {
+                let d = buffer.centre(axis, i) - centre;
+                (-d * d * inv_2s2).exp()
+            })
+        };
+        let mut factors: Vec<f32> = across(0, x, c.x).chain(across(2, z, c.z)).collect();
+        let axis = p.density * s * (2.0 * std::f32::consts::PI).sqrt();
+        let scatter = p.albedo * forward;
+        let (y, scale) = match splat {
+            Splat::Whole => {
+                // From the sun-side edge of the particle on: the first centre at or past it.
+                let (first, _) = buffer.centres_within(1, c.y - p.radius, f32::INFINITY);
+                ((first, first + 1), axis)
+            }
+            Splat::Pieces => {
+                // Split thin, the factors multiply into exp(-(1 - a p/4pi) tau): the
+                // forward-scattering transport the paper's G approximates per particle,
+                // solved exactly.
+                let (first, last) = buffer.centres_within(1, c.y - p.radius, c.y + p.radius);
+                let end = (last + 1).min(buffer.resolution);
+                let k = 1.0 / (s * std::f32::consts::SQRT_2);
+                let mut below = -1.0;
+                for j in first..end {
+                    // The cell after the particle's last centre takes the rest of it.
+                    let above = if j == last {
+                        1.0
+                    } else {
+                        erf_table((buffer.centre(1, j) - c.y) * k)
+                    };
+                    factors.push(0.5 * (above - below));
+                    below = above;
+                }
+                ((first, end), -(1.0 - scatter) * axis)
+            }
+        };
+        Stamp {
+            x,
+            z,
+            y,
+            factors,
+            scale,
+            scatter,
+            splat,
+        }
+    }
+
+    /// Adds the stamp to the x plane `ix` (`plane`, `[z][y]`, `n` voxels a side).
+    #[inline]
+    fn add_to(&self, plane: &mut [f32], ix: usize, n: usize) {
+        let (nx, nz) = (self.x.1 - self.x.0, self.z.1 - self.z.0);
+        let (across_x, rest) = self.factors.split_at(nx);
+        let (across_z, along) = rest.split_at(nz);
+        let w_x = self.scale * across_x[ix - self.x.0];
+        let (first, end) = self.y;
+        if first >= end || first >= n {
+            return;
+        }
+        for (iz, a_z) in (self.z.0..self.z.1).zip(across_z) {
+            let column = &mut plane[iz * n..(iz + 1) * n];
+            match self.splat {
+                Splat::Whole => {
+                    let tau = w_x * a_z;
+                    column[first] += ((-tau).exp() + self.scatter * tau).ln();
+                }
+                Splat::Pieces => {
+                    let w = w_x * a_z;
+                    for (cell, share) in column[first..end].iter_mut().zip(along) {
+                        *cell += w * share;
+                    }
+                }
+            }
+        }
     }
 }

@@ -11,7 +11,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::buffer::IntensityBuffer;
-use super::particles::{erf_table, Particle};
+use super::particles::Particle;
 use crate::image::Frame;
 use crate::shafts::camera::Camera;
 
@@ -100,7 +100,7 @@ pub fn render(
                 let p = &particles[k];
                 let z = depth[k];
                 let s = p.sigma();
-                let (inv_2s2, k_erf) = (1.0 / (2.0 * s * s), 1.0 / (s * std::f32::consts::SQRT_2));
+                let inv_2s2 = 1.0 / (2.0 * s * s);
                 let column = p.density * s * (2.0 * PI).sqrt();
                 // The phase at the particle's centre: the angle changes little over it.
                 let view = (p.position - camera.position).normalize();
@@ -121,8 +121,7 @@ pub fn render(
                             continue;
                         }
                         // The column through the blob at this pixel, and the point it shows.
-                        let hk = (p.radius * p.radius - b2).sqrt() * k_erf;
-                        let tau = column * (-b2 * inv_2s2).exp() * erf_table(hk);
+                        let tau = column * (-b2 * inv_2s2).exp();
                         let point =
                             camera.position + camera.ray(x as f32 + 0.5, y as f32 + 0.5) * z;
                         let gamma = buffer.sample(point);

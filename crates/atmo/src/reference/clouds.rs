@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use crate::clouds::buffer::IntensityBuffer;
+use crate::clouds::buffer::{IntensityBuffer, FOOTPRINT};
 use crate::clouds::particles::Particle;
 
 /// The fraction of sunlight arriving at `point` through `particles` with nothing
@@ -26,8 +26,8 @@ pub fn transmittance(particles: &[Particle], to_sun: Vec3, point: Vec3) -> f64 {
 }
 
 /// `Gamma` at the centres of `grid`'s voxels as the paper computes it: for each
-/// particle, each slice perpendicular to `z` that it crosses gets a rectangle covering
-/// the particle's width and everything from its sun-side edge on, filled with its
+/// particle, each slice perpendicular to `z` within its footprint gets a rectangle
+/// covering the footprint's width and everything from its sun-side edge on, filled with its
 /// factor `G = a tau p(l,l)/4pi + T` at each voxel's distance from the particle's axis,
 /// and the rectangles are multiplied in. `[x][z][y]` like [`IntensityBuffer::log_gamma`].
 pub fn shadow_polygons(grid: &IntensityBuffer, particles: &[Particle], forward: f32) -> Vec<f32> {
@@ -36,19 +36,19 @@ pub fn shadow_polygons(grid: &IntensityBuffer, particles: &[Particle], forward: 
     let centre = |axis: usize, i: usize| grid.min[axis] + (i as f32 + 0.5) * grid.voxel[axis];
     for p in particles {
         let c = grid.buffer_from_world * p.position;
+        let reach = FOOTPRINT * p.sigma();
         for iz in 0..n {
             let dz = centre(2, iz) - c.z;
-            if dz.abs() >= p.radius {
+            if dz.abs() > reach {
                 continue;
             }
             for ix in 0..n {
                 let dx = centre(0, ix) - c.x;
-                let b = ((dx * dx + dz * dz) as f64).sqrt();
-                if dx.abs() >= p.radius || b >= p.radius as f64 {
+                if dx.abs() > reach {
                     continue;
                 }
-                let h = ((p.radius as f64).powi(2) - b * b).sqrt();
-                let tau = p.column(b, -h, h);
+                let b = ((dx * dx + dz * dz) as f64).sqrt();
+                let tau = p.column(b, f64::NEG_INFINITY, f64::INFINITY);
                 let g = (-tau).exp() + p.albedo as f64 * forward as f64 * tau;
                 for iy in 0..n {
                     if centre(1, iy) >= c.y - p.radius {
