@@ -206,23 +206,43 @@ impl IntensityBuffer {
     /// `Gamma` at the world point `p`: `ln Gamma` trilinear between voxel centres
     /// (clamped to the grid: 1 on the sun's side of it), exponentiated.
     pub fn sample(&self, p: Vec3) -> f32 {
-        let local = self.buffer_from_world * p;
+        self.sample_grid(self.grid_coordinates(p))
+    }
+
+    /// The grid coordinates of the world point `p`: voxel `(i, j, k)`'s centre is at
+    /// `(i, j, k)`. Affine in `p`, so a caller walking a line of points can step them.
+    #[inline]
+    pub fn grid_coordinates(&self, p: Vec3) -> Vec3 {
+        (self.buffer_from_world * p - self.min) / self.voxel - Vec3::splat(0.5)
+    }
+
+    /// [`IntensityBuffer::sample`] at grid coordinates `g`.
+    #[inline]
+    pub fn sample_grid(&self, g: Vec3) -> f32 {
         let n = self.resolution;
-        let g = (local - self.min) / self.voxel - Vec3::splat(0.5);
         if g.y < -0.5 {
             return 1.0;
         }
         let last = (n - 1) as f32;
         let g = g.clamp(Vec3::ZERO, Vec3::splat(last));
-        let i = g.as_uvec3().min(glam::UVec3::splat((n - 2) as u32));
-        let f = g - i.as_vec3();
-        let (ix, iy, iz) = (i.x as usize, i.y as usize, i.z as usize);
+        // Through i32: cheaper than to unsigned, and g >= 0 here.
+        let top = n as i32 - 2;
+        let (ix, iy, iz) = (
+            (g.x as i32).min(top) as usize,
+            (g.y as i32).min(top) as usize,
+            (g.z as i32).min(top) as usize,
+        );
+        let f = g - Vec3::new(ix as f32, iy as f32, iz as f32);
+        // [x][z][y]: the two y neighbours are adjacent.
+        let at = |x: usize, z: usize| {
+            let i = (x * n + z) * n + iy;
+            let (a, b) = (self.log_gamma[i], self.log_gamma[i + 1]);
+            a + f.y * (b - a)
+        };
         let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
-        let along_y =
-            |x: usize, z: usize| lerp(self.log_at(x, iy, z), self.log_at(x, iy + 1, z), f.y);
         lerp(
-            lerp(along_y(ix, iz), along_y(ix + 1, iz), f.x),
-            lerp(along_y(ix, iz + 1), along_y(ix + 1, iz + 1), f.x),
+            lerp(at(ix, iz), at(ix + 1, iz), f.x),
+            lerp(at(ix, iz + 1), at(ix + 1, iz + 1), f.x),
             f.z,
         )
         .exp()
