@@ -262,3 +262,56 @@ fn particle_files_round_trip_and_bad_ones_name_the_line() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn billboards_composite_as_clouds_five_and_six() {
+    use atmo::clouds::render::{render, CloudPhase, Lighting};
+    use atmo::image::Frame;
+    use atmo::shafts::camera::Camera;
+    // Two particles on the camera's axis, the pixel at the image centre looking through
+    // both; only ambient light, so each source is a tau ambient.
+    let particle = |z: f32, density: f32| Particle {
+        position: Vec3::new(0.0, 0.0, z),
+        radius: 6.0,
+        density,
+        albedo: 0.8,
+    };
+    let particles = vec![particle(-200.0, 0.05), particle(-100.0, 0.02)];
+    let camera = Camera {
+        position: Vec3::ZERO,
+        forward: Vec3::NEG_Z,
+        right: Vec3::X,
+        up: Vec3::Y,
+        tan_half_width: 0.1,
+        tan_half_height: 0.1,
+        width: 65,
+        height: 65,
+        supersampling: 1,
+        far: f32::INFINITY,
+    };
+    let light = Lighting {
+        to_sun: Vec3::Y,
+        sun: Vec3::ZERO,
+        ambient: Vec3::new(1.0, 0.5, 0.25),
+        phase: CloudPhase::CloudMie,
+    };
+    let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.5, Splat::Pieces).unwrap();
+    let mut background = Frame::new(65, 65);
+    background
+        .pixels
+        .iter_mut()
+        .for_each(|p| *p = Vec3::splat(2.0));
+    let frame = render(&particles, &buffer, &camera, &light, Some(&background));
+    let tau = |p: &Particle| p.column(0.0, f64::NEG_INFINITY, f64::INFINITY) as f32;
+    let (near, far) = (tau(&particles[1]), tau(&particles[0]));
+    let a = 0.8;
+    let want = light.ambient * (a * near)
+        + (-near).exp() * (light.ambient * (a * far) + (-far).exp() * Vec3::splat(2.0));
+    let got = frame.pixels[32 * 65 + 32];
+    assert!(
+        (got - want).abs().max_element() < 1e-4 * want.max_element(),
+        "{got:?} vs {want:?}"
+    );
+    // Far from the particles: the background alone.
+    assert_eq!(frame.pixels[0], Vec3::splat(2.0));
+}
