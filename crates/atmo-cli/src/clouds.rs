@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Result;
+use atmo::atmosphere::spectrum::SpectrumToRgb;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::files;
 use atmo::clouds::generator::Cumulus;
@@ -13,6 +14,8 @@ use atmo::clouds::render::{render, CloudPhase, Lighting};
 use atmo::error::check_range;
 use atmo::image::{check_folder, Display, Frame, ImageKind};
 use atmo::shafts::camera::Camera;
+use atmo::sky::frame::{Projection, SkyPicture, View};
+use atmo::sky::{SkyModel, SkySettings, Sun};
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 
@@ -83,9 +86,14 @@ pub struct CloudsArgs {
     /// Image height, pixels.
     #[arg(long, default_value_t = 720)]
     height: u32,
-    /// Multiplies radiance before the tone map (PNG only).
-    #[arg(long, default_value_t = 10.0)]
-    exposure: f32,
+    /// Draw the cloud in front of the sky (the sky module, Earth atmosphere), lit by
+    /// sunlight coloured by the atmosphere down to the cloud and by the sky's light.
+    #[arg(long)]
+    sky: bool,
+    /// Multiplies radiance before the tone map (PNG only); default 10, or 0.15 with
+    /// --sky (whose radiance is in the atmosphere's units).
+    #[arg(long)]
+    exposure: Option<f32>,
     /// Tone map for PNG output.
     #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]
     tone_map: ToneMapArg,
@@ -175,7 +183,8 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         90.0,
     )?;
     check_range("--sun-azimuth", args.sun_azimuth as f64, -360.0, 360.0)?;
-    atmo::error::check_positive("--exposure", args.exposure as f64, 1e12)?;
+    let exposure = args.exposure.unwrap_or(if args.sky { 0.15 } else { 10.0 });
+    atmo::error::check_positive("--exposure", exposure as f64, 1e12)?;
     match args.animate {
         None => {
             ImageKind::of(&args.output)?;
@@ -211,14 +220,37 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         }
     };
     let display = Display {
-        exposure: args.exposure,
+        exposure,
         tone: args.tone_map.into(),
     };
-    let lighting = |to_sun: Vec3| Lighting {
-        to_sun,
-        sun: Vec3::ONE,
-        ambient: Vec3::new(0.03, 0.04, 0.06),
-        phase,
+    let sky = if args.sky {
+        Some(SkyLight::new(&particles, &camera)?)
+    } else {
+        None
+    };
+    // Sunlight and sky light at the cloud, and what is behind it, for a sun's azimuth.
+    let lighting = |to_sun: Vec3, azimuth: f32| -> atmo::Result<(Lighting, Option<Frame>)> {
+        Ok(match &sky {
+            None => (
+                Lighting {
+                    to_sun,
+                    sun: Vec3::ONE,
+                    ambient: Vec3::new(0.03, 0.04, 0.06),
+                    phase,
+                },
+                None,
+            ),
+            Some(sky) => {
+                let (sun, ambient, background) = sky.at(args.sun_elevation, azimuth, &camera)?;
+                let light = Lighting {
+                    to_sun,
+                    sun,
+                    ambient,
+                    phase,
+                };
+                (light, Some(background))
+            }
+        })
     };
     let to_sun = sun_direction(args.sun_elevation, args.sun_azimuth);
     let start = Instant::now();
@@ -228,7 +260,8 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     match args.animate {
         None => {
             let start = Instant::now();
-            let frame = render(&particles, &buffer, &camera, &lighting(to_sun), None);
+            let (light, background) = lighting(to_sun, args.sun_azimuth)?;
+            let frame = render(&particles, &buffer, &camera, &light, background.as_ref());
             let draw_ms = start.elapsed().as_secs_f64() * 1e3;
             frame.write(&args.output, display.exposure, display.tone)?;
             eprintln!(
@@ -248,11 +281,12 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                 (args.width, args.height),
                 display,
                 |k, frame| {
+                    let azimuth = match animate {
+                        Animate::Sun => args.sun_azimuth + 360.0 * k as f32 / args.frames as f32,
+                        Animate::Wind => args.sun_azimuth,
+                    };
                     let to_sun = match animate {
-                        Animate::Sun => sun_direction(
-                            args.sun_elevation,
-                            args.sun_azimuth + 360.0 * k as f32 / args.frames as f32,
-                        ),
+                        Animate::Sun => sun_direction(args.sun_elevation, azimuth),
                         Animate::Wind => {
                             // A sheared breeze: 6 m/s at the base, faster aloft, 4 s a frame.
                             if k > 0 {
@@ -269,7 +303,8 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                         }
                     };
                     buffer.update(&particles, to_sun, args.forward, splat)?;
-                    *frame = render(&particles, &buffer, &camera, &lighting(to_sun), None);
+                    let (light, background) = lighting(to_sun, azimuth)?;
+                    *frame = render(&particles, &buffer, &camera, &light, background.as_ref());
                     Ok(())
                 },
             )?;
@@ -282,4 +317,63 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The sky around a cloud: the sky module's models at the camera's and the cloud's
+/// altitudes (Earth atmosphere, default settings).
+struct SkyLight {
+    atmosphere: atmo::Atmosphere,
+    at_camera: SkyModel,
+    at_cloud: SkyModel,
+}
+
+impl SkyLight {
+    fn new(particles: &[Particle], camera: &Camera) -> atmo::Result<SkyLight> {
+        let atmosphere = atmo::Atmosphere::earth();
+        let settings = SkySettings::default();
+        let height =
+            particles.iter().map(|p| p.position.y as f64).sum::<f64>() / particles.len() as f64;
+        let top = atmosphere.top_radius_m - atmosphere.bottom_radius_m - 1.0;
+        let altitude = |h: f64| h.clamp(0.0, top);
+        let at_camera = SkyModel::new(&atmosphere, &settings, altitude(camera.position.y as f64))?;
+        let at_cloud = SkyModel::new(&atmosphere, &settings, altitude(height))?;
+        Ok(SkyLight {
+            atmosphere,
+            at_camera,
+            at_cloud,
+        })
+    }
+
+    /// For a sun at `elevation` and `azimuth` (degrees): the sun's irradiance at the
+    /// cloud (RGB, through the atmosphere), the zenith sky's radiance there (the cloud's
+    /// ambient light), and the sky behind the cloud as the camera sees it.
+    fn at(
+        &self,
+        elevation: f32,
+        azimuth: f32,
+        camera: &Camera,
+    ) -> atmo::Result<(Vec3, Vec3, Frame)> {
+        let sun = Sun::from_degrees(elevation as f64, azimuth as f64)?;
+        let mut spectrum = vec![0.0f32; self.atmosphere.wavelengths_nm.len()];
+        self.at_cloud.sun_radiance(sun.elevation, &mut spectrum);
+        let disc = std::f64::consts::PI * self.atmosphere.sun_angular_radius.powi(2);
+        spectrum.iter_mut().for_each(|v| *v *= disc as f32);
+        let sunlight =
+            Vec3::from(SpectrumToRgb::new(&self.atmosphere.wavelengths_nm).rgb(&spectrum));
+        let ambient = SkyPicture::new(&self.at_cloud, sun).radiance(glam::DVec3::Z, false);
+        // The camera in the sky's frame (x east, y north, z up; ours is x east, y up,
+        // z south): yaw clockwise from north, pitch above the horizontal.
+        let f = camera.forward;
+        let yaw = f.x.atan2(-f.z).to_degrees() as f64;
+        let pitch = f.y.clamp(-1.0, 1.0).asin().to_degrees() as f64;
+        let fov = 2.0 * camera.tan_half_height.atan().to_degrees() as f64;
+        let view = View {
+            width: camera.width,
+            height: camera.height,
+            projection: Projection::perspective_degrees(yaw, pitch, fov)?,
+            sun_disc: true,
+        };
+        let background = SkyPicture::new(&self.at_camera, sun).render(&view);
+        Ok((sunlight, ambient, background))
+    }
 }

@@ -670,3 +670,27 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn clouds_in_front_of_the_sky() {
+    let dir = scratch("clouds-sky");
+    let out = dir.join("sky.png");
+    let mut args = vec![
+        "clouds",
+        "--generate",
+        "cumulus",
+        "--sky",
+        "--view-height",
+        "300",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend(SMALL_CLOUD);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&out).unwrap().to_rgb8();
+    // The sky behind: the top corner is blue, not black.
+    let corner = img.get_pixel(2, 2).0;
+    assert!(corner[2] > 80 && corner[2] > corner[0], "{corner:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -9,7 +9,7 @@
 //! - [`shafts`]: shafts of light from spotlights in haze, with volumetric shadows and
 //!   gobos, by sample planes (Dobashi, Yamamoto, Nishita 2002), cited as `shafts (n)`.
 //! - [`clouds`]: particle clouds and the 3-D intensity buffer of the sun's light
-//!   (Shimada, Shinya, Shiraishi, Harada 2008), cited as `clouds (n)`; in progress.
+//!   (Shimada, Shinya, Shiraishi, Harada 2008), cited as `clouds (n)`.
 //! - [`reference`](mod@reference): slow, obviously-correct integrators the fast methods are tested
 //!   against.
 //! - [`image`]: float frame buffers, exposure, tone mapping, PNG/EXR written atomically.

@@ -4,9 +4,8 @@
 //! every part of it is kept in a 3-D intensity buffer oriented to the sun ([`buffer`]),
 //! filled in any particle order by the multiplicative form (7).
 //!
-//! [`harris`] is the baseline light pass the buffer is measured against; [`files`]
-//! reads and writes particles. Still to come (issue 5): billboard rendering, the command
-//! line and the benchmark.
+//! [`harris`] is the baseline light pass the buffer is measured against; [`render`]
+//! draws the billboards; [`files`] reads and writes particles.
 
 pub mod buffer;
 pub mod files;
