@@ -169,13 +169,15 @@ impl IntensityBuffer {
             .enumerate()
             .for_each(|(ix, (plane, touching))| {
                 plane.fill(0.0);
+                // Per column, the first cell anything was added to (n: none).
+                let mut start = vec![n; n];
                 for &k in touching {
-                    stamps[k as usize].add_to(plane, ix, n);
+                    stamps[k as usize].add_to(plane, ix, n, &mut start);
                 }
-                // Prefix sums along y: ln Gamma at each centre.
-                for column in plane.chunks_mut(n) {
+                // Prefix sums along y: ln Gamma at each centre (0 before the start).
+                for (column, &first) in plane.chunks_mut(n).zip(&start) {
                     let mut sum = 0.0f64;
-                    for v in column.iter_mut() {
+                    for v in &mut column[first..] {
                         sum += *v as f64;
                         *v = sum as f32;
                     }
@@ -329,9 +331,10 @@ impl Stamp {
         }
     }
 
-    /// Adds the stamp to the x plane `ix` (`plane`, `[z][y]`, `n` voxels a side).
+    /// Adds the stamp to the x plane `ix` (`plane`, `[z][y]`, `n` voxels a side),
+    /// lowering `start[z]` to the first cell it touches in column `z`.
     #[inline]
-    fn add_to(&self, plane: &mut [f32], ix: usize, n: usize) {
+    fn add_to(&self, plane: &mut [f32], ix: usize, n: usize, start: &mut [usize]) {
         let (nx, nz) = (self.x.1 - self.x.0, self.z.1 - self.z.0);
         let (across_x, rest) = self.factors.split_at(nx);
         let (across_z, along) = rest.split_at(nz);
@@ -341,6 +344,7 @@ impl Stamp {
             return;
         }
         for (iz, a_z) in (self.z.0..self.z.1).zip(across_z) {
+            start[iz] = start[iz].min(first);
             let column = &mut plane[iz * n..(iz + 1) * n];
             match self.splat {
                 Splat::Whole => {

@@ -58,6 +58,9 @@ pub struct Lighting {
 /// Rows drawn together by one thread.
 const BAND: usize = 8;
 
+/// Columns of a block whose opacity is tracked, to skip particles hidden behind it.
+const BLOCK: usize = 16;
+
 /// Draws `particles` lit through `buffer` over `background` (same size as the camera's
 /// image, or black).
 pub fn render(
@@ -95,10 +98,35 @@ pub fn render(
             let (y0, y1) = (band * BAND, (band * BAND + pixels.len() / w) as f32);
             // What still gets through each pixel of the band from behind.
             let mut through = vec![1.0f32; pixels.len()];
+            // Blocks of BLOCK columns across the band: whether one of their pixels still
+            // lets light through, kept up to date lazily (`dirty` after a particle).
+            let blocks = w.div_ceil(BLOCK);
+            let (mut open, mut dirty) = (vec![true; blocks], vec![false; blocks]);
+            let rows_in_band = pixels.len() / w;
             for (&k, &(sx, sy, sr)) in order.iter().zip(&footprint) {
                 if sy + sr < y0 as f32 || sy - sr > y1 || sx + sr < 0.0 || sx - sr > w as f32 {
                     continue;
                 }
+                // Behind pixels that are all finished: nothing to draw.
+                let b0 = (sx - sr).max(0.0) as usize / BLOCK;
+                let b1 = ((sx + sr).max(0.0) as usize / BLOCK).min(blocks - 1);
+                let mut any_open = false;
+                for b in b0..=b1 {
+                    if dirty[b] {
+                        let cols = b * BLOCK..((b + 1) * BLOCK).min(w);
+                        open[b] = (0..rows_in_band).any(|r| {
+                            through[r * w + cols.start..r * w + cols.end]
+                                .iter()
+                                .any(|t| *t >= OPAQUE)
+                        });
+                        dirty[b] = false;
+                    }
+                    any_open |= open[b];
+                }
+                if !any_open {
+                    continue;
+                }
+                dirty[b0..=b1].iter_mut().for_each(|d| *d = true);
                 let p = &particles[k];
                 let z = depth[k];
                 let s = p.sigma();
