@@ -100,30 +100,10 @@ impl IntensityBuffer {
         forward: f32,
         splat: Splat,
     ) -> Result<()> {
-        check_range("forward scattering p(l,l)/4pi", forward as f64, 0.0, 1.0)?;
-        if particles.is_empty() {
-            return Err(Error::Invalid("the cloud has no particles".into()));
-        }
-        let light = (-to_sun)
-            .try_normalize()
-            .ok_or_else(|| Error::Invalid("the sun direction is zero".into()))?;
-        let helper = if light.y.abs() < 0.9 {
-            Vec3::Y
-        } else {
-            Vec3::X
-        };
-        let x = helper.cross(light).normalize();
-        let z = x.cross(light);
-        self.buffer_from_world = Mat3::from_cols(x, light, z).transpose();
-        // The grid holds every particle whole.
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for p in particles {
-            let c = self.buffer_from_world * p.position;
-            lo = lo.min(c - Vec3::splat(p.radius));
-            hi = hi.max(c + Vec3::splat(p.radius));
-        }
-        self.min = lo;
-        self.voxel = (hi - lo) / self.resolution as f32;
+        let frame = LightFrame::new(particles, to_sun, forward)?;
+        self.buffer_from_world = frame.from_world;
+        self.min = frame.min;
+        self.voxel = (frame.max - frame.min) / self.resolution as f32;
         self.fill(particles, forward, splat);
         Ok(())
     }
@@ -248,6 +228,48 @@ impl IntensityBuffer {
             f.z,
         )
         .exp()
+    }
+}
+
+/// The frame of a light pass, shared by the buffer and the Harris baseline: world to
+/// `(x, y, z)` with `y` along the light's travel, and the box in that frame that holds
+/// every particle whole. Making it validates what a light pass is given.
+pub(crate) struct LightFrame {
+    /// World to light-pass axes: rows `x`, `y`, `z`.
+    pub from_world: Mat3,
+    /// The box's corners, in light-pass axes, m.
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl LightFrame {
+    pub(crate) fn new(particles: &[Particle], to_sun: Vec3, forward: f32) -> Result<LightFrame> {
+        check_range("forward scattering p(l,l)/4pi", forward as f64, 0.0, 1.0)?;
+        if particles.is_empty() {
+            return Err(Error::Invalid("the cloud has no particles".into()));
+        }
+        let light = (-to_sun)
+            .try_normalize()
+            .ok_or_else(|| Error::Invalid("the sun direction is zero".into()))?;
+        let helper = if light.y.abs() < 0.9 {
+            Vec3::Y
+        } else {
+            Vec3::X
+        };
+        let x = helper.cross(light).normalize();
+        let z = x.cross(light);
+        let from_world = Mat3::from_cols(x, light, z).transpose();
+        let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for p in particles {
+            let c = from_world * p.position;
+            min = min.min(c - Vec3::splat(p.radius));
+            max = max.max(c + Vec3::splat(p.radius));
+        }
+        Ok(LightFrame {
+            from_world,
+            min,
+            max,
+        })
     }
 }
 

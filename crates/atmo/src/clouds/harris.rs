@@ -8,8 +8,9 @@
 
 use glam::Vec3;
 
+use super::buffer::LightFrame;
 use super::particles::Particle;
-use crate::error::{check_range, Error, Result};
+use crate::error::{check_range, Result};
 
 /// `I_k / I_0` for each particle, in the particles' order: the sunlight reaching its
 /// centre. `to_sun` points toward the sun; `resolution` is the side of the square
@@ -22,30 +23,13 @@ pub fn light_per_particle(
     forward: f32,
 ) -> Result<Vec<f32>> {
     check_range("baseline buffer resolution", resolution as f64, 2.0, 8192.0)?;
-    check_range("forward scattering p(l,l)/4pi", forward as f64, 0.0, 1.0)?;
-    if particles.is_empty() {
-        return Err(Error::Invalid("the cloud has no particles".into()));
-    }
-    let light = (-to_sun)
-        .try_normalize()
-        .ok_or_else(|| Error::Invalid("the sun direction is zero".into()))?;
     // The view from the sun: x and z across the light, y along it (as the 3-D buffer).
-    let helper = if light.y.abs() < 0.9 {
-        Vec3::Y
-    } else {
-        Vec3::X
-    };
-    let x = helper.cross(light).normalize();
-    let z = x.cross(light);
+    let frame = LightFrame::new(particles, to_sun, forward)?;
     let local: Vec<Vec3> = particles
         .iter()
-        .map(|p| Vec3::new(p.position.dot(x), p.position.dot(light), p.position.dot(z)))
+        .map(|p| frame.from_world * p.position)
         .collect();
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for (p, c) in particles.iter().zip(&local) {
-        lo = lo.min(*c - Vec3::splat(p.radius));
-        hi = hi.max(*c + Vec3::splat(p.radius));
-    }
+    let (lo, hi) = (frame.min, frame.max);
     let n = resolution;
     let (tx, tz) = ((hi.x - lo.x) / n as f32, (hi.z - lo.z) / n as f32);
     let mut buffer = vec![1.0f32; n * n];
