@@ -133,19 +133,13 @@ fn mean_error(
 fn camera(particles: &[atmo::clouds::particles::Particle]) -> Camera {
     let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
     let position = centre + Vec3::new(-700.0, -600.0, 1900.0);
-    let forward = (centre - position).normalize();
-    let right = forward.cross(Vec3::Y).normalize();
     let tan = 20f32.to_radians().tan();
-    Camera {
+    Camera::look_at(
         position,
-        forward,
-        right,
-        up: right.cross(forward),
-        tan_half_width: tan * 1280.0 / 720.0,
-        tan_half_height: tan,
-        width: 1280,
-        height: 720,
-        supersampling: 1,
-        far: f32::INFINITY,
-    }
+        centre,
+        Vec3::Y,
+        (tan * 1280.0 / 720.0, tan),
+        (1280, 720),
+    )
+    .expect("the view is oblique: not along up")
 }

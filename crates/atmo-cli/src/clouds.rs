@@ -157,22 +157,17 @@ fn camera_for(particles: &[Particle], args: &CloudsArgs) -> atmo::Result<Camera>
         args.view_height,
         centre.z - a.cos() * width * args.distance,
     );
-    let forward = (centre - position).normalize();
-    let right = forward.cross(Vec3::Y).normalize();
-    let up = right.cross(forward);
     let tan = (0.5 * args.fov.to_radians()).tan();
-    Ok(Camera {
+    let aspect = args.width as f32 / args.height as f32;
+    // The camera stands at least a tenth of a width off the cloud's axis: never above it.
+    Camera::look_at(
         position,
-        forward,
-        right,
-        up,
-        tan_half_width: tan * args.width as f32 / args.height as f32,
-        tan_half_height: tan,
-        width: args.width,
-        height: args.height,
-        supersampling: 1,
-        far: f32::INFINITY,
-    })
+        centre,
+        Vec3::Y,
+        (tan * aspect, tan),
+        (args.width, args.height),
+    )
+    .ok_or_else(|| atmo::Error::Invalid("the camera looks straight up or down at the cloud".into()))
 }
 
 pub fn run(args: CloudsArgs) -> Result<()> {

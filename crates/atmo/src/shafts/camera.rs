@@ -31,6 +31,33 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// A camera at `position` looking at `target`, rolled so that `up` is up on the
+    /// screen; `tan_half` the tangents of half the field of view across the width and
+    /// the height; one ray a pixel, nothing clipped. `None` when `target` is `position`
+    /// or `up` is zero or along the view.
+    pub fn look_at(
+        position: Vec3,
+        target: Vec3,
+        up: Vec3,
+        (tan_half_width, tan_half_height): (f32, f32),
+        (width, height): (u32, u32),
+    ) -> Option<Camera> {
+        let forward = (target - position).try_normalize()?;
+        let right = forward.cross(up).try_normalize()?;
+        Some(Camera {
+            position,
+            forward,
+            right,
+            up: right.cross(forward),
+            tan_half_width,
+            tan_half_height,
+            width,
+            height,
+            supersampling: 1,
+            far: f32::INFINITY,
+        })
+    }
+
     /// The ray through the image point `(x, y)` in pixels (0,0 the top-left corner of
     /// the top-left pixel), scaled so that its component along the view axis is 1.
     #[inline]

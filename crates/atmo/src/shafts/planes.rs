@@ -56,6 +56,8 @@ pub struct LightPlanes<'a> {
     lamp_in_haze: bool,
     /// The beam profile, tabulated.
     light_map: LightMap,
+    /// The eye in the light's space: where every camera ray starts.
+    eye: Vec3,
 }
 
 /// Everything the plane method prepares once a frame: shadow maps, the lit volumes'
@@ -159,6 +161,7 @@ impl<'a> SamplePlanes<'a> {
                         .bounds
                         .map_or(true, |b| b.contains(light.position)),
                     light_map: LightMap::new(light),
+                    eye: light.to_light(camera.position),
                 }
             })
             .collect();
@@ -269,7 +272,6 @@ impl<'a> SamplePlanes<'a> {
     /// ends, `g` of shafts (6) for the lanes the same way.
     fn scattered(&self, light: &Spotlight, planes: &LightPlanes, lanes: &Lanes) -> [Vec3; LANES] {
         let scene = self.scene;
-        let eye = scene.camera.position;
         let mut sum = [Vec3::ZERO; LANES];
         let (first, last) = lanes.k_range();
         if first >= last {
@@ -278,7 +280,7 @@ impl<'a> SamplePlanes<'a> {
         let m = scene.planes.sub_planes as usize;
         let dz = lanes.dz;
         let sub = dz / m as f32;
-        let origin = light.to_light(eye);
+        let origin = planes.eye;
         let inv_tan = 1.0 / light.tan_field();
         let shadow = &planes.shadow;
         let [sx, sy, sz] = &lanes.step;
@@ -337,7 +339,7 @@ impl<'a> SamplePlanes<'a> {
     ) {
         let haze = &self.scene.haze;
         let eye = self.scene.camera.position;
-        let origin = light.to_light(eye);
+        let origin = planes.eye;
         let [sx, sy, sz] = &lanes.step;
         let depth = planes.z_near + (plane as f32 + 0.5) * lanes.dz;
         let (mut cos_alpha, mut s_haze, mut t_haze, mut inv_s2) = (

@@ -394,39 +394,33 @@ impl CameraSpec {
     fn validate(&self) -> Result<Camera> {
         let position = vec3("camera.position", self.position)?;
         let look_at = vec3("camera.look_at", self.look_at)?;
-        let forward = (look_at - position).try_normalize().ok_or_else(|| {
-            Error::Invalid(format!(
+        if look_at == position {
+            return Err(Error::Invalid(format!(
                 "camera.look_at = {look_at:?} equals camera.position: the camera has no view direction"
-            ))
-        })?;
+            )));
+        }
         let up = vec3("camera.up", self.up)?;
-        let right = forward.cross(up).try_normalize().ok_or_else(|| {
-            Error::Invalid(format!(
-                "camera.up = {up:?} is zero or parallel to the view direction {forward:?}"
-            ))
-        })?;
-        let up = right.cross(forward);
         Frame::check_size(self.width, self.height)?;
         check_range("camera.fov_deg", self.fov_deg as f64, 0.01, 179.0)?;
         check_range("camera.supersampling", self.supersampling as f64, 1.0, 16.0)?;
         check_positive("camera.far_m", self.far_m as f64, 1e7)?;
         let tan = (0.5 * self.fov_deg.to_radians()).tan();
         let aspect = self.width as f32 / self.height as f32;
-        let (tan_half_width, tan_half_height) = match self.fov_axis {
+        let tan_half = match self.fov_axis {
             FovAxis::Vertical => (tan * aspect, tan),
             FovAxis::Horizontal => (tan, tan / aspect),
         };
+        let camera = Camera::look_at(position, look_at, up, tan_half, (self.width, self.height))
+            .ok_or_else(|| {
+                Error::Invalid(format!(
+                    "camera.up = {up:?} is zero or parallel to the view direction {:?}",
+                    (look_at - position).normalize()
+                ))
+            })?;
         Ok(Camera {
-            position,
-            forward,
-            right,
-            up,
-            tan_half_width,
-            tan_half_height,
-            width: self.width,
-            height: self.height,
             supersampling: self.supersampling,
             far: self.far_m,
+            ..camera
         })
     }
 }
