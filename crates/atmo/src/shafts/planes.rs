@@ -159,7 +159,7 @@ impl<'a> SamplePlanes<'a> {
                     lamp_in_haze: scene
                         .haze
                         .bounds
-                        .map_or(true, |b| b.contains(light.position)),
+                        .is_none_or(|b| b.contains(light.position)),
                     light_map: LightMap::new(light),
                     eye: light.to_light(camera.position),
                 }

@@ -44,14 +44,14 @@ impl Projection {
     /// World direction through the centre of pixel (x, y) of a `width` x `height`
     /// image, or `None` outside the fisheye's circle.
     pub fn direction(&self, x: u32, y: u32, width: u32, height: u32) -> Option<DVec3> {
-        self.camera(width, height)
+        self.pixel_basis(width, height)
             .direction(x, y)
             .map(|d| d.as_dvec3().normalize())
     }
 
     /// The per-frame constants that turn pixels into directions, in f32: a frame's
     /// millions of pixels need no more than the 1e-7 rad this resolves.
-    fn camera(&self, width: u32, height: u32) -> Camera {
+    pub fn pixel_basis(&self, width: u32, height: u32) -> PixelBasis {
         let (w, h) = (width as f32, height as f32);
         match *self {
             Projection::Perspective { yaw, pitch, fov_y } => {
@@ -62,13 +62,13 @@ impl Projection {
                 // Direction = forward + u right + v up, with u, v from the pixel centre.
                 let right = (right * t * 2.0 / height as f64).as_vec3();
                 let up = (up * t * 2.0 / height as f64).as_vec3();
-                Camera::Perspective {
+                PixelBasis::Perspective {
                     origin: forward.as_vec3() - right * (0.5 * w) + up * (0.5 * h),
                     right,
                     up,
                 }
             }
-            Projection::Fisheye => Camera::Fisheye {
+            Projection::Fisheye => PixelBasis::Fisheye {
                 centre: Vec2::new(0.5 * w, 0.5 * h),
                 radius: 0.5 * w.min(h),
             },
@@ -77,20 +77,24 @@ impl Projection {
 }
 
 /// [`Projection`] prepared for one frame size.
-enum Camera {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PixelBasis {
     /// Direction of pixel (x, y) = `origin + (x + 1/2) right - (y + 1/2) up` (not unit).
     Perspective { origin: Vec3, right: Vec3, up: Vec3 },
-    /// Zenith angle proportional to the distance from `centre`, 90 deg at `radius`.
+    /// Zenith angle proportional to the distance from `centre` (pixels), 90 deg at
+    /// `radius`; north (+y) up and east (+x) to the left.
     Fisheye { centre: Vec2, radius: f32 },
 }
 
-impl Camera {
+impl PixelBasis {
+    /// The direction (not unit) through the centre of pixel (x, y), or `None` outside
+    /// the fisheye's circle.
     #[inline]
-    fn direction(&self, x: u32, y: u32) -> Option<Vec3> {
+    pub fn direction(&self, x: u32, y: u32) -> Option<Vec3> {
         let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
         match *self {
-            Camera::Perspective { origin, right, up } => Some(origin + px * right - py * up),
-            Camera::Fisheye { centre, radius } => {
+            PixelBasis::Perspective { origin, right, up } => Some(origin + px * right - py * up),
+            PixelBasis::Fisheye { centre, radius } => {
                 // North (+y) up and east (+x) to the left, as seen from below.
                 let q = (centre - Vec2::new(px, py)) / radius;
                 let rho = q.length();
@@ -142,37 +146,53 @@ pub struct View {
     pub sun_disc: bool,
 }
 
-/// Radiance over a grid of directions, linear sRGB, with the constants of its bilinear
-/// lookup (sky 4.2) precomputed in f32 for the per-pixel path.
-struct RgbGrid {
-    /// Values in SIMD-aligned vectors, for the lookups' arithmetic.
-    rgb: Vec<Vec3A>,
-    azimuths: usize,
+/// The constants of the bilinear lookup (sky 4.2) in a [`DirectionGrid`], in f32 for
+/// the per-pixel path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridLookup {
+    /// Points in azimuth.
+    pub azimuths: usize,
     /// Grid columns per radian of azimuth.
-    x_scale: f32,
+    pub x_scale: f32,
     /// Lowest elevation, rad, and grid rows per radian of elevation.
-    y_min: f32,
-    y_scale: f32,
+    pub y_min: f32,
+    pub y_scale: f32,
     /// Largest column and row indices, as f32.
-    x_last: f32,
-    y_last: f32,
+    pub x_last: f32,
+    pub y_last: f32,
 }
 
-impl RgbGrid {
-    fn new(grid: &DirectionGrid, rgb: Vec<Vec3>) -> Self {
+impl GridLookup {
+    /// The lookup constants of `grid`.
+    pub fn new(grid: &DirectionGrid) -> Self {
         let (x_last, y_last) = ((grid.azimuths - 1) as f32, (grid.elevations - 1) as f32);
-        RgbGrid {
-            // Radiance is never negative; clamping here keeps the per-pixel path lean.
-            rgb: rgb
-                .into_iter()
-                .map(|v| Vec3A::from(v).max(Vec3A::ZERO))
-                .collect(),
+        GridLookup {
             azimuths: grid.azimuths,
             x_scale: x_last / std::f32::consts::PI,
             y_min: grid.elevation_min as f32,
             y_scale: y_last / (grid.elevation_max - grid.elevation_min) as f32,
             x_last,
             y_last,
+        }
+    }
+}
+
+/// Radiance over a grid of directions, linear sRGB, ready for bilinear lookups.
+struct RgbGrid {
+    /// Values in SIMD-aligned vectors, for the lookups' arithmetic.
+    rgb: Vec<Vec3A>,
+    lookup: GridLookup,
+}
+
+impl RgbGrid {
+    fn new(grid: &DirectionGrid, rgb: Vec<Vec3>) -> Self {
+        RgbGrid {
+            // Radiance is never negative; clamping here keeps the per-pixel path lean.
+            rgb: rgb
+                .into_iter()
+                .map(|v| Vec3A::from(v).max(Vec3A::ZERO))
+                .collect(),
+            lookup: GridLookup::new(grid),
         }
     }
 
@@ -185,17 +205,18 @@ impl RgbGrid {
     /// clamped to the grid.
     #[inline]
     fn sample(&self, azimuth: f32, elevation: f32) -> Vec3A {
-        let x = (azimuth * self.x_scale).clamp(0.0, self.x_last);
-        let y = ((elevation - self.y_min) * self.y_scale).clamp(0.0, self.y_last);
+        let g = &self.lookup;
+        let x = (azimuth * g.x_scale).clamp(0.0, g.x_last);
+        let y = ((elevation - g.y_min) * g.y_scale).clamp(0.0, g.y_last);
         let (i, j) = (
-            (x as usize).min(self.azimuths - 2),
-            (y as usize).min(self.y_last as usize - 1),
+            (x as usize).min(g.azimuths - 2),
+            (y as usize).min(g.y_last as usize - 1),
         );
         let (fx, fy) = (x - i as f32, y - j as f32);
-        let at = j * self.azimuths + i;
+        let at = j * g.azimuths + i;
         let (r0, r1) = (
             &self.rgb[at..at + 2],
-            &self.rgb[at + self.azimuths..at + self.azimuths + 2],
+            &self.rgb[at + g.azimuths..at + g.azimuths + 2],
         );
         let lo = r0[0].lerp(r0[1], fx);
         let hi = r1[0].lerp(r1[1], fx);
@@ -252,11 +273,6 @@ impl SkyPicture {
         map: Vec<Vec3>,
     ) -> Self {
         let atmosphere = table.atmosphere();
-        let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
-        let mut sun_spectrum = vec![0.0; atmosphere.channels()];
-        let r = atmosphere.bottom_radius_m + altitude_m;
-        transmittance_to_sun(atmosphere, r, sun.elevation.sin(), &mut sun_spectrum);
-        sun_disc_radiance(atmosphere, &mut sun_spectrum);
         let grid = table.grid(altitude_m);
         let ground_below = grid.elevation_min;
         Self::with_maps(
@@ -265,7 +281,7 @@ impl SkyPicture {
             RgbGrid::new(&grid, map),
             None,
             ground_below,
-            colour.rgb(&sun_spectrum),
+            sun_disc_rgb(atmosphere, altitude_m, sun.elevation),
         )
     }
 
@@ -339,6 +355,12 @@ impl SkyPicture {
         }
     }
 
+    /// The sun's disc as drawn: unit direction, linear sRGB radiance, and the cosine of
+    /// its angular radius.
+    pub fn sun_disc(&self) -> (Vec3, Vec3, f32) {
+        (self.sun_direction, self.sun_rgb.into(), self.sun_cos_radius)
+    }
+
     /// Renders `view`, rows in parallel.
     pub fn render(&self, view: &View) -> Frame {
         let mut frame = Frame::new(view.width, view.height);
@@ -348,7 +370,7 @@ impl SkyPicture {
 
     /// Renders `view` into `frame` (of the view's size), rows in parallel.
     pub fn render_into(&self, view: &View, frame: &mut Frame) {
-        let camera = view.projection.camera(view.width, view.height);
+        let camera = view.projection.pixel_basis(view.width, view.height);
         frame
             .pixels
             .par_chunks_mut(view.width as usize)
@@ -360,6 +382,17 @@ impl SkyPicture {
                 self.shade(rays, view.sun_disc, row);
             });
     }
+}
+
+/// The linear sRGB radiance of the sun's disc at `sun_elevation` rad seen from
+/// `altitude_m` (no limb darkening), through the atmosphere.
+pub fn sun_disc_rgb(atmosphere: &Atmosphere, altitude_m: f64, sun_elevation: f64) -> [f32; 3] {
+    let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+    let mut sun_spectrum = vec![0.0; atmosphere.channels()];
+    let r = atmosphere.bottom_radius_m + altitude_m;
+    transmittance_to_sun(atmosphere, r, sun_elevation.sin(), &mut sun_spectrum);
+    sun_disc_radiance(atmosphere, &mut sun_spectrum);
+    colour.rgb(&sun_spectrum)
 }
 
 /// Directions (not necessarily unit; NaN where a pixel has none) and their map

@@ -436,15 +436,24 @@ impl Factors {
         }
     }
 
-    /// The sky at the interpolation `corners` ((column, weight) pairs) into `out`,
-    /// `[direction]` in linear sRGB; `acc` is scratch space.
-    fn draw(&self, corners: &[(usize, f32); 4], cols: usize, acc: &mut Vec<f32>, out: &mut [Vec3]) {
+    /// `t_k` interpolated at `corners` ((column, weight) pairs), one per stored term:
+    /// the per-frame coefficients of sky (17), shared by the CPU and GPU draws.
+    fn coefficients(&self, corners: &[(usize, f32); 4], cols: usize) -> Vec<f32> {
+        (0..self.used.len())
+            .map(|k| {
+                let t = &self.t[k * cols..(k + 1) * cols];
+                corners.iter().map(|&(j, w)| t[j] * w).sum()
+            })
+            .collect()
+    }
+
+    /// The sky with `coefficients` into `out`, `[direction]` in linear sRGB; `acc` is
+    /// scratch space.
+    fn draw(&self, coefficients: &[f32], acc: &mut Vec<f32>, out: &mut [Vec3]) {
         acc.clear();
         acc.resize(self.terms.len(), 0.0);
         let mut offset = 0;
-        for (k, &n) in self.used.iter().enumerate() {
-            let t = &self.t[k * cols..(k + 1) * cols];
-            let coefficient: f32 = corners.iter().map(|&(j, w)| t[j] * w).sum();
+        for (&n, &coefficient) in self.used.iter().zip(coefficients) {
             let n = n as usize;
             for (a, &s) in acc[..n].iter_mut().zip(&self.s[offset..offset + n]) {
                 *a += coefficient * s;
@@ -524,6 +533,22 @@ fn term_count(exact: &[f32], s_row: &[f32], t: &[f32], bound: &ErrorBound) -> Op
         }
     }
     None
+}
+
+/// The factors `s_k` of a table as a draw reads them: rows (`channel * directions +
+/// direction`) sorted by decreasing term count, and term after term the `s_k` of the
+/// rows that use it, so that row `order[i]` finds its term `k` at `s[offset_k + i]`
+/// with `offset_k = used[0] + ... + used[k - 1]`.
+#[derive(Debug, Clone, Copy)]
+pub struct TableFactors<'a> {
+    /// `s_k`, term after term.
+    pub s: &'a [f32],
+    /// Row of each position.
+    pub order: &'a [u32],
+    /// Rows using term `k`: `used[k]`.
+    pub used: &'a [u32],
+    /// View directions per channel (`L^2`).
+    pub directions: usize,
 }
 
 /// The skylight table of one atmosphere: grids, bound, and per channel the SVD factors
@@ -717,6 +742,15 @@ impl SkylightTable {
         out: &mut [Vec3],
         scratch: &mut Vec<f32>,
     ) -> Result<()> {
+        let coefficients = self.coefficients(sun_elevation, altitude_m)?;
+        self.factors.draw(&coefficients, scratch, out);
+        Ok(())
+    }
+
+    /// The coefficients `t_k` of sky (17) for a sun at `sun_elevation` rad seen from
+    /// `altitude_m`, bilinear in the table's grid, one per stored term: all a draw
+    /// needs per frame besides the stored `s_k`. An error outside the table's ranges.
+    pub fn coefficients(&self, sun_elevation: f64, altitude_m: f64) -> Result<Vec<f32>> {
         let (sun, altitude) = (self.sun_axis(), self.altitude_axis());
         let (s, ws) = sun.locate(sun_elevation).ok_or_else(|| {
             Error::out_of_range(
@@ -744,9 +778,17 @@ impl SkylightTable {
             ((a + 1) * m + s, (1.0 - ws) * wa),
             ((a + 1) * m + s + 1, ws * wa),
         ];
-        self.factors
-            .draw(&corners, m * altitude.count(), scratch, out);
-        Ok(())
+        Ok(self.factors.coefficients(&corners, m * altitude.count()))
+    }
+
+    /// The stored factors in the layout a draw runs over, for uploading to a GPU.
+    pub fn factors(&self) -> TableFactors<'_> {
+        TableFactors {
+            s: &self.factors.s,
+            order: &self.factors.order,
+            used: &self.factors.used,
+            directions: self.settings.sky.directions.pow(2),
+        }
     }
 
     /// The shell-method model at `altitude_m` on this table's grid, to compare with.

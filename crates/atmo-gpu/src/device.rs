@@ -1,0 +1,368 @@
+//! The device every pipeline runs on: adapter selection, the features and limits atmo
+//! needs checked up front, and submissions that turn GPU errors (out of memory, a lost
+//! device) into [`GpuError`]s instead of panics.
+
+use std::sync::{Arc, Mutex};
+
+use wgpu::util::DeviceExt;
+
+use crate::GpuError;
+
+/// Features every pipeline needs: additive blending into f32 targets (shafts' planes,
+/// clouds' billboards accumulate in f32; f16 loses 4 % over 180 quads on lavapipe).
+const REQUIRED_FEATURES: &[(wgpu::Features, &str)] = &[(
+    wgpu::Features::FLOAT32_BLENDABLE,
+    "float32 blending (additive planes and billboards in f32 targets)",
+)];
+
+/// A device and queue, with what is known of the adapter behind them.
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    /// The adapter's name, backend and kind.
+    pub info: wgpu::AdapterInfo,
+    /// Whether passes can be timed with timestamp queries.
+    pub timestamps: bool,
+    /// Why the device was lost, once it is.
+    lost: Arc<Mutex<Option<String>>>,
+}
+
+impl Gpu {
+    /// Opens an adapter: `choice` matches an adapter's name (any part, any case) or a
+    /// backend (`vulkan`, `metal`, `dx12`); without it, `WGPU_ADAPTER_NAME` does, and
+    /// else the first of discrete, integrated, virtual, software. The instance follows
+    /// `WGPU_BACKEND` and the drivers' own variables (`VK_DRIVER_FILES`).
+    pub fn new(choice: Option<&str>) -> Result<Gpu, GpuError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        if adapters.is_empty() {
+            return Err(GpuError::NoAdapter);
+        }
+        let wanted = choice
+            .map(str::to_owned)
+            .or_else(|| std::env::var("WGPU_ADAPTER_NAME").ok())
+            .map(|s| s.to_lowercase());
+        let matches = |a: &wgpu::Adapter| {
+            let info = a.get_info();
+            wanted.as_ref().is_none_or(|w| {
+                info.name.to_lowercase().contains(w.as_str())
+                    || info.backend.to_str().eq_ignore_ascii_case(w)
+            })
+        };
+        let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 3,
+            wgpu::DeviceType::Other => 4,
+        };
+        let names: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
+        let adapter = adapters
+            .into_iter()
+            .filter(matches)
+            .min_by_key(rank)
+            .ok_or_else(|| GpuError::NoMatch {
+                wanted: wanted.clone().unwrap_or_default(),
+                found: names.join("; "),
+            })?;
+        let info = adapter.get_info();
+        let features = adapter.features();
+        for (feature, why) in REQUIRED_FEATURES {
+            if !features.contains(*feature) {
+                return Err(GpuError::MissingFeature {
+                    adapter: describe(&info),
+                    missing: why.to_string(),
+                });
+            }
+        }
+        // Timestamps between the passes of one encoder, where the adapter has them.
+        let timing =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let timestamps = features.contains(timing);
+        let mut required = wgpu::Features::FLOAT32_BLENDABLE;
+        if timestamps {
+            required |= timing;
+        }
+        // The adapter's own limits: the largest buffers and 3-D textures it has, which
+        // `check_limit` compares requests against before anything is allocated.
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("atmo"),
+            required_features: required,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+        let lost = Arc::new(Mutex::new(None));
+        let on_lost = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            *on_lost.lock().unwrap() = Some(format!("{reason:?}: {message}"));
+        });
+        // Errors outside a `run` scope (none are expected) are reported, not panicked on.
+        device.on_uncaptured_error(Arc::new(|e| eprintln!("atmo-gpu: {e}")));
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+            timestamps,
+            lost,
+        })
+    }
+
+    /// One line naming the device, for the CLI's notice.
+    pub fn describe(&self) -> String {
+        describe(&self.info)
+    }
+
+    /// Whether the adapter is a software rasteriser (llvmpipe and the like).
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// The device's limits (the adapter's).
+    pub fn limits(&self) -> wgpu::Limits {
+        self.device.limits()
+    }
+
+    /// Refuses `needed` above the device's `limit` named `limit_name`, before any
+    /// allocation: `what` is the resource, `setting` what to lower.
+    pub fn check_limit(
+        &self,
+        what: &str,
+        needed: u64,
+        limit: u64,
+        limit_name: &str,
+        setting: &str,
+    ) -> Result<(), GpuError> {
+        if needed > limit {
+            return Err(GpuError::OverLimit {
+                what: what.to_string(),
+                needed,
+                limit: limit_name.to_string(),
+                max: limit,
+                setting: setting.to_string(),
+            });
+        }
+        Ok(())
+    }
+
+    /// A storage buffer of `contents` (at least 4 bytes: empty arrays get one zero word),
+    /// checked against the device's binding limit.
+    pub fn storage(
+        &self,
+        label: &str,
+        contents: &[u8],
+        setting: &str,
+    ) -> Result<wgpu::Buffer, GpuError> {
+        let limit = self.limits().max_storage_buffer_binding_size;
+        self.check_limit(
+            label,
+            contents.len() as u64,
+            limit,
+            "max_storage_buffer_binding_size",
+            setting,
+        )?;
+        let zero = [0u8; 4];
+        let contents = if contents.is_empty() {
+            &zero[..]
+        } else {
+            contents
+        };
+        Ok(self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            }))
+    }
+
+    /// A uniform buffer holding `value`.
+    pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::bytes_of(value),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            })
+    }
+
+    /// A compute pipeline of `entry` in `module`, with its layout inferred.
+    pub fn compute_pipeline(
+        &self,
+        module: &wgpu::ShaderModule,
+        entry: &str,
+    ) -> wgpu::ComputePipeline {
+        self.device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+    }
+
+    /// A bind group of `resources` (binding `i` gets entry `i`) for group 0 of `layout`.
+    pub fn bind_group(
+        &self,
+        layout: &wgpu::BindGroupLayout,
+        resources: &[wgpu::BindingResource],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = resources
+            .iter()
+            .enumerate()
+            .map(|(i, r)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: r.clone(),
+            })
+            .collect();
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout,
+            entries: &entries,
+        })
+    }
+
+    /// Records commands with `record`, submits them and waits: out-of-memory and
+    /// validation errors come back as [`GpuError`]s naming `what`, as does a lost device.
+    /// With `timed`, the time between the first and last timestamp `record` writes into
+    /// the query set it is given (two queries) is returned, in ms.
+    pub fn run(
+        &self,
+        what: &str,
+        record: impl FnOnce(&mut wgpu::CommandEncoder, Option<&wgpu::QuerySet>),
+    ) -> Result<Option<f64>, GpuError> {
+        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let queries = self.timestamps.then(|| {
+            self.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            })
+        });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(what) });
+        if let Some(q) = &queries {
+            encoder.write_timestamp(q, 0);
+        }
+        record(&mut encoder, queries.as_ref());
+        let resolved = queries.as_ref().map(|q| {
+            encoder.write_timestamp(q, 1);
+            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            encoder.resolve_query_set(q, 0..2, &resolve, 0);
+            resolve
+        });
+        self.queue.submit([encoder.finish()]);
+        self.wait(what)?;
+        let errors = [
+            pollster::block_on(validation.pop()),
+            pollster::block_on(memory.pop()),
+        ];
+        if let Some(e) = errors.into_iter().flatten().next() {
+            return Err(match e {
+                wgpu::Error::OutOfMemory { .. } => GpuError::OutOfMemory(what.to_string()),
+                other => GpuError::Internal {
+                    what: what.to_string(),
+                    message: other.to_string(),
+                },
+            });
+        }
+        match resolved {
+            Some(buffer) => {
+                let bytes = self.read(what, &buffer, 0, 16)?;
+                let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+                let period = self.queue.get_timestamp_period() as f64;
+                Ok(Some(
+                    ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-6,
+                ))
+            }
+            None => Ok(None),
+        }
+    }
+
+    /// Waits for the queue; a lost device or a timeout is an error.
+    fn wait(&self, what: &str) -> Result<(), GpuError> {
+        let waited = self.device.poll(wgpu::PollType::wait_indefinitely());
+        if let Some(reason) = self.lost.lock().unwrap().clone() {
+            return Err(GpuError::DeviceLost {
+                what: what.to_string(),
+                reason,
+            });
+        }
+        waited.map(|_| ()).map_err(|e| GpuError::DeviceLost {
+            what: what.to_string(),
+            reason: e.to_string(),
+        })
+    }
+
+    /// Copies `size` bytes at `offset` of `buffer` (which has `COPY_SRC`) back.
+    pub fn read(
+        &self,
+        what: &str,
+        buffer: &wgpu::Buffer,
+        offset: u64,
+        size: u64,
+    ) -> Result<Vec<u8>, GpuError> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(what) });
+        encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
+        self.queue.submit([encoder.finish()]);
+        let slice = staging.slice(..);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = sender.send(r);
+        });
+        self.wait(what)?;
+        match receiver.recv() {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => {
+                return Err(GpuError::Internal {
+                    what: what.to_string(),
+                    message: e.to_string(),
+                })
+            }
+            Err(_) => {
+                return Err(GpuError::DeviceLost {
+                    what: what.to_string(),
+                    reason: "the read-back never completed".into(),
+                })
+            }
+        }
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Internal {
+                what: what.to_string(),
+                message: e.to_string(),
+            })?
+            .to_vec();
+        staging.unmap();
+        Ok(bytes)
+    }
+}
+
+fn describe(info: &wgpu::AdapterInfo) -> String {
+    let kind = match info.device_type {
+        wgpu::DeviceType::Cpu => "software",
+        wgpu::DeviceType::DiscreteGpu => "discrete",
+        wgpu::DeviceType::IntegratedGpu => "integrated",
+        wgpu::DeviceType::VirtualGpu => "virtual",
+        wgpu::DeviceType::Other => "other",
+    };
+    format!("{} ({:?}, {kind})", info.name, info.backend)
+}

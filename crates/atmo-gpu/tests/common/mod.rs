@@ -1,0 +1,49 @@
+//! What every GPU test shares: the device, and the comparison with the CPU path.
+
+use atmo::image::{Display, Frame, LevelErrors, ToneMap};
+use atmo_gpu::{Gpu, GpuError};
+
+/// The adapter the tests run on (`WGPU_ADAPTER_NAME` picks one), or `None` where there
+/// is none, outside CI: in CI (`CI=true`) a missing adapter fails the test, so a broken
+/// driver install cannot pass silently.
+pub fn gpu() -> Option<Gpu> {
+    match Gpu::new(None) {
+        Ok(gpu) => Some(gpu),
+        Err(GpuError::NoAdapter) if std::env::var("CI").as_deref() != Ok("true") => {
+            eprintln!("skipped: no GPU adapter (install mesa-vulkan-drivers)");
+            None
+        }
+        Err(e) => panic!("GPU setup failed: {e}"),
+    }
+}
+
+/// The bound: RMS at most 0.5 and max at most 2 levels of 255 after the same
+/// tone map.
+pub fn assert_close(gpu: &Frame, cpu: &Frame, exposure: f32, what: &str) -> LevelErrors {
+    let display = Display {
+        exposure,
+        tone: ToneMap::Exponential,
+    };
+    let e = gpu.level_errors(cpu, display).unwrap();
+    assert!(
+        e.rms <= 0.5 && e.max <= 2.0,
+        "{what}: GPU vs CPU RMS {:.3}, max {:.3} levels (bound: RMS 0.5, max 2)",
+        e.rms,
+        e.max
+    );
+    e
+}
+
+/// Mean displayed level of a frame: a picture that is not black.
+pub fn mean_level(frame: &Frame, exposure: f32) -> f64 {
+    let display = Display {
+        exposure,
+        tone: ToneMap::Exponential,
+    };
+    let sum: f64 = frame
+        .pixels
+        .iter()
+        .map(|p| (0..3).map(|c| display.value(p[c]) as f64).sum::<f64>())
+        .sum();
+    255.0 * sum / (3.0 * frame.pixels.len() as f64)
+}
