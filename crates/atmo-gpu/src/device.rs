@@ -187,21 +187,34 @@ impl Gpu {
             })
     }
 
+    /// A shader module from WGSL source; a shader the device refuses is an error.
+    pub fn shader(&self, name: &str, source: &str) -> Result<wgpu::ShaderModule, GpuError> {
+        self.scoped(name, || {
+            self.device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(name),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                })
+        })
+    }
+
     /// A compute pipeline of `entry` in `module`, with its layout inferred.
     pub fn compute_pipeline(
         &self,
         module: &wgpu::ShaderModule,
         entry: &str,
-    ) -> wgpu::ComputePipeline {
-        self.device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
+        self.scoped(entry, || {
+            self.device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: None,
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+        })
     }
 
     /// A bind group of `resources` (binding `i` gets entry `i`) for group 0 of `layout`.
@@ -227,15 +240,55 @@ impl Gpu {
 
     /// Records commands with `record`, submits them and waits: out-of-memory and
     /// validation errors come back as [`GpuError`]s naming `what`, as does a lost device.
-    /// With `timed`, the time between the first and last timestamp `record` writes into
-    /// the query set it is given (two queries) is returned, in ms.
+    /// Where the adapter has timestamp queries, returns the GPU time between the start
+    /// and the end of the commands, ms.
     pub fn run(
         &self,
         what: &str,
         record: impl FnOnce(&mut wgpu::CommandEncoder, Option<&wgpu::QuerySet>),
     ) -> Result<Option<f64>, GpuError> {
+        let resolved = self.scoped(what, || self.submit(what, record))??;
+        match resolved {
+            Some(buffer) => {
+                let bytes = self.read(what, &buffer, 0, 16)?;
+                let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+                let period = self.queue.get_timestamp_period() as f64;
+                Ok(Some(
+                    ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-6,
+                ))
+            }
+            None => Ok(None),
+        }
+    }
+
+    /// Runs `make` (resource and pipeline creation, submissions) with out-of-memory and
+    /// validation errors caught and returned as [`GpuError`]s naming `what`.
+    pub fn scoped<T>(&self, what: &str, make: impl FnOnce() -> T) -> Result<T, GpuError> {
         let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = make();
+        let errors = [
+            pollster::block_on(validation.pop()),
+            pollster::block_on(memory.pop()),
+        ];
+        if let Some(e) = errors.into_iter().flatten().next() {
+            return Err(match e {
+                wgpu::Error::OutOfMemory { .. } => GpuError::OutOfMemory(what.to_string()),
+                other => GpuError::Internal {
+                    what: what.to_string(),
+                    message: other.to_string(),
+                },
+            });
+        }
+        Ok(value)
+    }
+
+    /// Records, submits and waits; the timestamps' resolve buffer, where there is one.
+    fn submit(
+        &self,
+        what: &str,
+        record: impl FnOnce(&mut wgpu::CommandEncoder, Option<&wgpu::QuerySet>),
+    ) -> Result<Option<wgpu::Buffer>, GpuError> {
         let queries = self.timestamps.then(|| {
             self.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("timestamps"),
@@ -263,30 +316,7 @@ impl Gpu {
         });
         self.queue.submit([encoder.finish()]);
         self.wait(what)?;
-        let errors = [
-            pollster::block_on(validation.pop()),
-            pollster::block_on(memory.pop()),
-        ];
-        if let Some(e) = errors.into_iter().flatten().next() {
-            return Err(match e {
-                wgpu::Error::OutOfMemory { .. } => GpuError::OutOfMemory(what.to_string()),
-                other => GpuError::Internal {
-                    what: what.to_string(),
-                    message: other.to_string(),
-                },
-            });
-        }
-        match resolved {
-            Some(buffer) => {
-                let bytes = self.read(what, &buffer, 0, 16)?;
-                let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-                let period = self.queue.get_timestamp_period() as f64;
-                Ok(Some(
-                    ticks[1].saturating_sub(ticks[0]) as f64 * period * 1e-6,
-                ))
-            }
-            None => Ok(None),
-        }
+        Ok(resolved)
     }
 
     /// Waits for the queue; a lost device or a timeout is an error.
@@ -353,6 +383,48 @@ impl Gpu {
             .to_vec();
         staging.unmap();
         Ok(bytes)
+    }
+
+    /// Copies an RGBA f32 texture of `width` x `height` back, rows unpadded.
+    pub fn read_texture(
+        &self,
+        what: &str,
+        texture: &wgpu::Texture,
+        width: u32,
+        height: u32,
+    ) -> Result<Vec<u8>, GpuError> {
+        let row = width as u64 * 16;
+        let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as u64);
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(what),
+            size: padded * height as u64,
+            usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        self.run(what, |encoder, _| {
+            encoder.copy_texture_to_buffer(
+                texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(padded as u32),
+                        rows_per_image: None,
+                    },
+                },
+                wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+            );
+        })?;
+        let bytes = self.read(what, &buffer, 0, padded * height as u64)?;
+        Ok(bytes
+            .chunks(padded as usize)
+            .flat_map(|r| &r[..row as usize])
+            .copied()
+            .collect())
     }
 }
 

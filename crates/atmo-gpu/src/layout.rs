@@ -6,7 +6,8 @@
 pub trait GpuStruct: bytemuck::Pod {
     /// The WGSL struct's name.
     const WGSL_NAME: &'static str;
-    /// The shader file (under `shaders/`) that declares it.
+    /// The shader files (under `shaders/`, separated by spaces) that, concatenated,
+    /// declare it, as the pipeline's source concatenates them.
     const SHADER: &'static str;
     /// `(field, byte offset)` in declaration order, and the struct's size.
     fn fields() -> Vec<(&'static str, usize)>;

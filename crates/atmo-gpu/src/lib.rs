@@ -8,6 +8,7 @@
 //! once with [`gpu_struct!`], `#[repr(C)]` and `Pod`, and mirrored in WGSL; a test
 //! checks each against naga's layout of the shader's struct.
 
+pub mod clouds;
 pub mod device;
 pub mod layout;
 pub mod sky;

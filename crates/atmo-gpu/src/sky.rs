@@ -77,12 +77,9 @@ impl<'a> GpuSkyTable<'a> {
         )?;
         let map_bytes = (f.directions * 3 * 4) as u64;
         let map = output(gpu, "the skylight map", map_bytes, setting)?;
-        let map_module = shader(gpu, "sky_map.wgsl", include_str!("../shaders/sky_map.wgsl"));
-        let frame_module = shader(
-            gpu,
-            "sky_frame.wgsl",
-            include_str!("../shaders/sky_frame.wgsl"),
-        );
+        let map_module = gpu.shader("sky_map.wgsl", include_str!("../shaders/sky_map.wgsl"))?;
+        let frame_module =
+            gpu.shader("sky_frame.wgsl", include_str!("../shaders/sky_frame.wgsl"))?;
         Ok(GpuSkyTable {
             table,
             params: SkyMapParams {
@@ -95,8 +92,8 @@ impl<'a> GpuSkyTable<'a> {
             order,
             used,
             map,
-            map_pass: gpu.compute_pipeline(&map_module, "main"),
-            frame_pass: gpu.compute_pipeline(&frame_module, "main"),
+            map_pass: gpu.compute_pipeline(&map_module, "main")?,
+            frame_pass: gpu.compute_pipeline(&frame_module, "main")?,
         })
     }
 
@@ -234,15 +231,6 @@ impl<'a> GpuSkyTable<'a> {
         }
         p
     }
-}
-
-/// A shader module from WGSL source.
-pub(crate) fn shader(gpu: &Gpu, name: &str, source: &str) -> wgpu::ShaderModule {
-    gpu.device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(name),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        })
 }
 
 /// A storage buffer the GPU writes and the CPU reads back, checked against the limits.

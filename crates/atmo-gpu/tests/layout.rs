@@ -5,8 +5,13 @@
 use atmo_gpu::layout::GpuStruct;
 
 fn check<T: GpuStruct>() {
-    let path = format!("{}/shaders/{}", env!("CARGO_MANIFEST_DIR"), T::SHADER);
-    let source = std::fs::read_to_string(&path).unwrap();
+    let source: String = T::SHADER
+        .split_whitespace()
+        .map(|file| {
+            let path = format!("{}/shaders/{file}", env!("CARGO_MANIFEST_DIR"));
+            std::fs::read_to_string(&path).unwrap()
+        })
+        .collect();
     let module = naga::front::wgsl::parse_str(&source)
         .unwrap_or_else(|e| panic!("{}: {}", T::SHADER, e.emit_to_string(&source)));
     let mut layouter = naga::proc::Layouter::default();
@@ -43,4 +48,11 @@ fn check<T: GpuStruct>() {
 fn sky_structs_match_their_wgsl() {
     check::<atmo_gpu::sky::SkyMapParams>();
     check::<atmo_gpu::sky::SkyFrameParams>();
+}
+
+#[test]
+fn cloud_structs_match_their_wgsl() {
+    check::<atmo_gpu::clouds::GpuParticle>();
+    check::<atmo_gpu::clouds::BufferFrame>();
+    check::<atmo_gpu::clouds::DrawParams>();
 }

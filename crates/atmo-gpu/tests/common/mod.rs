@@ -25,6 +25,10 @@ pub fn assert_close(gpu: &Frame, cpu: &Frame, exposure: f32, what: &str) -> Leve
         tone: ToneMap::Exponential,
     };
     let e = gpu.level_errors(cpu, display).unwrap();
+    eprintln!(
+        "{what}: GPU vs CPU RMS {:.3}, max {:.3} levels",
+        e.rms, e.max
+    );
     assert!(
         e.rms <= 0.5 && e.max <= 2.0,
         "{what}: GPU vs CPU RMS {:.3}, max {:.3} levels (bound: RMS 0.5, max 2)",

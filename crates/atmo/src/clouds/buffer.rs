@@ -62,6 +62,17 @@ impl IntensityBuffer {
         2 * (resolution as u64).pow(3) * 4
     }
 
+    /// Refuses a resolution outside [2, 2048] or over [`BUFFER_BUDGET_BYTES`].
+    pub fn check_resolution(resolution: usize) -> Result<()> {
+        check_range("buffer resolution", resolution as f64, 2.0, 2048.0)?;
+        check_budget(
+            &format!("a {resolution}^3 intensity buffer"),
+            Self::bytes(resolution),
+            BUFFER_BUDGET_BYTES,
+            "the buffer resolution",
+        )
+    }
+
     /// The buffer of `particles` lit from the direction `to_sun` (toward the sun, any
     /// length), `resolution`^3 voxels; `forward` is the paper's `p(l, l) / 4 pi`, the
     /// part of scattered light taken to continue along the light, in [0, 1].
@@ -72,13 +83,7 @@ impl IntensityBuffer {
         forward: f32,
         splat: Splat,
     ) -> Result<IntensityBuffer> {
-        check_range("buffer resolution", resolution as f64, 2.0, 2048.0)?;
-        check_budget(
-            &format!("a {resolution}^3 intensity buffer"),
-            Self::bytes(resolution),
-            BUFFER_BUDGET_BYTES,
-            "the buffer resolution",
-        )?;
+        Self::check_resolution(resolution)?;
         let mut buffer = IntensityBuffer {
             resolution,
             buffer_from_world: Mat3::IDENTITY,
@@ -231,10 +236,12 @@ impl IntensityBuffer {
     }
 }
 
-/// The frame of a light pass, shared by the buffer and the Harris baseline: world to
-/// `(x, y, z)` with `y` along the light's travel, and the box in that frame that holds
-/// every particle whole. Making it validates what a light pass is given.
-pub(crate) struct LightFrame {
+/// The frame of a light pass, shared by the buffer, the Harris baseline and the GPU's
+/// light pass: world to `(x, y, z)` with `y` along the light's travel, and the box in
+/// that frame that holds every particle whole. Making it validates what a light pass
+/// is given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightFrame {
     /// World to light-pass axes: rows `x`, `y`, `z`.
     pub from_world: Mat3,
     /// The box's corners, in light-pass axes, m.
@@ -243,7 +250,9 @@ pub(crate) struct LightFrame {
 }
 
 impl LightFrame {
-    pub(crate) fn new(particles: &[Particle], to_sun: Vec3, forward: f32) -> Result<LightFrame> {
+    /// The frame for `particles` lit from `to_sun` (any length), with `forward` the
+    /// forward-scattering share `p(l, l) / 4 pi` in [0, 1].
+    pub fn new(particles: &[Particle], to_sun: Vec3, forward: f32) -> Result<LightFrame> {
         check_range("forward scattering p(l,l)/4pi", forward as f64, 0.0, 1.0)?;
         if particles.is_empty() {
             return Err(Error::Invalid("the cloud has no particles".into()));

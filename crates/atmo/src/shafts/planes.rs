@@ -156,10 +156,7 @@ impl<'a> SamplePlanes<'a> {
                     z_near: lo.max(NEAR_PLANE),
                     z_far: hi.min(camera.far),
                     bounds: extent.4,
-                    lamp_in_haze: scene
-                        .haze
-                        .bounds
-                        .is_none_or(|b| b.contains(light.position)),
+                    lamp_in_haze: scene.haze.bounds.is_none_or(|b| b.contains(light.position)),
                     light_map: LightMap::new(light),
                     eye: light.to_light(camera.position),
                 }

@@ -1,0 +1,413 @@
+//! Clouds on the GPU (clouds 3.3 and 2.2): the 3-D intensity buffer filled
+//! order-independently by a compute pass (every particle adds its `log G` with integer
+//! atomics, then each column is summed along the light), and the particles drawn back
+//! to front as billboards that look the buffer up trilinearly. Translates
+//! `atmo::clouds::buffer` and `atmo::clouds::render`; the buffer lives on the GPU
+//! between the light pass and the draw, so a moving sun costs one light pass and a
+//! moving camera none.
+
+use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
+use atmo::clouds::particles::Particle;
+use atmo::clouds::render::{CloudPhase, Lighting};
+use atmo::image::Frame;
+use atmo::shafts::camera::Camera;
+use glam::Vec3;
+
+use crate::sky::frame_of;
+use crate::{gpu_struct, Gpu, GpuError, Rendered};
+
+gpu_struct! {
+    /// A particle as the shaders read it (32 bytes).
+    pub struct GpuParticle in "clouds_common.wgsl" {
+        /// Centre (m) and radius (m).
+        position_radius: [f32; 4],
+        /// Extinction coefficient at the centre, 1/m.
+        density: f32,
+        albedo: f32,
+        pad0: f32,
+        pad1: f32,
+    }
+}
+
+gpu_struct! {
+    /// The light pass's frame and the buffer's grid (see `atmo::clouds::buffer`).
+    pub struct BufferFrame in "clouds_common.wgsl" {
+        /// Rows of world-to-buffer axes.
+        x_axis: [f32; 4],
+        y_axis: [f32; 4],
+        z_axis: [f32; 4],
+        /// The grid's smallest corner and its voxel size, buffer axes, m.
+        min: [f32; 4],
+        voxel: [f32; 4],
+        resolution: u32,
+        particles: u32,
+        /// 1: `Splat::Pieces`, 0: `Splat::Whole`.
+        pieces: u32,
+        /// `p(l, l) / 4 pi` as f32 bits.
+        forward_bits: u32,
+    }
+}
+
+gpu_struct! {
+    /// The draw's camera and lighting (see clouds_draw.wgsl).
+    pub struct DrawParams in "clouds_common.wgsl clouds_draw.wgsl" {
+        position: [f32; 4],
+        forward: [f32; 4],
+        right: [f32; 4],
+        up: [f32; 4],
+        to_sun: [f32; 4],
+        sun: [f32; 4],
+        ambient: [f32; 4],
+        width: u32,
+        height: u32,
+        pad0: u32,
+        pad1: u32,
+    }
+}
+
+/// Workgroup size of the compute passes (the shaders' `@workgroup_size(64)`).
+const GROUP: u32 = 64;
+
+/// A cloud on the GPU: its particles, its intensity buffer, the passes.
+pub struct GpuClouds {
+    particles: Vec<Particle>,
+    particle_buffer: wgpu::Buffer,
+    resolution: u32,
+    /// ln Gamma, `[x][z][y]` (fixed-point increments during the light pass).
+    cells: wgpu::Buffer,
+    /// The light pass's frame, once it has run.
+    frame: Option<BufferFrame>,
+    splat: wgpu::ComputePipeline,
+    prefix: wgpu::ComputePipeline,
+    draw: wgpu::RenderPipeline,
+}
+
+impl GpuClouds {
+    /// Uploads `particles` and allocates a `resolution`^3 buffer: refused above the
+    /// CPU's budget and the device's buffer limits, before anything is allocated.
+    pub fn new(gpu: &Gpu, particles: &[Particle], resolution: usize) -> Result<Self, GpuError> {
+        IntensityBuffer::check_resolution(resolution)?;
+        let bytes = (resolution as u64).pow(3) * 4;
+        let limits = gpu.limits();
+        for (limit, name) in [
+            (
+                limits.max_storage_buffer_binding_size,
+                "max_storage_buffer_binding_size",
+            ),
+            (limits.max_buffer_size, "max_buffer_size"),
+        ] {
+            gpu.check_limit(
+                &format!("a {resolution}^3 intensity buffer"),
+                bytes,
+                limit,
+                name,
+                "the buffer resolution (--resolution)",
+            )?;
+        }
+        let records: Vec<GpuParticle> = particles
+            .iter()
+            .map(|p| GpuParticle {
+                position_radius: [p.position.x, p.position.y, p.position.z, p.radius],
+                density: p.density,
+                albedo: p.albedo,
+                pad0: 0.0,
+                pad1: 0.0,
+            })
+            .collect();
+        let particle_buffer = gpu.storage(
+            "the particles",
+            bytemuck::cast_slice(&records),
+            "the particle count",
+        )?;
+        let cells = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("the intensity buffer"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let common = include_str!("../shaders/clouds_common.wgsl");
+        let module = |name: &str, source: &str| gpu.shader(name, &format!("{common}\n{source}"));
+        let light = module(
+            "clouds_light.wgsl",
+            include_str!("../shaders/clouds_light.wgsl"),
+        )?;
+        let prefix = module(
+            "clouds_prefix.wgsl",
+            include_str!("../shaders/clouds_prefix.wgsl"),
+        )?;
+        let draw = module(
+            "clouds_draw.wgsl",
+            include_str!("../shaders/clouds_draw.wgsl"),
+        )?;
+        Ok(GpuClouds {
+            particles: particles.to_vec(),
+            particle_buffer,
+            resolution: resolution as u32,
+            cells,
+            frame: None,
+            splat: gpu.compute_pipeline(&light, "main")?,
+            prefix: gpu.compute_pipeline(&prefix, "main")?,
+            draw: gpu.scoped("the billboards", || draw_pipeline(gpu, &draw))?,
+        })
+    }
+
+    /// The light pass for a sun in the direction `to_sun` (any length), as
+    /// `IntensityBuffer::update`; returns the GPU time where timestamps exist, ms.
+    pub fn light(
+        &mut self,
+        gpu: &Gpu,
+        to_sun: Vec3,
+        forward: f32,
+        splat: Splat,
+    ) -> Result<Option<f64>, GpuError> {
+        let light = LightFrame::new(&self.particles, to_sun, forward)?;
+        let voxel = (light.max - light.min) / self.resolution as f32;
+        let row = |v: Vec3| [v.x, v.y, v.z, 0.0];
+        let m = light.from_world;
+        let frame = BufferFrame {
+            x_axis: row(m.row(0)),
+            y_axis: row(m.row(1)),
+            z_axis: row(m.row(2)),
+            min: row(light.min),
+            voxel: row(voxel),
+            resolution: self.resolution,
+            particles: self.particles.len() as u32,
+            pieces: (splat == Splat::Pieces) as u32,
+            forward_bits: forward.to_bits(),
+        };
+        let params = gpu.uniform("the buffer frame", &frame);
+        let splat_group = gpu.bind_group(
+            &self.splat.get_bind_group_layout(0),
+            &[
+                params.as_entire_binding(),
+                self.particle_buffer.as_entire_binding(),
+                self.cells.as_entire_binding(),
+            ],
+        );
+        let prefix_group = gpu.bind_group(
+            &self.prefix.get_bind_group_layout(0),
+            &[params.as_entire_binding(), self.cells.as_entire_binding()],
+        );
+        let groups = |count: u32| {
+            let max = gpu.limits().max_compute_workgroups_per_dimension;
+            (count.min(max), count.div_ceil(max))
+        };
+        let time = gpu.run("the clouds' light pass", |encoder, _| {
+            encoder.clear_buffer(&self.cells, 0, None);
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.splat);
+            pass.set_bind_group(0, &splat_group, &[]);
+            // One workgroup a particle.
+            let (x, y) = groups(frame.particles);
+            pass.dispatch_workgroups(x, y, 1);
+            pass.set_pipeline(&self.prefix);
+            pass.set_bind_group(0, &prefix_group, &[]);
+            let (x, y) = groups((self.resolution * self.resolution).div_ceil(GROUP));
+            pass.dispatch_workgroups(x, y, 1);
+        })?;
+        self.frame = Some(frame);
+        Ok(time)
+    }
+
+    /// The buffer's `ln Gamma`, `[x][z][y]`, as `IntensityBuffer::log_gamma`.
+    pub fn log_gamma(&self, gpu: &Gpu) -> Result<Vec<f32>, GpuError> {
+        let bytes = gpu.read("the intensity buffer", &self.cells, 0, self.cells.size())?;
+        Ok(bytemuck::cast_slice(&bytes).to_vec())
+    }
+
+    /// The cloud seen by `camera` over `background` (or black), as
+    /// `atmo::clouds::render::render`: particles sorted by depth on the CPU, drawn back
+    /// to front. An error before the first light pass.
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        camera: &Camera,
+        light: &Lighting,
+        background: Option<&Frame>,
+    ) -> Result<Rendered, GpuError> {
+        let frame = self.frame.ok_or_else(|| {
+            atmo::Error::Invalid("the clouds need a light pass before they are drawn".into())
+        })?;
+        let (w, h) = (camera.width, camera.height);
+        if let Some(b) = background {
+            if (b.width, b.height) != (w, h) {
+                return Err(atmo::Error::Invalid(format!(
+                    "the background is {} x {}, the camera's image {w} x {h}",
+                    b.width, b.height
+                ))
+                .into());
+            }
+        }
+        let max = gpu.limits().max_texture_dimension_2d;
+        gpu.check_limit(
+            "the image width",
+            w as u64,
+            max as u64,
+            "max_texture_dimension_2d",
+            "the width",
+        )?;
+        gpu.check_limit(
+            "the image height",
+            h as u64,
+            max as u64,
+            "max_texture_dimension_2d",
+            "the height",
+        )?;
+        // Farthest first; ties in reverse index order, the CPU's front-to-back reversed.
+        let depth: Vec<f32> = self
+            .particles
+            .iter()
+            .map(|p| camera.depth(p.position))
+            .collect();
+        let mut order: Vec<u32> = (0..self.particles.len() as u32)
+            .filter(|&k| depth[k as usize] > self.particles[k as usize].radius)
+            .collect();
+        order.sort_by(|&a, &b| {
+            depth[b as usize]
+                .total_cmp(&depth[a as usize])
+                .then(b.cmp(&a))
+        });
+        let order_buffer = gpu.storage(
+            "the draw order",
+            bytemuck::cast_slice(&order),
+            "the particle count",
+        )?;
+        let focal = 0.5 * h as f32 / camera.tan_half_height;
+        let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
+        let (kind, g) = match light.phase {
+            CloudPhase::HenyeyGreenstein { g } => (0.0, g),
+            CloudPhase::CloudMie => (1.0, 0.0),
+        };
+        let params = DrawParams {
+            position: v4(camera.position, focal),
+            forward: v4(camera.forward, camera.tan_half_width),
+            right: v4(camera.right, camera.tan_half_height),
+            up: v4(camera.up, 0.0),
+            to_sun: v4(light.to_sun, kind),
+            sun: v4(light.sun, g),
+            ambient: v4(light.ambient, 0.0),
+            width: w,
+            height: h,
+            pad0: 0,
+            pad1: 0,
+        };
+        let params = gpu.uniform("the cloud draw", &params);
+        let frame_buffer = gpu.uniform("the buffer frame", &frame);
+        let group = gpu.bind_group(
+            &self.draw.get_bind_group_layout(0),
+            &[
+                params.as_entire_binding(),
+                frame_buffer.as_entire_binding(),
+                self.particle_buffer.as_entire_binding(),
+                order_buffer.as_entire_binding(),
+                self.cells.as_entire_binding(),
+            ],
+        );
+        let target = target_texture(gpu, w, h, background);
+        let view = target.create_view(&Default::default());
+        let gpu_ms = gpu.run("the cloud draw", |encoder, _| {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("billboards"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.draw);
+            pass.set_bind_group(0, &group, &[]);
+            pass.draw(0..6, 0..order.len() as u32);
+        })?;
+        let bytes = gpu.read_texture("the cloud frame", &target, w, h)?;
+        Ok(Rendered {
+            frame: frame_of(w, h, &bytes),
+            gpu_ms,
+        })
+    }
+}
+
+/// The billboards' pipeline: premultiplied "over" into an RGBA f32 target.
+fn draw_pipeline(gpu: &Gpu, module: &wgpu::ShaderModule) -> wgpu::RenderPipeline {
+    let over = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+        operation: wgpu::BlendOperation::Add,
+    };
+    gpu.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("billboards"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vertex"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fragment"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: wgpu::TextureFormat::Rgba32Float,
+                    blend: Some(wgpu::BlendState {
+                        color: over,
+                        alpha: over,
+                    }),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            multiview_mask: None,
+            cache: None,
+        })
+}
+
+/// An RGBA f32 render target of `w` x `h`, holding `background` (or black).
+pub(crate) fn target_texture(
+    gpu: &Gpu,
+    w: u32,
+    h: u32,
+    background: Option<&Frame>,
+) -> wgpu::Texture {
+    let size = wgpu::Extent3d {
+        width: w,
+        height: h,
+        depth_or_array_layers: 1,
+    };
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("target"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let pixels: Vec<[f32; 4]> = match background {
+        Some(b) => b.pixels.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect(),
+        None => vec![[0.0; 4]; (w * h) as usize],
+    };
+    gpu.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(&pixels),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * 16),
+            rows_per_image: None,
+        },
+        size,
+    );
+    texture
+}
