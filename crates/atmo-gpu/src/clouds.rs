@@ -147,9 +147,18 @@ impl GpuClouds {
             resolution: resolution as u32,
             cells,
             frame: None,
-            splat: gpu.compute_pipeline(&light, "main")?,
-            prefix: gpu.compute_pipeline(&prefix, "main")?,
-            draw: gpu.scoped("the billboards", || draw_pipeline(gpu, &draw))?,
+            splat: gpu.compute_pipeline(&light, "main", None)?,
+            prefix: gpu.compute_pipeline(&prefix, "main", None)?,
+            // Premultiplied "over": E_k = S_k + T_k E_{k-1}.
+            draw: gpu.blended_pipeline(
+                &draw,
+                None,
+                wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                    operation: wgpu::BlendOperation::Add,
+                },
+            )?,
         })
     }
 
@@ -331,44 +340,6 @@ impl GpuClouds {
             gpu_ms,
         })
     }
-}
-
-/// The billboards' pipeline: premultiplied "over" into an RGBA f32 target.
-fn draw_pipeline(gpu: &Gpu, module: &wgpu::ShaderModule) -> wgpu::RenderPipeline {
-    let over = wgpu::BlendComponent {
-        src_factor: wgpu::BlendFactor::One,
-        dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-        operation: wgpu::BlendOperation::Add,
-    };
-    gpu.device
-        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("billboards"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some("vertex"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some("fragment"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: wgpu::TextureFormat::Rgba32Float,
-                    blend: Some(wgpu::BlendState {
-                        color: over,
-                        alpha: over,
-                    }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        })
 }
 
 /// An RGBA f32 render target of `w` x `h`, holding `background` (or black).

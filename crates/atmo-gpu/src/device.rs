@@ -198,20 +198,64 @@ impl Gpu {
         })
     }
 
-    /// A compute pipeline of `entry` in `module`, with its layout inferred.
+    /// A compute pipeline of `entry` in `module`, with `layout` or, without one, the
+    /// layout inferred from the shader.
     pub fn compute_pipeline(
         &self,
         module: &wgpu::ShaderModule,
         entry: &str,
+        layout: Option<&wgpu::PipelineLayout>,
     ) -> Result<wgpu::ComputePipeline, GpuError> {
         self.scoped(entry, || {
             self.device
                 .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(entry),
-                    layout: None,
+                    layout,
                     module,
                     entry_point: Some(entry),
                     compilation_options: Default::default(),
+                    cache: None,
+                })
+        })
+    }
+
+    /// A render pipeline drawing `vertex` and `fragment` of `module` (no vertex
+    /// buffers) into one RGBA f32 target with `blend`, e.g. additive planes or
+    /// premultiplied "over" billboards.
+    pub fn blended_pipeline(
+        &self,
+        module: &wgpu::ShaderModule,
+        layout: Option<&wgpu::PipelineLayout>,
+        blend: wgpu::BlendComponent,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        self.scoped("a render pipeline", || {
+            self.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: None,
+                    layout,
+                    vertex: wgpu::VertexState {
+                        module,
+                        entry_point: Some("vertex"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    fragment: Some(wgpu::FragmentState {
+                        module,
+                        entry_point: Some("fragment"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: wgpu::TextureFormat::Rgba32Float,
+                            blend: Some(wgpu::BlendState {
+                                color: blend,
+                                alpha: blend,
+                            }),
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    primitive: Default::default(),
+                    depth_stencil: None,
+                    multisample: Default::default(),
+                    multiview_mask: None,
                     cache: None,
                 })
         })

@@ -11,6 +11,7 @@
 pub mod clouds;
 pub mod device;
 pub mod layout;
+pub mod shafts;
 pub mod sky;
 
 pub use device::Gpu;

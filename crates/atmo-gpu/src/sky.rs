@@ -92,8 +92,8 @@ impl<'a> GpuSkyTable<'a> {
             order,
             used,
             map,
-            map_pass: gpu.compute_pipeline(&map_module, "main")?,
-            frame_pass: gpu.compute_pipeline(&frame_module, "main")?,
+            map_pass: gpu.compute_pipeline(&map_module, "main", None)?,
+            frame_pass: gpu.compute_pipeline(&frame_module, "main", None)?,
         })
     }
 

@@ -56,3 +56,9 @@ fn cloud_structs_match_their_wgsl() {
     check::<atmo_gpu::clouds::BufferFrame>();
     check::<atmo_gpu::clouds::DrawParams>();
 }
+
+#[test]
+fn shafts_structs_match_their_wgsl() {
+    check::<atmo_gpu::shafts::ShaftsParams>();
+    check::<atmo_gpu::shafts::GpuLight>();
+}

@@ -125,11 +125,18 @@ impl Objects {
     /// The objects that may meet a ray from `light` inside its field cone (by their
     /// bounding spheres; unbounded planes always): what its shadow map is traced against.
     pub fn in_cone(&self, light: &super::spotlight::Spotlight) -> Vec<&Object> {
+        self.indices_in_cone(light)
+            .into_iter()
+            .map(|i| &self.list[i as usize])
+            .collect()
+    }
+
+    /// The indices in `list` of the objects [`Objects::in_cone`] gives.
+    pub fn indices_in_cone(&self, light: &super::spotlight::Spotlight) -> Vec<u32> {
         let (sin, cos) = light.field_half.sin_cos();
         let axis = light.light_from_world.row(2);
-        self.list
-            .iter()
-            .filter(|o| match o.shape.bounds() {
+        (0..self.list.len() as u32)
+            .filter(|&i| match self.list[i as usize].shape.bounds() {
                 None => true,
                 Some(b) => {
                     // A sphere meets the cone when its centre is within its radius of it:
@@ -321,6 +328,18 @@ impl Mesh {
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.triangles.len()
+    }
+
+    /// The triangles as the BVH orders them, each as `[a, b - a, c - a]`.
+    pub fn triangles(&self) -> &[[Vec3; 3]] {
+        &self.triangles
+    }
+
+    /// The BVH, depth first from the root: `(bounds, start, count)`; a leaf holds
+    /// triangles `start..start + count`, an inner node (`count` 0) has its first child
+    /// next to it and its second at `start`.
+    pub fn nodes(&self) -> impl Iterator<Item = (Aabb, u32, u32)> + '_ {
+        self.nodes.iter().map(|n| (n.bounds, n.start, n.count))
     }
 
     /// True when the mesh has no triangles.

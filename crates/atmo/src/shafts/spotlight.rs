@@ -120,6 +120,12 @@ impl Spotlight {
         self.tan_field
     }
 
+    /// `tan(beam / 2)`.
+    #[inline]
+    pub fn tan_beam(&self) -> f32 {
+        self.tan_beam
+    }
+
     /// The light-space position of the world point `p`.
     #[inline]
     pub fn to_light(&self, p: Vec3) -> Vec3 {

@@ -17,7 +17,8 @@ use super::spotlight::Spotlight;
 /// `F(alpha)`, the haze's phase function in 1/sr, tabulated.
 #[derive(Debug, Clone)]
 pub struct PhaseTable {
-    values: Vec<f32>,
+    /// `F` at `sin(alpha/2) = k / (SIZE - 1)`, 1/sr.
+    pub values: Vec<f32>,
 }
 
 impl PhaseTable {
@@ -57,10 +58,12 @@ fn lerp_1d(values: &[f32], x: f32) -> f32 {
 /// would need a square root and an arc-tangent. The gobo, if any, stays an image.
 #[derive(Debug, Clone)]
 pub struct LightMap {
-    values: Vec<f32>,
+    /// The profile at `q = q_beam + k / scale`.
+    pub values: Vec<f32>,
     /// Below this `q` the profile is 1 (inside the beam).
-    q_beam: f32,
-    scale: f32,
+    pub q_beam: f32,
+    /// Table entries per unit of `q`.
+    pub scale: f32,
 }
 
 impl LightMap {

@@ -1,0 +1,563 @@
+//! Light shafts on the GPU by the paper's method (shafts 4): per frame, the shadow maps
+//! of every light by one ray a texel (with the extents of the lit volumes), the planes'
+//! depth ranges and the attenuation table, the surfaces, then the sample planes drawn
+//! as screen-parallel quads blended additively ([`ShaftsMethod::Planes`], the default)
+//! or the same sums in one compute pass ([`ShaftsMethod::Compute`]). Everything stays
+//! on the GPU from the scene's upload to the finished picture. Translates
+//! `atmo::shafts::SamplePlanes::render`, which the tests hold it to.
+
+use atmo::shafts::objects::Shape;
+use atmo::shafts::spotlight::{Falloff, Sampling};
+use atmo::shafts::tables::{AttenuationTable, LightMap, PhaseTable};
+use atmo::shafts::Scene;
+use glam::Vec3;
+
+use crate::sky::{frame_of, output};
+use crate::{gpu_struct, Gpu, GpuError, Rendered};
+
+gpu_struct! {
+    /// The scene's camera, haze and sizes (see shafts_common.wgsl).
+    pub struct ShaftsParams in "shafts_common.wgsl" {
+        position: [f32; 4],
+        forward: [f32; 4],
+        right: [f32; 4],
+        up: [f32; 4],
+        haze_min: [f32; 4],
+        haze_max: [f32; 4],
+        width: u32,
+        height: u32,
+        supersampling: u32,
+        lights: u32,
+        planes: u32,
+        sub_planes: u32,
+        shadow_size: u32,
+        haze_box: u32,
+        objects: u32,
+        nodes_at: u32,
+        triangles_at: u32,
+        phase_size: u32,
+        light_map_size: u32,
+        attenuation_size: u32,
+        pad0: u32,
+        pad1: u32,
+    }
+}
+
+gpu_struct! {
+    /// One spotlight (see shafts_common.wgsl).
+    pub struct GpuLight in "shafts_common.wgsl" {
+        position: [f32; 4],
+        x_axis: [f32; 4],
+        y_axis: [f32; 4],
+        z_axis: [f32; 4],
+        intensity: [f32; 4],
+        field_half: f32,
+        falloff: u32,
+        gobo: u32,
+        gobo_at: u32,
+        gobo_width: u32,
+        gobo_height: u32,
+        cone_at: u32,
+        cone_count: u32,
+    }
+}
+
+/// How the planes' sums are taken on the GPU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ShaftsMethod {
+    /// The paper's: a quad per plane (and sub-pixel ray), blended additively.
+    #[default]
+    Planes,
+    /// The same sums per pixel in one compute pass.
+    Compute,
+}
+
+/// Floats per light in the `derived` buffer (planes), then 4 table scales.
+const PLANE_FLOATS: u64 = 12;
+
+/// A scene uploaded, with its passes.
+pub struct GpuShafts {
+    params: ShaftsParams,
+    /// Per light, 10 initial extents (order-preserving encodings).
+    extents_init: Vec<u32>,
+    extents: wgpu::Buffer,
+    out: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    shadow: wgpu::ComputePipeline,
+    prepare: wgpu::ComputePipeline,
+    attenuation: wgpu::ComputePipeline,
+    surface: wgpu::ComputePipeline,
+    compute: wgpu::ComputePipeline,
+    planes: wgpu::RenderPipeline,
+    composite: wgpu::ComputePipeline,
+    /// The planes' render target.
+    target: wgpu::Texture,
+}
+
+impl GpuShafts {
+    /// Uploads `scene` (objects, lights, gobos, the phase table and light maps) and
+    /// allocates the frame's buffers, each checked against the device's limits first.
+    pub fn new(gpu: &Gpu, scene: &Scene) -> Result<Self, GpuError> {
+        let camera = &scene.camera;
+        let (w, h, k) = (camera.width, camera.height, camera.supersampling);
+        let lights = scene.lights.len() as u32;
+        let size = scene.planes.shadow_map;
+        let limits = gpu.limits();
+        let max_2d = limits.max_texture_dimension_2d as u64;
+        let dim = "max_texture_dimension_2d";
+        gpu.check_limit("the image width", w as u64, max_2d, dim, "camera.width")?;
+        gpu.check_limit("the image height", h as u64, max_2d, dim, "camera.height")?;
+        gpu.check_limit(
+            "the light maps",
+            lights.max(1) as u64,
+            max_2d,
+            dim,
+            "the number of lights",
+        )?;
+        let geometry = Geometry::of(scene);
+        let layout = bind_group_layout(gpu);
+        let storage = |what: &str, bytes: u64, setting: &str| -> Result<wgpu::Buffer, GpuError> {
+            let buffer = output(gpu, what, bytes, setting)?;
+            Ok(buffer)
+        };
+        let depth = storage(
+            "the shadow maps",
+            lights.max(1) as u64 * (size as u64).pow(2) * 4,
+            "render.shadow_map",
+        )?;
+        let extents = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("the lit volumes' extents"),
+            size: 40 * lights.max(1) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let n = AttenuationTable::SIZE as u64;
+        let derived = storage(
+            "the planes and the attenuation table",
+            4 * (PLANE_FLOATS * lights.max(1) as u64 + 4 + n * n),
+            "the number of lights",
+        )?;
+        let pixels = w as u64 * h as u64;
+        let ends = storage(
+            "the rays' ends",
+            pixels * (k * k) as u64 * 4,
+            "camera.width, camera.height or render.supersampling",
+        )?;
+        let out = storage("the picture", pixels * 16, "camera.width or camera.height")?;
+        let params = ShaftsParams {
+            position: v4(camera.position, camera.far),
+            forward: v4(camera.forward, camera.tan_half_width),
+            right: v4(camera.right, camera.tan_half_height),
+            up: v4(camera.up, 1.0 / (k * k) as f32),
+            haze_min: v4(
+                scene.haze.bounds.map_or(Vec3::ZERO, |b| b.min),
+                scene.haze.extinction,
+            ),
+            haze_max: v4(
+                scene.haze.bounds.map_or(Vec3::ZERO, |b| b.max),
+                scene.haze.scattering(),
+            ),
+            width: w,
+            height: h,
+            supersampling: k,
+            lights,
+            planes: scene.planes.planes,
+            sub_planes: scene.planes.sub_planes,
+            shadow_size: size,
+            haze_box: scene.haze.bounds.is_some() as u32,
+            objects: scene.objects.list.len() as u32,
+            nodes_at: geometry.nodes_at,
+            triangles_at: geometry.triangles_at,
+            phase_size: PhaseTable::SIZE as u32,
+            light_map_size: LightMap::SIZE as u32,
+            attenuation_size: AttenuationTable::SIZE as u32,
+            pad0: 0,
+            pad1: 0,
+        };
+        let uniform = gpu.uniform("the shafts' parameters", &params);
+        let light_records = gpu.storage(
+            "the lights",
+            bytemuck::cast_slice(&geometry.lights),
+            "the number of lights",
+        )?;
+        let geometry_buffer = gpu.storage(
+            "the objects, meshes and gobos",
+            bytemuck::cast_slice(&geometry.values),
+            "the mesh sizes or the gobo images",
+        )?;
+        let phase = PhaseTable::new(&scene.haze);
+        let phase_texture = table_texture(gpu, &phase.values, PhaseTable::SIZE as u32, 1);
+        let maps: Vec<f32> = scene
+            .lights
+            .iter()
+            .flat_map(|l| LightMap::new(l).values)
+            .collect();
+        let maps = if maps.is_empty() {
+            vec![0.0; LightMap::SIZE]
+        } else {
+            maps
+        };
+        let map_texture = table_texture(gpu, &maps, LightMap::SIZE as u32, lights.max(1));
+        let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("the planes"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let phase_view = phase_texture.create_view(&Default::default());
+        let map_view = map_texture.create_view(&Default::default());
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shafts"),
+            layout: &layout,
+            entries: &[
+                entry(0, uniform.as_entire_binding()),
+                entry(1, light_records.as_entire_binding()),
+                entry(2, geometry_buffer.as_entire_binding()),
+                entry(3, wgpu::BindingResource::TextureView(&phase_view)),
+                entry(4, wgpu::BindingResource::TextureView(&map_view)),
+                entry(5, depth.as_entire_binding()),
+                entry(6, extents.as_entire_binding()),
+                entry(7, derived.as_entire_binding()),
+                entry(8, ends.as_entire_binding()),
+                entry(9, out.as_entire_binding()),
+            ],
+        });
+        let pipeline_layout = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("shafts"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+        let common = include_str!("../shaders/shafts_common.wgsl");
+        let module = |name: &str, source: &str| gpu.shader(name, &format!("{common}\n{source}"));
+        let shadow = module(
+            "shafts_shadow.wgsl",
+            include_str!("../shaders/shafts_shadow.wgsl"),
+        )?;
+        let prepare = module(
+            "shafts_prepare.wgsl",
+            include_str!("../shaders/shafts_prepare.wgsl"),
+        )?;
+        let surface = module(
+            "shafts_surface.wgsl",
+            include_str!("../shaders/shafts_surface.wgsl"),
+        )?;
+        let compute = module(
+            "shafts_compute.wgsl",
+            include_str!("../shaders/shafts_compute.wgsl"),
+        )?;
+        let planes = module(
+            "shafts_planes.wgsl",
+            include_str!("../shaders/shafts_planes.wgsl"),
+        )?;
+        let composite = gpu.shader(
+            "shafts_composite.wgsl",
+            include_str!("../shaders/shafts_composite.wgsl"),
+        )?;
+        let with = Some(&pipeline_layout);
+        let mut extents_init = Vec::new();
+        for _ in 0..lights {
+            let (lo, hi, zero) = (
+                encode(f32::INFINITY),
+                encode(f32::NEG_INFINITY),
+                encode(0.0),
+            );
+            extents_init.extend([lo, hi, zero, zero, lo, lo, lo, hi, hi, hi]);
+        }
+        Ok(GpuShafts {
+            params,
+            extents_init,
+            extents,
+            out,
+            group,
+            shadow: gpu.compute_pipeline(&shadow, "main", with)?,
+            prepare: gpu.compute_pipeline(&prepare, "planes", with)?,
+            attenuation: gpu.compute_pipeline(&prepare, "attenuation_table", with)?,
+            surface: gpu.compute_pipeline(&surface, "main", with)?,
+            compute: gpu.compute_pipeline(&compute, "main", with)?,
+            // Additive: the planes' terms sum up (shafts (7)).
+            planes: gpu.blended_pipeline(
+                &planes,
+                Some(&pipeline_layout),
+                wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                },
+            )?,
+            composite: gpu.compute_pipeline(&composite, "main", None)?,
+            target,
+        })
+    }
+
+    /// The picture, as `SamplePlanes::new(scene).render()` on the CPU.
+    pub fn render(&self, gpu: &Gpu, method: ShaftsMethod) -> Result<Rendered, GpuError> {
+        let p = &self.params;
+        gpu.queue
+            .write_buffer(&self.extents, 0, bytemuck::cast_slice(&self.extents_init));
+        let view = self.target.create_view(&Default::default());
+        let composite_group = gpu.bind_group(
+            &self.composite.get_bind_group_layout(0),
+            &[
+                wgpu::BindingResource::TextureView(&view),
+                self.out.as_entire_binding(),
+            ],
+        );
+        let gpu_ms = gpu.run("the light shafts", |encoder, _| {
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_bind_group(0, &self.group, &[]);
+                if p.lights > 0 {
+                    pass.set_pipeline(&self.shadow);
+                    let groups = p.shadow_size.div_ceil(8);
+                    pass.dispatch_workgroups(groups, groups, p.lights);
+                }
+                pass.set_pipeline(&self.prepare);
+                pass.dispatch_workgroups(1, 1, 1);
+                pass.set_pipeline(&self.attenuation);
+                let groups = p.attenuation_size.div_ceil(16);
+                pass.dispatch_workgroups(groups, groups, 1);
+                pass.set_pipeline(&self.surface);
+                pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
+                if method == ShaftsMethod::Compute {
+                    pass.set_pipeline(&self.compute);
+                    pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
+                }
+            }
+            if method == ShaftsMethod::Planes {
+                {
+                    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some("sample planes"),
+                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                            view: &view,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                                store: wgpu::StoreOp::Store,
+                            },
+                        })],
+                        ..Default::default()
+                    });
+                    pass.set_pipeline(&self.planes);
+                    pass.set_bind_group(0, &self.group, &[]);
+                    let quads = p.lights * p.planes * p.supersampling * p.supersampling;
+                    pass.draw(0..3, 0..quads);
+                }
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.composite);
+                pass.set_bind_group(0, &composite_group, &[]);
+                pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
+            }
+        })?;
+        let bytes = gpu.read("the light shafts", &self.out, 0, self.out.size())?;
+        Ok(Rendered {
+            frame: frame_of(p.width, p.height, &bytes),
+            gpu_ms,
+        })
+    }
+}
+
+fn v4(v: Vec3, w: f32) -> [f32; 4] {
+    [v.x, v.y, v.z, w]
+}
+
+/// A float as a u32 whose unsigned order is the float's (shafts_shadow.wgsl's `encode`).
+fn encode(f: f32) -> u32 {
+    let b = f.to_bits();
+    if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    }
+}
+
+fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource }
+}
+
+/// The one layout of every shafts pass (shafts_common.wgsl's bindings).
+fn bind_group_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
+    let visible = wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT;
+    let buffer =
+        |binding: u32, ty: wgpu::BufferBindingType, visibility| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+    let storage = |binding: u32, read_only: bool| {
+        buffer(
+            binding,
+            wgpu::BufferBindingType::Storage { read_only },
+            visible,
+        )
+    };
+    let texture = |binding: u32| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: visible,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    gpu.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shafts"),
+            entries: &[
+                buffer(
+                    0,
+                    wgpu::BufferBindingType::Uniform,
+                    visible | wgpu::ShaderStages::VERTEX,
+                ),
+                storage(1, true),
+                storage(2, true),
+                texture(3),
+                texture(4),
+                storage(5, false),
+                storage(6, false),
+                storage(7, false),
+                storage(8, false),
+                storage(9, false),
+            ],
+        })
+}
+
+/// An R32 float texture of `width` x `rows` holding `values` row after row.
+fn table_texture(gpu: &Gpu, values: &[f32], width: u32, rows: u32) -> wgpu::Texture {
+    let size = wgpu::Extent3d {
+        width,
+        height: rows,
+        depth_or_array_layers: 1,
+    };
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("table"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::R32Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    gpu.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(values),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(width * 4),
+            rows_per_image: None,
+        },
+        size,
+    );
+    texture
+}
+
+/// The scene's static data as the shaders read it.
+struct Geometry {
+    lights: Vec<GpuLight>,
+    /// Objects, nodes, triangles, cone lists and gobo texels (see shafts_common.wgsl).
+    values: Vec<[f32; 4]>,
+    nodes_at: u32,
+    triangles_at: u32,
+}
+
+impl Geometry {
+    fn of(scene: &Scene) -> Geometry {
+        let list = &scene.objects.list;
+        let bits = |u: u32| f32::from_bits(u);
+        let (mut nodes, mut triangles) = (Vec::new(), Vec::new());
+        let mut values: Vec<[f32; 4]> = Vec::with_capacity(4 * list.len());
+        for object in list {
+            let (kind, a, b, c) = match &object.shape {
+                Shape::Plane { point, normal } => (0, v4(*point, 0.0), v4(*normal, 0.0), [0.0; 4]),
+                Shape::Rect {
+                    corner,
+                    edge_a,
+                    edge_b,
+                } => (1, v4(*corner, 0.0), v4(*edge_a, 0.0), v4(*edge_b, 0.0)),
+                Shape::Sphere { center, radius } => (2, v4(*center, *radius), [0.0; 4], [0.0; 4]),
+                Shape::Box(aabb) => (3, v4(aabb.min, 0.0), v4(aabb.max, 0.0), [0.0; 4]),
+                Shape::Mesh(mesh) => {
+                    let root = (nodes.len() / 2) as u32;
+                    let first = (triangles.len() / 3) as u32;
+                    for (bounds, start, count) in mesh.nodes() {
+                        nodes.push(v4(bounds.min, bits(start)));
+                        nodes.push(v4(bounds.max, bits(count)));
+                    }
+                    for t in mesh.triangles() {
+                        triangles.extend(t.iter().map(|v| v4(*v, 0.0)));
+                    }
+                    (4, [bits(root), bits(first), 0.0, 0.0], [0.0; 4], [0.0; 4])
+                }
+            };
+            values.extend([a, b, c, v4(object.albedo, bits(kind))]);
+        }
+        let nodes_at = values.len() as u32;
+        values.extend(nodes);
+        let triangles_at = values.len() as u32;
+        values.extend(triangles);
+        let lights = scene
+            .lights
+            .iter()
+            .map(|light| {
+                let cone = scene.objects.indices_in_cone(light);
+                let cone_at = values.len() as u32;
+                values.extend(
+                    cone.chunks(4)
+                        .map(|c| std::array::from_fn(|i| bits(c.get(i).copied().unwrap_or(0)))),
+                );
+                let (gobo, gobo_at, gobo_width, gobo_height) = match &light.gobo {
+                    None => (0, 0, 0, 0),
+                    Some(g) => {
+                        let at = values.len() as u32;
+                        values.extend(g.texels.iter().map(|t| v4(*t, 0.0)));
+                        let sampling = match g.sampling {
+                            Sampling::Nearest => 1,
+                            Sampling::Bilinear => 2,
+                        };
+                        (sampling, at, g.width as u32, g.height as u32)
+                    }
+                };
+                let map = LightMap::new(light);
+                let m = light.light_from_world;
+                GpuLight {
+                    position: v4(light.position, light.tan_field()),
+                    x_axis: v4(m.row(0), map.q_beam),
+                    y_axis: v4(m.row(1), map.scale),
+                    z_axis: v4(m.row(2), light.tan_beam()),
+                    intensity: v4(light.intensity, light.beam_half),
+                    field_half: light.field_half,
+                    falloff: (light.falloff == Falloff::Smooth) as u32,
+                    gobo,
+                    gobo_at,
+                    gobo_width,
+                    gobo_height,
+                    cone_at,
+                    cone_count: cone.len() as u32,
+                }
+            })
+            .collect();
+        Geometry {
+            lights,
+            values,
+            nodes_at,
+            triangles_at,
+        }
+    }
+}
