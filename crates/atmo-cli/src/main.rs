@@ -3,6 +3,7 @@
 //! Exit codes: 0 on success, 2 for bad input (a message names the field and the
 //! allowed range; no output file is left behind), 1 for anything else.
 
+mod backend;
 mod bench;
 mod bench_clouds;
 mod bench_shafts;
@@ -50,6 +51,11 @@ enum Command {
 }
 
 fn main() {
+    // Silences Mesa's device-select layer ("XDG_RUNTIME_DIR is invalid") on headless
+    // machines; set before any thread starts, so no other code reads the environment.
+    if std::env::var_os("NODEVICE_SELECT").is_none() {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Sky(args) => sky::run(args),

@@ -8,8 +8,10 @@ use anyhow::Result;
 use atmo::image::{check_folder, Display, Frame, ImageKind};
 use atmo::reference::shafts::RayMarcher;
 use atmo::shafts::{SamplePlanes, Scene};
-use clap::Args;
+use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};
+use clap::{Args, ValueEnum};
 
+use crate::backend::{gpu_error, Backend, BackendArgs};
 use crate::sky::ToneMapArg;
 
 #[derive(Args)]
@@ -50,6 +52,28 @@ pub struct ShaftsArgs {
     /// Tone map for PNG output (overrides display.tone_map).
     #[arg(long, value_enum)]
     tone_map: Option<ToneMapArg>,
+    #[command(flatten)]
+    device: BackendArgs,
+    /// On the GPU: the planes drawn as additive quads (the paper's), or the same sums
+    /// in one compute pass.
+    #[arg(long, value_enum, default_value_t = GpuMethod::Planes)]
+    gpu_method: GpuMethod,
+}
+
+/// `--gpu-method`.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum GpuMethod {
+    Planes,
+    Compute,
+}
+
+impl From<GpuMethod> for ShaftsMethod {
+    fn from(m: GpuMethod) -> Self {
+        match m {
+            GpuMethod::Planes => ShaftsMethod::Planes,
+            GpuMethod::Compute => ShaftsMethod::Compute,
+        }
+    }
 }
 
 /// The scene of `path` with the command line's overrides, validated.
@@ -83,8 +107,37 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
     if let Some(t) = args.tone_map {
         display.tone = t.into();
     }
+    if args.reference && args.device.backend == Backend::Gpu {
+        return Err(atmo::Error::Invalid(
+            "--reference runs on the CPU only; leave out --backend gpu".into(),
+        )
+        .into());
+    }
+    let gpu = if args.reference {
+        None
+    } else {
+        args.device.open()?
+    };
     let start = Instant::now();
-    let (frame, method): (Frame, String) = if args.reference {
+    let (frame, method): (Frame, String) = if let Some(gpu) = &gpu {
+        let shafts = GpuShafts::new(gpu, &scene).map_err(gpu_error)?;
+        let rendered = shafts
+            .render(gpu, args.gpu_method.into())
+            .map_err(gpu_error)?;
+        (
+            rendered.frame,
+            format!(
+                "{} planes x {} sub-planes, {}^2 shadow maps on the GPU ({:?}{})",
+                scene.planes.planes,
+                scene.planes.sub_planes,
+                scene.planes.shadow_map,
+                ShaftsMethod::from(args.gpu_method),
+                rendered
+                    .gpu_ms
+                    .map_or(String::new(), |ms| format!(", {ms:.1} ms of GPU time"))
+            ),
+        )
+    } else if args.reference {
         let marcher = if args.baseline {
             RayMarcher::baseline(&scene)
         } else {

@@ -471,6 +471,12 @@ fn plane_term(k: u32, plane: u32, q: u32, x: u32, y: u32) -> vec3<f32> {
     let end = ends[q * params.width * params.height + y * params.width + x];
     let box_min = vec3<f32>(derived[pa + 4u], derived[pa + 5u], derived[pa + 6u]);
     let box_max = vec3<f32>(derived[pa + 8u], derived[pa + 9u], derived[pa + 10u]);
+    // Where the ray is in the lit volume's box before the surface, as camera depths: a
+    // slice outside it has nothing to add (the per-sample tests below would all fail).
+    let span = clip_box(box_min, box_max, eye, safe_recip(dir), 0.0, end) / len;
+    if span.x > span.y || span.y < z_near + f32(plane) * dz || span.x > z_near + f32(plane + 1u) * dz {
+        return vec3<f32>(0.0);
+    }
     let origin = vec3<f32>(derived[pa], derived[pa + 1u], derived[pa + 2u]);
     let step = light_dir(l, ray);
     let offset = interleaved_offset(x, y);

@@ -83,6 +83,8 @@ pub struct GpuShafts {
     extents: wgpu::Buffer,
     out: wgpu::Buffer,
     group: wgpu::BindGroup,
+    /// The same resources, read-only, for the planes' render pass.
+    render_group: wgpu::BindGroup,
     shadow: wgpu::ComputePipeline,
     prepare: wgpu::ComputePipeline,
     attenuation: wgpu::ComputePipeline,
@@ -115,7 +117,6 @@ impl GpuShafts {
             "the number of lights",
         )?;
         let geometry = Geometry::of(scene);
-        let layout = bind_group_layout(gpu);
         let storage = |what: &str, bytes: u64, setting: &str| -> Result<wgpu::Buffer, GpuError> {
             let buffer = output(gpu, what, bytes, setting)?;
             Ok(buffer)
@@ -214,28 +215,35 @@ impl GpuShafts {
         });
         let phase_view = phase_texture.create_view(&Default::default());
         let map_view = map_texture.create_view(&Default::default());
-        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shafts"),
-            layout: &layout,
-            entries: &[
-                entry(0, uniform.as_entire_binding()),
-                entry(1, light_records.as_entire_binding()),
-                entry(2, geometry_buffer.as_entire_binding()),
-                entry(3, wgpu::BindingResource::TextureView(&phase_view)),
-                entry(4, wgpu::BindingResource::TextureView(&map_view)),
-                entry(5, depth.as_entire_binding()),
-                entry(6, extents.as_entire_binding()),
-                entry(7, derived.as_entire_binding()),
-                entry(8, ends.as_entire_binding()),
-                entry(9, out.as_entire_binding()),
-            ],
-        });
-        let pipeline_layout = gpu
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("shafts"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
+        // The compute passes write the frame's buffers; the render pass only reads them,
+        // through the same bindings declared read-only (so its vertex stage may too).
+        let [(compute_layout, group), (render_layout, render_group)] =
+            [false, true].map(|read_only| {
+                let layout = bind_group_layout(gpu, read_only);
+                let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("shafts"),
+                    layout: &layout,
+                    entries: &[
+                        entry(0, uniform.as_entire_binding()),
+                        entry(1, light_records.as_entire_binding()),
+                        entry(2, geometry_buffer.as_entire_binding()),
+                        entry(3, wgpu::BindingResource::TextureView(&phase_view)),
+                        entry(4, wgpu::BindingResource::TextureView(&map_view)),
+                        entry(5, depth.as_entire_binding()),
+                        entry(6, extents.as_entire_binding()),
+                        entry(7, derived.as_entire_binding()),
+                        entry(8, ends.as_entire_binding()),
+                        entry(9, out.as_entire_binding()),
+                    ],
+                });
+                let layout = gpu
+                    .device
+                    .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                        label: Some("shafts"),
+                        bind_group_layouts: &[Some(&layout)],
+                        immediate_size: 0,
+                    });
+                (layout, group)
             });
         let common = include_str!("../shaders/shafts_common.wgsl");
         let module = |name: &str, source: &str| gpu.shader(name, &format!("{common}\n{source}"));
@@ -255,15 +263,21 @@ impl GpuShafts {
             "shafts_compute.wgsl",
             include_str!("../shaders/shafts_compute.wgsl"),
         )?;
-        let planes = module(
+        let read_only_common = common
+            .replace("var<storage, read_write>", "var<storage, read>")
+            .replace("array<atomic<u32>>", "array<u32>");
+        let planes = gpu.shader(
             "shafts_planes.wgsl",
-            include_str!("../shaders/shafts_planes.wgsl"),
+            &format!(
+                "{read_only_common}\n{}",
+                include_str!("../shaders/shafts_planes.wgsl")
+            ),
         )?;
         let composite = gpu.shader(
             "shafts_composite.wgsl",
             include_str!("../shaders/shafts_composite.wgsl"),
         )?;
-        let with = Some(&pipeline_layout);
+        let with = Some(&compute_layout);
         let mut extents_init = Vec::new();
         for _ in 0..lights {
             let (lo, hi, zero) = (
@@ -279,6 +293,7 @@ impl GpuShafts {
             extents,
             out,
             group,
+            render_group,
             shadow: gpu.compute_pipeline(&shadow, "main", with)?,
             prepare: gpu.compute_pipeline(&prepare, "planes", with)?,
             attenuation: gpu.compute_pipeline(&prepare, "attenuation_table", with)?,
@@ -287,7 +302,7 @@ impl GpuShafts {
             // Additive: the planes' terms sum up (shafts (7)).
             planes: gpu.blended_pipeline(
                 &planes,
-                Some(&pipeline_layout),
+                Some(&render_layout),
                 wgpu::BlendComponent {
                     src_factor: wgpu::BlendFactor::One,
                     dst_factor: wgpu::BlendFactor::One,
@@ -349,9 +364,9 @@ impl GpuShafts {
                         ..Default::default()
                     });
                     pass.set_pipeline(&self.planes);
-                    pass.set_bind_group(0, &self.group, &[]);
+                    pass.set_bind_group(0, &self.render_group, &[]);
                     let quads = p.lights * p.planes * p.supersampling * p.supersampling;
-                    pass.draw(0..3, 0..quads);
+                    pass.draw(0..6, 0..quads);
                 }
                 let mut pass = encoder.begin_compute_pass(&Default::default());
                 pass.set_pipeline(&self.composite);
@@ -385,9 +400,14 @@ fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEn
     wgpu::BindGroupEntry { binding, resource }
 }
 
-/// The one layout of every shafts pass (shafts_common.wgsl's bindings).
-fn bind_group_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
-    let visible = wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT;
+/// The layout of shafts_common.wgsl's bindings: for the compute passes, or read-only
+/// for the render pass (whose vertex stage reads the lit volumes' boxes).
+fn bind_group_layout(gpu: &Gpu, read_only: bool) -> wgpu::BindGroupLayout {
+    let visible = if read_only {
+        wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT
+    } else {
+        wgpu::ShaderStages::COMPUTE
+    };
     let buffer =
         |binding: u32, ty: wgpu::BufferBindingType, visibility| wgpu::BindGroupLayoutEntry {
             binding,
@@ -399,10 +419,12 @@ fn bind_group_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
             },
             count: None,
         };
-    let storage = |binding: u32, read_only: bool| {
+    let storage = |binding: u32, only_read: bool| {
         buffer(
             binding,
-            wgpu::BufferBindingType::Storage { read_only },
+            wgpu::BufferBindingType::Storage {
+                read_only: only_read || read_only,
+            },
             visible,
         )
     };
@@ -420,11 +442,7 @@ fn bind_group_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
         .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shafts"),
             entries: &[
-                buffer(
-                    0,
-                    wgpu::BufferBindingType::Uniform,
-                    visible | wgpu::ShaderStages::VERTEX,
-                ),
+                buffer(0, wgpu::BufferBindingType::Uniform, visible),
                 storage(1, true),
                 storage(2, true),
                 texture(3),
