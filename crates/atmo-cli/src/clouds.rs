@@ -19,6 +19,10 @@ use atmo::sky::{SkyModel, SkySettings, Sun};
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 
+use atmo_gpu::clouds::GpuClouds;
+use atmo_gpu::Gpu;
+
+use crate::backend::{gpu_error, BackendArgs};
 use crate::sky::ToneMapArg;
 use crate::sky_table::write_animation;
 
@@ -108,6 +112,67 @@ pub struct CloudsArgs {
     /// with --animate, a folder.
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
+    #[command(flatten)]
+    device: BackendArgs,
+}
+
+/// The light pass and the drawing, on the CPU or the GPU.
+enum Renderer {
+    /// The buffer and its resolution (none before the first light pass).
+    Cpu(Option<IntensityBuffer>, usize),
+    Gpu(Gpu, GpuClouds),
+}
+
+impl Renderer {
+    /// The intensity buffer of `particles` (which may have moved) lit from `to_sun`.
+    fn light(
+        &mut self,
+        particles: &[Particle],
+        to_sun: Vec3,
+        forward: f32,
+        splat: Splat,
+    ) -> Result<()> {
+        match self {
+            Renderer::Cpu(Some(buffer), _) => buffer.update(particles, to_sun, forward, splat)?,
+            Renderer::Cpu(buffer, resolution) => {
+                *buffer = Some(IntensityBuffer::new(
+                    particles,
+                    to_sun,
+                    *resolution,
+                    forward,
+                    splat,
+                )?)
+            }
+            Renderer::Gpu(gpu, clouds) => {
+                clouds.move_particles(gpu, particles).map_err(gpu_error)?;
+                clouds
+                    .light(gpu, to_sun, forward, splat)
+                    .map_err(gpu_error)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn draw(
+        &self,
+        particles: &[Particle],
+        camera: &Camera,
+        light: &Lighting,
+        background: Option<&Frame>,
+    ) -> Result<Frame> {
+        Ok(match self {
+            Renderer::Cpu(buffer, _) => {
+                let buffer = buffer.as_ref().expect("a light pass comes first");
+                render(particles, buffer, camera, light, background)
+            }
+            Renderer::Gpu(gpu, clouds) => {
+                clouds
+                    .render(gpu, camera, light, background)
+                    .map_err(gpu_error)?
+                    .frame
+            }
+        })
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -248,15 +313,21 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         })
     };
     let to_sun = sun_direction(args.sun_elevation, args.sun_azimuth);
+    let mut renderer = match args.device.open()? {
+        Some(gpu) => {
+            let clouds = GpuClouds::new(&gpu, &particles, args.resolution).map_err(gpu_error)?;
+            Renderer::Gpu(gpu, clouds)
+        }
+        None => Renderer::Cpu(None, args.resolution),
+    };
     let start = Instant::now();
-    let mut buffer =
-        IntensityBuffer::new(&particles, to_sun, args.resolution, args.forward, splat)?;
+    renderer.light(&particles, to_sun, args.forward, splat)?;
     let light_ms = start.elapsed().as_secs_f64() * 1e3;
     match args.animate {
         None => {
             let start = Instant::now();
             let (light, background) = lighting(to_sun, args.sun_azimuth)?;
-            let frame = render(&particles, &buffer, &camera, &light, background.as_ref());
+            let frame = renderer.draw(&particles, &camera, &light, background.as_ref())?;
             let draw_ms = start.elapsed().as_secs_f64() * 1e3;
             frame.write(&args.output, display.exposure, display.tone)?;
             eprintln!(
@@ -297,9 +368,9 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                             to_sun
                         }
                     };
-                    buffer.update(&particles, to_sun, args.forward, splat)?;
+                    renderer.light(&particles, to_sun, args.forward, splat)?;
                     let (light, background) = lighting(to_sun, azimuth)?;
-                    *frame = render(&particles, &buffer, &camera, &light, background.as_ref());
+                    *frame = renderer.draw(&particles, &camera, &light, background.as_ref())?;
                     Ok(())
                 },
             )?;

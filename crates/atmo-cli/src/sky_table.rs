@@ -116,13 +116,14 @@ pub fn write_animation(
     frames: usize,
     (width, height): (u32, u32),
     display: Display,
-    mut fill: impl FnMut(usize, &mut Frame) -> atmo::Result<()>,
-) -> atmo::Result<std::path::PathBuf> {
+    mut fill: impl FnMut(usize, &mut Frame) -> anyhow::Result<()>,
+) -> anyhow::Result<std::path::PathBuf> {
     if folder.extension().is_some_and(|e| e == "png" || e == "exr") {
         return Err(Error::Invalid(format!(
             "{}: with --animate, -o names a folder for the frames",
             folder.display()
-        )));
+        ))
+        .into());
     }
     std::fs::create_dir_all(folder).map_err(|source| Error::Io {
         path: folder.to_path_buf(),
@@ -133,7 +134,9 @@ pub fn write_animation(
         path: apng.clone(),
         message: e.to_string(),
     };
-    write_atomically(&apng, |w| {
+    // A frame's own error, kept whole (it may not be atmo's) while the file is dropped.
+    let mut failed: Option<anyhow::Error> = None;
+    let written = write_atomically(&apng, |w| {
         let mut encoder = png::Encoder::new(w, width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
@@ -142,7 +145,11 @@ pub fn write_animation(
         let mut writer = encoder.write_header().map_err(png_error)?;
         let mut frame = Frame::new(width, height);
         for k in 0..frames {
-            fill(k, &mut frame)?;
+            if let Err(e) = fill(k, &mut frame) {
+                let message = format!("frame {k}: {e:#}");
+                failed = Some(e);
+                return Err(Error::Invalid(message));
+            }
             frame.write(
                 &folder.join(format!("frame-{k:04}.png")),
                 display.exposure,
@@ -153,6 +160,10 @@ pub fn write_animation(
                 .map_err(png_error)?;
         }
         writer.finish().map_err(png_error)
-    })?;
-    Ok(apng)
+    });
+    match (written, failed) {
+        (_, Some(e)) => Err(e),
+        (Err(e), None) => Err(e.into()),
+        (Ok(()), None) => Ok(apng),
+    }
 }

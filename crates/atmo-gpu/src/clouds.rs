@@ -104,19 +104,9 @@ impl GpuClouds {
                 "the buffer resolution (--resolution)",
             )?;
         }
-        let records: Vec<GpuParticle> = particles
-            .iter()
-            .map(|p| GpuParticle {
-                position_radius: [p.position.x, p.position.y, p.position.z, p.radius],
-                density: p.density,
-                albedo: p.albedo,
-                pad0: 0.0,
-                pad1: 0.0,
-            })
-            .collect();
         let particle_buffer = gpu.storage(
             "the particles",
-            bytemuck::cast_slice(&records),
+            bytemuck::cast_slice(&records(particles)),
             "the particle count",
         )?;
         let cells = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -160,6 +150,27 @@ impl GpuClouds {
                 },
             )?,
         })
+    }
+
+    /// Moves the particles (the same number of them, e.g. carried by the wind): the
+    /// next light pass and draw see them where they are now.
+    pub fn move_particles(&mut self, gpu: &Gpu, particles: &[Particle]) -> Result<(), GpuError> {
+        if particles.len() != self.particles.len() {
+            return Err(atmo::Error::Invalid(format!(
+                "{} particles where the cloud has {}; make a new GpuClouds",
+                particles.len(),
+                self.particles.len()
+            ))
+            .into());
+        }
+        gpu.queue.write_buffer(
+            &self.particle_buffer,
+            0,
+            bytemuck::cast_slice(&records(particles)),
+        );
+        self.particles.copy_from_slice(particles);
+        self.frame = None;
+        Ok(())
     }
 
     /// The light pass for a sun in the direction `to_sun` (any length), as
@@ -340,6 +351,20 @@ impl GpuClouds {
             gpu_ms,
         })
     }
+}
+
+/// The particles as the shaders read them.
+fn records(particles: &[Particle]) -> Vec<GpuParticle> {
+    particles
+        .iter()
+        .map(|p| GpuParticle {
+            position_radius: [p.position.x, p.position.y, p.position.z, p.radius],
+            density: p.density,
+            albedo: p.albedo,
+            pad0: 0.0,
+            pad1: 0.0,
+        })
+        .collect()
 }
 
 /// An RGBA f32 render target of `w` x `h`, holding `background` (or black).
