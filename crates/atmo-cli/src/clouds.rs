@@ -120,7 +120,7 @@ pub struct CloudsArgs {
 enum Renderer {
     /// The buffer and its resolution (none before the first light pass).
     Cpu(Option<IntensityBuffer>, usize),
-    Gpu(Gpu, GpuClouds),
+    Gpu(Box<(Gpu, GpuClouds)>),
 }
 
 impl Renderer {
@@ -143,7 +143,8 @@ impl Renderer {
                     splat,
                 )?)
             }
-            Renderer::Gpu(gpu, clouds) => {
+            Renderer::Gpu(boxed) => {
+                let (gpu, clouds) = &mut **boxed;
                 clouds.move_particles(gpu, particles).map_err(gpu_error)?;
                 clouds
                     .light(gpu, to_sun, forward, splat)
@@ -165,7 +166,8 @@ impl Renderer {
                 let buffer = buffer.as_ref().expect("a light pass comes first");
                 render(particles, buffer, camera, light, background)
             }
-            Renderer::Gpu(gpu, clouds) => {
+            Renderer::Gpu(boxed) => {
+                let (gpu, clouds) = &**boxed;
                 clouds
                     .render(gpu, camera, light, background)
                     .map_err(gpu_error)?
@@ -316,7 +318,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     let mut renderer = match args.device.open()? {
         Some(gpu) => {
             let clouds = GpuClouds::new(&gpu, &particles, args.resolution).map_err(gpu_error)?;
-            Renderer::Gpu(gpu, clouds)
+            Renderer::Gpu(Box::new((gpu, clouds)))
         }
         None => Renderer::Cpu(None, args.resolution),
     };

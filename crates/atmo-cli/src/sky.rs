@@ -77,6 +77,8 @@ pub struct SkyArgs {
     /// Output picture: .png (8-bit sRGB) or .exr (linear radiance); with --animate, a folder.
     #[arg(short, long, value_name = "FILE", required_unless_present = "probe")]
     output: Option<PathBuf>,
+    #[command(flatten)]
+    device: crate::backend::BackendArgs,
 }
 
 /// What `--animate` moves.
@@ -205,8 +207,10 @@ pub fn run(args: SkyArgs) -> Result<()> {
             exposure: args.exposure,
             tone: args.tone_map.into(),
         };
+        let gpu = args.device.open()?;
+        let drawer = crate::sky_table::TableDrawer::new(&table, gpu.as_ref())?;
         return match args.animate {
-            None => crate::sky_table::draw(&table, sun, args.altitude, &view, display, path),
+            None => crate::sky_table::draw(&drawer, sun, args.altitude, &view, display, path),
             Some(what) => {
                 let frames = crate::sky_table::Animation {
                     what,
@@ -214,11 +218,17 @@ pub fn run(args: SkyArgs) -> Result<()> {
                     sun,
                     altitude_m: args.altitude,
                 };
-                crate::sky_table::animate(&table, &frames, &view, display, path)
+                crate::sky_table::animate(&drawer, &table, &frames, &view, display, path)
             }
         };
     }
-    // Without a table: the atmosphere and the shell method's settings.
+    // Without a table: the atmosphere and the shell method's settings, on the CPU.
+    if args.device.backend == crate::backend::Backend::Gpu {
+        eprintln!(
+            "atmo: the shell method runs on the CPU; --table draws from a skylight table \
+             on the GPU"
+        );
+    }
     let atmosphere = args.medium.load()?;
     let settings = args.method.settings();
     settings.validate(atmosphere.channels())?;

@@ -10,12 +10,43 @@ use atmo::sky::frame::{SkyPicture, View};
 use atmo::sky::table::SkylightTable;
 use atmo::sky::Sun;
 use atmo::Error;
+use atmo_gpu::sky::GpuSkyTable;
+use atmo_gpu::Gpu;
 
+use crate::backend::gpu_error;
 use crate::sky::Animate;
 
-/// One picture of `table` for `sun` at `altitude_m`, written to `path`.
+/// Draws pictures from a table, on the CPU or on the GPU.
+pub enum TableDrawer<'a> {
+    Cpu(&'a SkylightTable),
+    Gpu(&'a Gpu, GpuSkyTable<'a>),
+}
+
+impl<'a> TableDrawer<'a> {
+    /// On `gpu` when given (the table uploaded), else on the CPU.
+    pub fn new(table: &'a SkylightTable, gpu: Option<&'a Gpu>) -> Result<Self> {
+        Ok(match gpu {
+            Some(gpu) => TableDrawer::Gpu(gpu, GpuSkyTable::new(gpu, table).map_err(gpu_error)?),
+            None => TableDrawer::Cpu(table),
+        })
+    }
+
+    /// The picture of `view` for `sun` seen from `altitude_m`.
+    fn frame(&self, sun: Sun, altitude_m: f64, view: &View) -> Result<Frame> {
+        Ok(match self {
+            TableDrawer::Cpu(table) => SkyPicture::from_table(table, sun, altitude_m)?.render(view),
+            TableDrawer::Gpu(gpu, sky) => {
+                sky.render(gpu, sun, altitude_m, view)
+                    .map_err(gpu_error)?
+                    .frame
+            }
+        })
+    }
+}
+
+/// One picture of the table for `sun` at `altitude_m`, written to `path`.
 pub fn draw(
-    table: &SkylightTable,
+    drawer: &TableDrawer,
     sun: Sun,
     altitude_m: f64,
     view: &View,
@@ -23,13 +54,11 @@ pub fn draw(
     path: &Path,
 ) -> Result<()> {
     let start = Instant::now();
-    let picture = SkyPicture::from_table(table, sun, altitude_m)?;
-    let map_ms = start.elapsed().as_secs_f64() * 1e3;
-    let frame = picture.render(view);
+    let frame = drawer.frame(sun, altitude_m, view)?;
     let total_ms = start.elapsed().as_secs_f64() * 1e3;
     frame.write(path, display.exposure, display.tone)?;
     eprintln!(
-        "atmo: {} ({}x{}) from the table in {total_ms:.1} ms (skylight map {map_ms:.2} ms)",
+        "atmo: {} ({}x{}) from the table in {total_ms:.1} ms",
         path.display(),
         view.width,
         view.height,
@@ -69,6 +98,7 @@ impl Animation {
 /// Writes `frame-0000.png` ... and `animation.png` (animated PNG, 30 frames/s) into the
 /// folder `folder`, creating it. Everything is checked before the first file.
 pub fn animate(
+    drawer: &TableDrawer,
     table: &SkylightTable,
     animation: &Animation,
     view: &View,
@@ -95,7 +125,7 @@ pub fn animate(
             elevation,
             ..animation.sun
         };
-        SkyPicture::from_table(table, sun, altitude)?.render_into(view, frame);
+        *frame = drawer.frame(sun, altitude, view)?;
         Ok(())
     })?;
     eprintln!(

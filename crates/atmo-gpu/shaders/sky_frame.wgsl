@@ -1,5 +1,6 @@
 // A picture of the sky: each pixel's direction looked up bilinearly in the skylight
-// map (sky 4.2), black below the table's horizon, plus the sun's disc. Follows
+// map (sky 4.2), black below the table's horizon, plus the sun's disc; both edges
+// anti-aliased over one pixel. Follows
 // atmo::sky::frame (SkyPicture::render) operation for operation.
 
 // Mirrors atmo_gpu::sky::SkyFrameParams.
@@ -8,7 +9,7 @@ struct SkyFrameParams {
     origin: vec4<f32>,
     right: vec4<f32>,
     up: vec4<f32>,
-    // xyz: unit vector to the sun; w: cosine of its angular radius.
+    // xyz: unit vector to the sun; w: cosine of its angular radius plus a pixel.
     sun_direction: vec4<f32>,
     // Linear sRGB radiance of the disc; w: 1 to draw it.
     sun_rgb: vec4<f32>,
@@ -23,7 +24,13 @@ struct SkyFrameParams {
     width: u32,
     height: u32,
     azimuths: u32,
-    pad: u32,
+    // The sun's angular radius and a pixel's angle, rad: the disc's and the horizon's
+    // edges are smooth over one pixel (atmo::sky::frame's Edges).
+    sun_radius: f32,
+    pixel: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SkyFrameParams;
@@ -33,6 +40,14 @@ struct SkyFrameParams {
 @group(0) @binding(2) var<storage, read_write> frame: array<vec4<f32>>;
 
 const HALF_PI: f32 = 1.5707963;
+
+// acos within 7e-5 rad (Abramowitz and Stegun 4.4.45), the CPU's fast_acos: the same
+// function on both sides puts the horizon's edge on the same pixels.
+fn fast_acos(x: f32) -> f32 {
+    let a = min(abs(x), 1.0);
+    let r = sqrt(1.0 - a) * (1.5707288 + a * (-0.2121144 + a * (0.074261 - 0.0187293 * a)));
+    return select(r, 3.14159265 - r, x < 0.0);
+}
 
 fn texel(at: u32) -> vec3<f32> {
     return vec3<f32>(map[3u * at], map[3u * at + 1u], map[3u * at + 2u]);
@@ -79,17 +94,22 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let horizontal = sqrt(d.x * d.x + d.y * d.y);
     let len = sqrt(horizontal * horizontal + d.z * d.z);
-    let elevation = HALF_PI - acos(clamp(d.z / len, -1.0, 1.0));
+    let elevation = HALF_PI - fast_acos(d.z / len);
     // The azimuth from the sun's, folded into [0, pi]; straight up, any will do.
     var c = 1.0;
     if horizontal > 1e-6 * len {
-        c = clamp(dot(d.xy, params.sun_horizontal.xy) / horizontal, -1.0, 1.0);
+        c = (d.x * params.sun_horizontal.x + d.y * params.sun_horizontal.y) / horizontal;
     }
-    if elevation >= params.ground_below {
-        rgb = sample(acos(c), elevation);
+    // The sky's share of the pixel, over one pixel at the horizon; below it, black
+    // (a table holds no ground: the application draws its terrain there).
+    let sky = clamp((elevation - params.ground_below) / params.pixel + 0.5, 0.0, 1.0);
+    if sky > 0.0 {
+        rgb = sky * sample(fast_acos(c), elevation);
     }
-    if params.sun_rgb.w != 0.0 && dot(d, params.sun_direction.xyz) / len >= params.sun_direction.w {
-        rgb += params.sun_rgb.xyz;
+    let sun = params.sun_direction.xyz;
+    if params.sun_rgb.w != 0.0 && dot(d, sun) / len >= params.sun_direction.w {
+        let angle = asin(min(length(cross(d, sun)) / len, 1.0));
+        rgb += params.sun_rgb.xyz * clamp((params.sun_radius - angle) / params.pixel + 0.5, 0.0, 1.0);
     }
     frame[id.y * params.width + id.x] = vec4<f32>(rgb, 1.0);
 }

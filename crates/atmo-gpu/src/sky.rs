@@ -42,7 +42,11 @@ gpu_struct! {
         width: u32,
         height: u32,
         azimuths: u32,
-        pad: u32,
+        sun_radius: f32,
+        pixel: f32,
+        pad0: u32,
+        pad1: u32,
+        pad2: u32,
     }
 }
 
@@ -196,6 +200,8 @@ impl<'a> GpuSkyTable<'a> {
         let rgb = sun_disc_rgb(atmosphere, altitude_m, sun.elevation);
         let (sin_a, cos_a) = sun.azimuth.sin_cos();
         let v4 = |v: Vec3| [v.x, v.y, v.z, 0.0];
+        let basis = view.projection.pixel_basis(view.width, view.height);
+        let (sun_radius, pixel) = (atmosphere.sun_angular_radius as f32, basis.pixel_angle());
         let mut p = SkyFrameParams {
             origin: [0.0; 4],
             right: [0.0; 4],
@@ -204,7 +210,7 @@ impl<'a> GpuSkyTable<'a> {
                 direction.x,
                 direction.y,
                 direction.z,
-                atmosphere.sun_angular_radius.cos() as f32,
+                (sun_radius + pixel).cos(),
             ],
             sun_rgb: [rgb[0], rgb[1], rgb[2], view.sun_disc as u32 as f32],
             sun_horizontal: [sin_a as f32, cos_a as f32, 0.0, 0.0],
@@ -216,9 +222,13 @@ impl<'a> GpuSkyTable<'a> {
             width: view.width,
             height: view.height,
             azimuths: lookup.azimuths as u32,
-            pad: 0,
+            sun_radius,
+            pixel,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
         };
-        match view.projection.pixel_basis(view.width, view.height) {
+        match basis {
             PixelBasis::Perspective { origin, right, up } => {
                 (p.origin, p.right, p.up) = (v4(origin), v4(right), v4(up));
             }

@@ -87,6 +87,15 @@ pub enum PixelBasis {
 }
 
 impl PixelBasis {
+    /// The angle a pixel spans at the centre of the picture, rad.
+    pub fn pixel_angle(&self) -> f32 {
+        match *self {
+            // |up| is the tangent step of one pixel at the centre.
+            PixelBasis::Perspective { up, .. } => up.length().atan(),
+            PixelBasis::Fisheye { radius, .. } => std::f32::consts::FRAC_PI_2 / radius,
+        }
+    }
+
     /// The direction (not unit) through the centre of pixel (x, y), or `None` outside
     /// the fisheye's circle.
     #[inline]
@@ -238,6 +247,8 @@ pub struct SkyPicture {
     sun_direction: Vec3,
     sun_rgb: Vec3A,
     sun_cos_radius: f32,
+    /// Angular radius of the disc, rad.
+    sun_radius: f32,
 }
 
 impl SkyPicture {
@@ -302,6 +313,7 @@ impl SkyPicture {
             sun_direction: direction_of(sun.azimuth, sun.elevation).as_vec3(),
             sun_rgb: Vec3A::from(sun_rgb),
             sun_cos_radius: atmosphere.sun_angular_radius.cos() as f32,
+            sun_radius: atmosphere.sun_angular_radius as f32,
         }
     }
 
@@ -310,14 +322,19 @@ impl SkyPicture {
         let mut rays = Rays::default();
         rays.fill(1, |_| d.normalize().as_vec3());
         let mut out = [Vec3::ZERO];
-        self.shade(&mut rays, sun_disc, &mut out);
+        let edges = Edges {
+            sun_disc,
+            pixel: 0.0,
+            sun_cos_outer: self.sun_cos_radius,
+        };
+        self.shade(&mut rays, edges, &mut out);
         out[0]
     }
 
     /// The radiance along `rays` into `out`. The trigonometry runs over whole arrays
     /// first, in loops the compiler vectorises, then the map lookups one ray at a time:
     /// a 1920 x 1080 frame takes a few milliseconds.
-    fn shade(&self, rays: &mut Rays, sun_disc: bool, out: &mut [Vec3]) {
+    fn shade(&self, rays: &mut Rays, edges: Edges, out: &mut [Vec3]) {
         let (sx, sy) = (self.sun_horizontal.x, self.sun_horizontal.y);
         let sun = self.sun_direction;
         // Equal-length slices, so the loop runs without bounds checks.
@@ -338,27 +355,36 @@ impl SkyPicture {
             suns[k] = (x * sun.x + y * sun.y + z * sun.z) / length;
         }
         for (k, o) in out.iter_mut().enumerate() {
-            let elevation = elevations[k];
+            let (azimuth, elevation) = (azimuths[k], elevations[k]);
             // No ray (outside the fisheye's circle) has a NaN elevation: black.
-            let map = if elevation >= self.ground_below {
-                Some(&self.sky)
-            } else if elevation < self.ground_below {
-                self.ground.as_ref()
+            if elevation.is_nan() {
+                *o = Vec3::ZERO;
+                continue;
+            }
+            // The sky's share of the pixel: the horizon's edge is smooth over one pixel.
+            let above = elevation - self.ground_below;
+            let sky = if edges.pixel > 0.0 {
+                (above / edges.pixel + 0.5).clamp(0.0, 1.0)
             } else {
-                None
+                (above >= 0.0) as u8 as f32
             };
-            let mut rgb = map.map_or(Vec3A::ZERO, |m| m.sample(azimuths[k], elevation));
-            if sun_disc && suns[k] >= self.sun_cos_radius {
-                rgb += self.sun_rgb;
+            let mut rgb = Vec3A::ZERO;
+            if sky > 0.0 {
+                rgb += sky * self.sky.sample(azimuth, elevation);
+            }
+            if let Some(ground) = self.ground.as_ref().filter(|_| sky < 1.0) {
+                rgb += (1.0 - sky) * ground.sample(azimuth, elevation);
+            }
+            if edges.sun_disc && suns[k] >= edges.sun_cos_outer {
+                rgb += if edges.pixel > 0.0 {
+                    let d = Vec3::new(xs[k], ys[k], zs[k]);
+                    self.sun_rgb * disc_cover(d, self.sun_direction, self.sun_radius, edges.pixel)
+                } else {
+                    self.sun_rgb
+                };
             }
             *o = rgb.into();
         }
-    }
-
-    /// The sun's disc as drawn: unit direction, linear sRGB radiance, and the cosine of
-    /// its angular radius.
-    pub fn sun_disc(&self) -> (Vec3, Vec3, f32) {
-        (self.sun_direction, self.sun_rgb.into(), self.sun_cos_radius)
     }
 
     /// Renders `view`, rows in parallel.
@@ -371,6 +397,12 @@ impl SkyPicture {
     /// Renders `view` into `frame` (of the view's size), rows in parallel.
     pub fn render_into(&self, view: &View, frame: &mut Frame) {
         let camera = view.projection.pixel_basis(view.width, view.height);
+        let pixel = camera.pixel_angle();
+        let edges = Edges {
+            sun_disc: view.sun_disc,
+            pixel,
+            sun_cos_outer: (self.sun_radius + pixel).cos(),
+        };
         frame
             .pixels
             .par_chunks_mut(view.width as usize)
@@ -379,9 +411,32 @@ impl SkyPicture {
                 rays.fill(row.len(), |x| {
                     camera.direction(x as u32, y as u32).unwrap_or(Vec3::NAN)
                 });
-                self.shade(rays, view.sun_disc, row);
+                self.shade(rays, edges, row);
             });
     }
+}
+
+/// How the sun's disc and the horizon end: over one pixel in a picture (anti-aliased:
+/// the disc is a few pixels wide, and a hard edge flips whole pixels on the last bit of
+/// a direction), in or out for single directions.
+#[derive(Debug, Clone, Copy)]
+struct Edges {
+    /// Whether to draw the sun's disc.
+    sun_disc: bool,
+    /// The angle a pixel spans, rad; 0 for hard edges.
+    pixel: f32,
+    /// Directions whose cosine to the sun is below this miss the disc.
+    sun_cos_outer: f32,
+}
+
+/// The part of a pixel looking along `d` (any length) that the sun's disc (unit
+/// direction `sun`, angular radius `radius`) covers: linear over one pixel (`pixel`
+/// rad) across the edge. The angle from the centre comes from the cross product,
+/// which unlike the dot product keeps its precision near 0.
+#[inline]
+pub fn disc_cover(d: Vec3, sun: Vec3, radius: f32, pixel: f32) -> f32 {
+    let angle = (d.cross(sun).length() / d.length()).min(1.0).asin();
+    ((radius - angle) / pixel + 0.5).clamp(0.0, 1.0)
 }
 
 /// The linear sRGB radiance of the sun's disc at `sun_elevation` rad seen from
@@ -461,6 +516,27 @@ mod tests {
         assert!((mid.x - 7.5).abs() < 1e-5);
         // Below the grid: its lowest row.
         assert!((g.sample(0.0, -1.0).x).abs() < 1e-5);
+    }
+
+    #[test]
+    fn the_sun_disc_edge_is_smooth_over_one_pixel() {
+        let sun = Vec3::new(0.0, 0.6, 0.8);
+        let (radius, pixel) = (0.005f32, 0.002f32);
+        // Directions at `angle` from the sun's centre, away from it in a fixed plane.
+        let at = |angle: f32| {
+            let side = sun.cross(Vec3::X).normalize();
+            let d = sun * angle.cos() + side * angle.sin();
+            disc_cover(3.0 * d, sun, radius, pixel)
+        };
+        assert_eq!(at(0.0), 1.0);
+        assert_eq!(at(radius - pixel), 1.0);
+        assert!((at(radius) - 0.5).abs() < 0.02, "{}", at(radius));
+        assert_eq!(at(radius + pixel), 0.0);
+        // Monotone across the edge.
+        let steps: Vec<f32> = (0..20)
+            .map(|k| at(radius - pixel + 0.0002 * k as f32))
+            .collect();
+        assert!(steps.windows(2).all(|w| w[1] <= w[0]), "{steps:?}");
     }
 
     #[test]
