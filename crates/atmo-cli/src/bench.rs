@@ -12,6 +12,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::json;
 
+use crate::backend::{Backend, BackendArgs};
+
 #[derive(Args)]
 pub struct BenchArgs {
     /// What to time.
@@ -29,6 +31,13 @@ pub struct BenchArgs {
     /// shafts: where the plane sweep's shafts-sweep.csv and .svg are written.
     #[arg(long, default_value = ".")]
     sweep_dir: std::path::PathBuf,
+    /// cpu: each method against its baseline; gpu: each GPU pipeline beside the same
+    /// method on the CPU (sky-table, shafts, clouds).
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    backend: Backend,
+    /// With --backend gpu: the adapter (part of its name, or a backend).
+    #[arg(long, value_name = "NAME")]
+    adapter: Option<String>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -47,6 +56,28 @@ enum Area {
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
+    if args.backend != Backend::Cpu {
+        let device = BackendArgs {
+            backend: Backend::Gpu,
+            adapter: args.adapter.clone(),
+        };
+        let gpu = device
+            .open()?
+            .expect("--backend gpu opens a device or fails");
+        return match args.area {
+            Area::Sky => Err(atmo::Error::Invalid(
+                "the shell method runs on the CPU; `atmo bench sky-table --backend gpu` \
+                 times the sky on the GPU"
+                    .into(),
+            )
+            .into()),
+            Area::SkyTable => crate::bench_gpu::bench_sky_table(&gpu, args.quick, args.json),
+            Area::Shafts => {
+                crate::bench_gpu::bench_shafts(&gpu, args.quick, args.json, &args.scenes)
+            }
+            Area::Clouds => crate::bench_gpu::bench_clouds(&gpu, args.quick, args.json),
+        };
+    }
     match args.area {
         Area::Sky => bench_sky(args.quick, args.json),
         Area::SkyTable => crate::bench_table::bench_sky_table(args.quick, args.json),

@@ -130,7 +130,7 @@ fn mean_error(
 }
 
 /// The bench's camera: 1280 x 720, 40 degrees, looking at the cloud from 1.6 widths.
-fn camera(particles: &[atmo::clouds::particles::Particle]) -> Camera {
+pub(crate) fn camera(particles: &[atmo::clouds::particles::Particle]) -> Camera {
     let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
     let position = centre + Vec3::new(-700.0, -600.0, 1900.0);
     let tan = 20f32.to_radians().tan();

@@ -6,6 +6,7 @@
 mod backend;
 mod bench;
 mod bench_clouds;
+mod bench_gpu;
 mod bench_shafts;
 mod bench_table;
 mod clouds;

@@ -141,20 +141,21 @@ impl<'a> GpuSkyTable<'a> {
     }
 
     /// The skylight map (linear sRGB, `[elevation][azimuth]` over the table's grid), as
-    /// `SkylightTable::map` gives it on the CPU.
+    /// `SkylightTable::map` gives it on the CPU, and the GPU time of its pass (ms) where
+    /// the adapter has timestamps.
     pub fn map(
         &self,
         gpu: &Gpu,
         sun_elevation: f64,
         altitude_m: f64,
-    ) -> Result<Vec<Vec3>, GpuError> {
+    ) -> Result<(Vec<Vec3>, Option<f64>), GpuError> {
         let (coefficients, params) = self.map_inputs(gpu, sun_elevation, altitude_m)?;
-        gpu.run("the skylight map", |encoder, _| {
+        let gpu_ms = gpu.run("the skylight map", |encoder, _| {
             self.record_map(gpu, encoder, &coefficients, &params)
         })?;
         let bytes = gpu.read("the skylight map", &self.map, 0, self.map.size())?;
         let values: &[f32] = bytemuck::cast_slice(&bytes);
-        Ok(values.chunks(3).map(Vec3::from_slice).collect())
+        Ok((values.chunks(3).map(Vec3::from_slice).collect(), gpu_ms))
     }
 
     /// The picture of `view` for `sun` seen from `altitude_m`: map pass and frame pass
