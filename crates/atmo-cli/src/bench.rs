@@ -32,7 +32,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = ".")]
     sweep_dir: std::path::PathBuf,
     /// cpu: each method against its baseline; gpu: each GPU pipeline beside the same
-    /// method on the CPU (sky-table, shafts, clouds).
+    /// method on the CPU.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     backend: Backend,
     /// With --backend gpu: the adapter (part of its name, or a backend).
@@ -65,12 +65,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             .open()?
             .expect("--backend gpu opens a device or fails");
         return match args.area {
-            Area::Sky => Err(atmo::Error::Invalid(
-                "the shell method runs on the CPU; `atmo bench sky-table --backend gpu` \
-                 times the sky on the GPU"
-                    .into(),
-            )
-            .into()),
+            Area::Sky => crate::bench_gpu::bench_sky(&gpu, args.quick, args.json),
             Area::SkyTable => crate::bench_gpu::bench_sky_table(&gpu, args.quick, args.json),
             Area::Shafts => {
                 crate::bench_gpu::bench_shafts(&gpu, args.quick, args.json, &args.scenes)

@@ -13,11 +13,11 @@ use atmo::image::{Display, Frame, ToneMap};
 use atmo::shafts::{SamplePlanes, Scene};
 use atmo::sky::frame::{Projection, SkyPicture, View};
 use atmo::sky::table::{SkylightTable, TableSettings};
-use atmo::sky::Sun;
+use atmo::sky::{SkyModel, SkySettings, Sun};
 use atmo::Atmosphere;
 use atmo_gpu::clouds::GpuClouds;
 use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};
-use atmo_gpu::sky::GpuSkyTable;
+use atmo_gpu::sky::{GpuSkyModel, GpuSkyTable};
 use atmo_gpu::{Gpu, GpuError, Rendered};
 use serde_json::{json, Value};
 
@@ -89,6 +89,96 @@ fn report(json: bool, gpu: &Gpu, case: Case) {
     );
 }
 
+pub fn bench_sky(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
+    // The CPU bench's case: the paper's Fig. 7(a), 7000 m, sun at 30 degrees.
+    let atmosphere = Atmosphere::earth();
+    let settings = SkySettings::default();
+    let model = SkyModel::new(&atmosphere, &settings, 7000.0)?;
+    let sky = GpuSkyModel::new(gpu, &model).map_err(gpu_error)?;
+    let runs = if quick { 5 } else { 21 };
+    let sun = Sun::from_degrees(30.0, 0.0)?;
+    let (wall, gpu_ms, ()) = time_gpu(runs, || Ok(((), sky.maps_timed(gpu, sun.elevation)?)))?;
+    let cpu_ms = median(
+        (0..runs)
+            .map(|_| {
+                time_ms(|| {
+                    std::hint::black_box((
+                        model.skylight_map(sun.elevation),
+                        model.ground_map(sun.elevation),
+                    ));
+                })
+            })
+            .collect(),
+    );
+    let params = json!({"altitude_m": 7000.0, "sun_elevation_deg": 30.0,
+        "directions": settings.directions, "shells": settings.shells, "order": settings.order});
+    report(
+        json,
+        gpu,
+        Case {
+            name: "sky.maps.gpu",
+            params: params.clone(),
+            wall_ms: wall,
+            gpu_ms,
+            cpu_ms,
+            error: None,
+        },
+    );
+    sky_frame(
+        gpu,
+        json,
+        ("sky.frame.gpu", json!({"model": params})),
+        runs.min(7),
+        |view| sky.render(gpu, sun, view),
+        |view, frame| SkyPicture::new(&model, sun).render_into(view, frame),
+    )
+}
+
+/// A 1920 x 1080 sky frame drawn `runs` times on the GPU and on the CPU, timed and
+/// compared at the sky's exposure.
+fn sky_frame(
+    gpu: &Gpu,
+    json: bool,
+    (name, params): (&str, Value),
+    runs: usize,
+    mut on_gpu: impl FnMut(&View) -> Result<Rendered, GpuError>,
+    mut on_cpu: impl FnMut(&View, &mut Frame),
+) -> Result<()> {
+    let view = View {
+        width: 1920,
+        height: 1080,
+        projection: Projection::perspective_degrees(0.0, 15.0, 70.0)?,
+        sun_disc: true,
+    };
+    let (wall, gpu_ms, frame) = time_gpu(runs, || {
+        let r = on_gpu(&view)?;
+        Ok((r.frame, r.gpu_ms))
+    })?;
+    let mut cpu = Frame::new(view.width, view.height);
+    let cpu_ms = median(
+        (0..runs)
+            .map(|_| time_ms(|| on_cpu(&view, &mut cpu)))
+            .collect(),
+    );
+    let display = Display {
+        exposure: 0.15,
+        tone: ToneMap::Exponential,
+    };
+    report(
+        json,
+        gpu,
+        Case {
+            name,
+            params: json!({"of": params, "width": view.width, "height": view.height}),
+            wall_ms: wall,
+            gpu_ms,
+            cpu_ms,
+            error: Some(frame.level_errors(&cpu, display)?),
+        },
+    );
+    Ok(())
+}
+
 pub fn bench_sky_table(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
     let mut settings = TableSettings::default();
     if quick {
@@ -127,45 +217,18 @@ pub fn bench_sky_table(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
             error: None,
         },
     );
-    let view = View {
-        width: 1920,
-        height: 1080,
-        projection: Projection::perspective_degrees(0.0, 15.0, 70.0)?,
-        sun_disc: true,
-    };
-    let (wall, gpu_ms, frame) = time_gpu(runs.min(7), || {
-        let r = sky.render(gpu, sun, altitude, &view)?;
-        Ok((r.frame, r.gpu_ms))
-    })?;
-    let mut cpu = Frame::new(view.width, view.height);
-    let cpu_ms = median(
-        (0..runs.min(7))
-            .map(|_| {
-                time_ms(|| {
-                    SkyPicture::from_table(&table, sun, altitude)
-                        .expect("inside the table")
-                        .render_into(&view, &mut cpu)
-                })
-            })
-            .collect(),
-    );
-    let display = Display {
-        exposure: 0.15,
-        tone: ToneMap::Exponential,
-    };
-    report(
-        json,
+    sky_frame(
         gpu,
-        Case {
-            name: "sky-table.frame.gpu",
-            params: json!({"table": params, "width": view.width, "height": view.height}),
-            wall_ms: wall,
-            gpu_ms,
-            cpu_ms,
-            error: Some(frame.level_errors(&cpu, display)?),
+        json,
+        ("sky-table.frame.gpu", json!({"table": params})),
+        runs.min(7),
+        |view| sky.render(gpu, sun, altitude, view),
+        |view, frame| {
+            SkyPicture::from_table(&table, sun, altitude)
+                .expect("inside the table")
+                .render_into(view, frame)
         },
-    );
-    Ok(())
+    )
 }
 
 pub fn bench_shafts(gpu: &Gpu, quick: bool, json: bool, scenes: &Path) -> Result<()> {

@@ -9,8 +9,11 @@ use atmo::sky::frame::{Projection, SkyPicture, View};
 use atmo::sky::table::SkylightTable;
 use atmo::sky::{SkyModel, SkySettings, Sun};
 use atmo::{Atmosphere, Error};
+use atmo_gpu::sky::GpuSkyModel;
 use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
+
+use crate::backend::gpu_error;
 
 #[derive(Args)]
 pub struct SkyArgs {
@@ -222,13 +225,7 @@ pub fn run(args: SkyArgs) -> Result<()> {
             }
         };
     }
-    // Without a table: the atmosphere and the shell method's settings, on the CPU.
-    if args.device.backend == crate::backend::Backend::Gpu {
-        eprintln!(
-            "atmo: the shell method runs on the CPU; --table draws from a skylight table \
-             on the GPU"
-        );
-    }
+    // Without a table: the atmosphere and the shell method's settings.
     let atmosphere = args.medium.load()?;
     let settings = args.method.settings();
     settings.validate(atmosphere.channels())?;
@@ -245,8 +242,13 @@ pub fn run(args: SkyArgs) -> Result<()> {
     let (Some(view), Some(path)) = (view, &args.output) else {
         unreachable!("clap requires -o without --probe")
     };
-    let picture = SkyPicture::new(&model, sun);
-    let frame = picture.render(&view);
+    let frame = match args.device.open()? {
+        Some(gpu) => {
+            let sky = GpuSkyModel::new(&gpu, &model).map_err(gpu_error)?;
+            sky.render(&gpu, sun, &view).map_err(gpu_error)?.frame
+        }
+        None => SkyPicture::new(&model, sun).render(&view),
+    };
     frame.write(path, args.exposure, args.tone_map.into())?;
     eprintln!(
         "atmo: {} ({}x{}, {}, order {}) in {:.0} ms",

@@ -742,6 +742,15 @@ fn every_method_gives_the_same_picture_on_the_gpu_and_the_cpu() {
         "--sun-elevation",
         "5",
     ];
+    let shell_args = [
+        "sky",
+        "--sun-elevation",
+        "5",
+        "--directions",
+        "16",
+        "--shells",
+        "16",
+    ];
     let shafts_args = ["shafts", &fig6, "--planes", "8", "--supersampling", "1"];
     let clouds_args = [
         "clouds",
@@ -753,7 +762,8 @@ fn every_method_gives_the_same_picture_on_the_gpu_and_the_cpu() {
         "32",
     ];
     for (name, args) in [
-        ("sky", &table_args[..]),
+        ("sky-table", &table_args[..]),
+        ("sky-shells", &shell_args[..]),
         ("shafts", &shafts_args[..]),
         ("clouds", &clouds_args[..]),
     ] {

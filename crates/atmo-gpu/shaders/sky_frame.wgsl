@@ -1,6 +1,6 @@
 // A picture of the sky: each pixel's direction looked up bilinearly in the skylight
-// map (sky 4.2), black below the table's horizon, plus the sun's disc; both edges
-// anti-aliased over one pixel. Follows
+// map (sky 4.2), below the horizon in the ground map (a model's) or black (a table's),
+// plus the sun's disc; both edges anti-aliased over one pixel. Follows
 // atmo::sky::frame (SkyPicture::render) operation for operation.
 
 // Mirrors atmo_gpu::sky::SkyFrameParams.
@@ -28,9 +28,12 @@ struct SkyFrameParams {
     // edges are smooth over one pixel (atmo::sky::frame's Edges).
     sun_radius: f32,
     pixel: f32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+    // 1 when there is a ground map, its lookup as `lookup`'s, its last row and its
+    // azimuths.
+    has_ground: u32,
+    ground_y_last: f32,
+    ground_azimuths: u32,
+    ground_lookup: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: SkyFrameParams;
@@ -38,6 +41,8 @@ struct SkyFrameParams {
 @group(0) @binding(1) var<storage, read> map: array<f32>;
 // Out: linear sRGB radiance per pixel, rows top to bottom.
 @group(0) @binding(2) var<storage, read_write> frame: array<vec4<f32>>;
+// The ground map, [elevation][azimuth][channel] (unused without one).
+@group(0) @binding(3) var<storage, read> ground: array<f32>;
 
 const HALF_PI: f32 = 1.5707963;
 
@@ -49,22 +54,34 @@ fn fast_acos(x: f32) -> f32 {
     return select(r, 3.14159265 - r, x < 0.0);
 }
 
-fn texel(at: u32) -> vec3<f32> {
+fn texel(is_ground: bool, at: u32) -> vec3<f32> {
+    if is_ground {
+        return vec3<f32>(ground[3u * at], ground[3u * at + 1u], ground[3u * at + 2u]);
+    }
     return vec3<f32>(map[3u * at], map[3u * at + 1u], map[3u * at + 2u]);
 }
 
-// Bilinear at (azimuth from the sun in [0, pi], elevation), rad, clamped to the grid.
-fn sample(azimuth: f32, elevation: f32) -> vec3<f32> {
-    let g = params.lookup;
+// Bilinear at (azimuth from the sun in [0, pi], elevation), rad, clamped to the grid
+// (the sky's or the ground's), negative values clamped to zero as the CPU stores them.
+fn sample(is_ground: bool, azimuth: f32, elevation: f32) -> vec3<f32> {
+    var g = params.lookup;
+    var y_last = params.y_last;
+    var azimuths = params.azimuths;
+    if is_ground {
+        g = params.ground_lookup;
+        y_last = params.ground_y_last;
+        azimuths = params.ground_azimuths;
+    }
     let x = clamp(azimuth * g.x, 0.0, g.w);
-    let y = clamp((elevation - g.y) * g.z, 0.0, params.y_last);
-    let i = min(u32(x), params.azimuths - 2u);
-    let j = min(u32(y), u32(params.y_last) - 1u);
+    let y = clamp((elevation - g.y) * g.z, 0.0, y_last);
+    let i = min(u32(x), azimuths - 2u);
+    let j = min(u32(y), u32(y_last) - 1u);
     let fx = x - f32(i);
     let fy = y - f32(j);
-    let at = j * params.azimuths + i;
-    let lo = mix(texel(at), texel(at + 1u), fx);
-    let hi = mix(texel(at + params.azimuths), texel(at + params.azimuths + 1u), fx);
+    let at = j * azimuths + i;
+    let zero = vec3<f32>(0.0);
+    let lo = mix(max(texel(is_ground, at), zero), max(texel(is_ground, at + 1u), zero), fx);
+    let hi = mix(max(texel(is_ground, at + azimuths), zero), max(texel(is_ground, at + azimuths + 1u), zero), fx);
     return mix(lo, hi, fy);
 }
 
@@ -100,11 +117,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if horizontal > 1e-6 * len {
         c = (d.x * params.sun_horizontal.x + d.y * params.sun_horizontal.y) / horizontal;
     }
-    // The sky's share of the pixel, over one pixel at the horizon; below it, black
-    // (a table holds no ground: the application draws its terrain there).
+    // The sky's share of the pixel, over one pixel at the horizon; below it the ground
+    // map, or black for a table (the application draws its terrain there).
     let sky = clamp((elevation - params.ground_below) / params.pixel + 0.5, 0.0, 1.0);
+    let azimuth = fast_acos(c);
     if sky > 0.0 {
-        rgb = sky * sample(fast_acos(c), elevation);
+        rgb = sky * sample(false, azimuth, elevation);
+    }
+    if params.has_ground != 0u && sky < 1.0 {
+        rgb += (1.0 - sky) * sample(true, azimuth, elevation);
     }
     let sun = params.sun_direction.xyz;
     if params.sun_rgb.w != 0.0 && dot(d, sun) / len >= params.sun_direction.w {

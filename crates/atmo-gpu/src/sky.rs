@@ -1,13 +1,20 @@
-//! The sky from the skylight table on the GPU (sky 4.2): the table's factors live in
-//! storage buffers; per frame, the CPU interpolates the few hundred `t_k` (sky (17)),
-//! one compute pass sums the terms of every view direction into the skylight map, and
-//! a second draws the picture (perspective or fisheye) from it, as
-//! `atmo::sky::frame::SkyPicture` does on the CPU.
+//! The sky on the GPU, two ways, each ending in the same picture pass
+//! (`sky_frame.wgsl`, perspective or fisheye, as `atmo::sky::frame::SkyPicture` on the
+//! CPU):
+//!
+//! - [`GpuSkyTable`], from the skylight table (sky 4.2): the table's factors live in
+//!   storage buffers; per frame the CPU interpolates the few hundred `t_k` (sky (17))
+//!   and one compute pass sums the terms of every view direction into the map.
+//! - [`GpuSkyModel`], by the shell method (sky 3): a model's sun-independent maps
+//!   (`atmo::sky::export`) live in one storage buffer; per sun one compute pass a grid
+//!   sums every view ray's shell crossings into the skylight map and the ground map.
 
+use atmo::atmosphere::spectrum::SpectrumToRgb;
 use atmo::image::Frame;
-use atmo::sky::frame::{sun_disc_rgb, GridLookup, PixelBasis, View};
+use atmo::sky::export::RayArrays;
+use atmo::sky::frame::{direction_of, sun_disc_rgb, GridLookup, PixelBasis, View};
 use atmo::sky::table::SkylightTable;
-use atmo::sky::Sun;
+use atmo::sky::{DirectionGrid, SkyModel, Sun};
 use glam::Vec3;
 
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
@@ -44,10 +51,155 @@ gpu_struct! {
         azimuths: u32,
         sun_radius: f32,
         pixel: f32,
-        pad0: u32,
-        pad1: u32,
-        pad2: u32,
+        has_ground: u32,
+        ground_y_last: f32,
+        ground_azimuths: u32,
+        ground_lookup: [f32; 4],
     }
+}
+
+gpu_struct! {
+    /// The shell pass's sun, grid, constants and where each region of the model's
+    /// buffer starts (see sky_shells.wgsl).
+    pub struct ShellParams in "sky_shells.wgsl" {
+        sun: [f32; 4],
+        grid: [f32; 4],
+        bottom: f32,
+        top: f32,
+        sun_radius: f32,
+        ground_albedo: f32,
+        lanes: u32,
+        order: u32,
+        shells: u32,
+        light_entries: u32,
+        mu_size: u32,
+        r_size: u32,
+        sun_bins: u32,
+        sun_bins_a: f32,
+        rayleigh_kind: u32,
+        rayleigh_g: f32,
+        mie_kind: u32,
+        mie_g: f32,
+        rays_at: u32,
+        samples_at: u32,
+        rayleigh_at: u32,
+        mie_at: u32,
+        ground_at: u32,
+        shells_at: u32,
+        light_at: u32,
+        irradiance_at: u32,
+        transmittance_at: u32,
+        moments_at: u32,
+        rgb_at: u32,
+        pad: u32,
+    }
+}
+
+/// The picture pass, shared by the table and the model.
+struct FramePass {
+    pipeline: wgpu::ComputePipeline,
+    /// Bound as the ground map when there is none.
+    no_ground: wgpu::Buffer,
+}
+
+/// What the picture pass reads: the maps, their grids, and the sun's disc.
+struct FrameInputs<'m> {
+    sky: &'m wgpu::Buffer,
+    sky_grid: DirectionGrid,
+    /// The ground map and its grid, below `ground_below` rad (a model's).
+    ground: Option<(&'m wgpu::Buffer, DirectionGrid)>,
+    ground_below: f64,
+    /// Linear sRGB radiance of the sun's disc, and its angular radius (rad).
+    sun_rgb: [f32; 3],
+    sun_radius: f64,
+}
+
+impl FramePass {
+    fn new(gpu: &Gpu) -> Result<Self, GpuError> {
+        let module = gpu.shader("sky_frame.wgsl", include_str!("../shaders/sky_frame.wgsl"))?;
+        Ok(FramePass {
+            pipeline: gpu.compute_pipeline(&module, "main", None)?,
+            no_ground: gpu.storage("no ground map", &[0; 16], "")?,
+        })
+    }
+
+    /// Records the picture of `view` for `sun` into `out` (RGBA f32 per pixel).
+    fn record(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        inputs: &FrameInputs,
+        sun: Sun,
+        view: &View,
+        out: &wgpu::Buffer,
+    ) {
+        let params = gpu.uniform("sky frame", &frame_params(inputs, sun, view));
+        let ground = inputs.ground.as_ref().map_or(&self.no_ground, |(g, _)| *g);
+        let group = gpu.bind_group(
+            &self.pipeline.get_bind_group_layout(0),
+            &[
+                params.as_entire_binding(),
+                inputs.sky.as_entire_binding(),
+                out.as_entire_binding(),
+                ground.as_entire_binding(),
+            ],
+        );
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(view.width.div_ceil(8), view.height.div_ceil(8), 1);
+    }
+}
+
+/// The picture pass's parameters (the CPU's `SkyPicture` and `PixelBasis`).
+fn frame_params(inputs: &FrameInputs, sun: Sun, view: &View) -> SkyFrameParams {
+    let lookup = GridLookup::new(&inputs.sky_grid);
+    let direction = direction_of(sun.azimuth, sun.elevation).as_vec3();
+    let rgb = inputs.sun_rgb;
+    let (sin_a, cos_a) = sun.azimuth.sin_cos();
+    let v4 = |v: Vec3| [v.x, v.y, v.z, 0.0];
+    let basis = view.projection.pixel_basis(view.width, view.height);
+    let (sun_radius, pixel) = (inputs.sun_radius as f32, basis.pixel_angle());
+    let ground = inputs.ground.as_ref().map(|(_, g)| GridLookup::new(g));
+    let mut p = SkyFrameParams {
+        origin: [0.0; 4],
+        right: [0.0; 4],
+        up: [0.0; 4],
+        sun_direction: [
+            direction.x,
+            direction.y,
+            direction.z,
+            (sun_radius + pixel).cos(),
+        ],
+        sun_rgb: [rgb[0], rgb[1], rgb[2], view.sun_disc as u32 as f32],
+        sun_horizontal: [sin_a as f32, cos_a as f32, 0.0, 0.0],
+        lookup: [lookup.x_scale, lookup.y_min, lookup.y_scale, lookup.x_last],
+        y_last: lookup.y_last,
+        ground_below: inputs.ground_below as f32,
+        radius: 1.0,
+        fisheye: 0,
+        width: view.width,
+        height: view.height,
+        azimuths: lookup.azimuths as u32,
+        sun_radius,
+        pixel,
+        has_ground: ground.is_some() as u32,
+        ground_y_last: ground.map_or(1.0, |g| g.y_last),
+        ground_azimuths: ground.map_or(2, |g| g.azimuths as u32),
+        ground_lookup: ground.map_or([0.0; 4], |g| [g.x_scale, g.y_min, g.y_scale, g.x_last]),
+    };
+    match basis {
+        PixelBasis::Perspective { origin, right, up } => {
+            (p.origin, p.right, p.up) = (v4(origin), v4(right), v4(up));
+        }
+        PixelBasis::Fisheye { centre, radius } => {
+            p.fisheye = 1;
+            p.radius = radius;
+            p.sun_horizontal[2] = centre.x;
+            p.sun_horizontal[3] = centre.y;
+        }
+    }
+    p
 }
 
 /// A skylight table uploaded, with its two pipelines.
@@ -60,7 +212,7 @@ pub struct GpuSkyTable<'a> {
     /// The skylight map, written by the map pass, read by the frame pass.
     map: wgpu::Buffer,
     map_pass: wgpu::ComputePipeline,
-    frame_pass: wgpu::ComputePipeline,
+    frame_pass: FramePass,
 }
 
 impl<'a> GpuSkyTable<'a> {
@@ -82,8 +234,6 @@ impl<'a> GpuSkyTable<'a> {
         let map_bytes = (f.directions * 3 * 4) as u64;
         let map = output(gpu, "the skylight map", map_bytes, setting)?;
         let map_module = gpu.shader("sky_map.wgsl", include_str!("../shaders/sky_map.wgsl"))?;
-        let frame_module =
-            gpu.shader("sky_frame.wgsl", include_str!("../shaders/sky_frame.wgsl"))?;
         Ok(GpuSkyTable {
             table,
             params: SkyMapParams {
@@ -97,7 +247,7 @@ impl<'a> GpuSkyTable<'a> {
             used,
             map,
             map_pass: gpu.compute_pipeline(&map_module, "main", None)?,
-            frame_pass: gpu.compute_pipeline(&frame_module, "main", None)?,
+            frame_pass: FramePass::new(gpu)?,
         })
     }
 
@@ -167,81 +317,264 @@ impl<'a> GpuSkyTable<'a> {
         altitude_m: f64,
         view: &View,
     ) -> Result<Rendered, GpuError> {
-        let pixels = view.width as u64 * view.height as u64;
-        let out = output(gpu, "the sky frame", pixels * 16, "the image size")?;
         let (coefficients, map_params) = self.map_inputs(gpu, sun.elevation, altitude_m)?;
-        let params = gpu.uniform("sky frame", &self.frame_params(sun, altitude_m, view));
-        let group = gpu.bind_group(
-            &self.frame_pass.get_bind_group_layout(0),
-            &[
-                params.as_entire_binding(),
-                self.map.as_entire_binding(),
-                out.as_entire_binding(),
-            ],
-        );
-        let gpu_ms = gpu.run("the sky frame", |encoder, _| {
-            self.record_map(gpu, encoder, &coefficients, &map_params);
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.frame_pass);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(view.width.div_ceil(8), view.height.div_ceil(8), 1);
+        let atmosphere = self.table.atmosphere();
+        let grid = self.table.grid(altitude_m);
+        let inputs = FrameInputs {
+            sky: &self.map,
+            ground_below: grid.elevation_min,
+            sky_grid: grid,
+            ground: None,
+            sun_rgb: sun_disc_rgb(atmosphere, altitude_m, sun.elevation),
+            sun_radius: atmosphere.sun_angular_radius,
+        };
+        picture(gpu, &self.frame_pass, &inputs, sun, view, |encoder| {
+            self.record_map(gpu, encoder, &coefficients, &map_params)
+        })
+    }
+}
+
+/// A sky model uploaded: its sun-independent maps in one buffer, the shell pass, and the
+/// skylight and ground maps it fills per sun.
+pub struct GpuSkyModel<'a> {
+    model: &'a SkyModel,
+    data: wgpu::Buffer,
+    /// The shell pass's parameters without the sun, for the sky's and the ground's rays.
+    sky_params: ShellParams,
+    ground_params: ShellParams,
+    sky_grid: DirectionGrid,
+    ground_grid: DirectionGrid,
+    sky_map: wgpu::Buffer,
+    ground_map: wgpu::Buffer,
+    shells: wgpu::ComputePipeline,
+    frame_pass: FramePass,
+}
+
+impl<'a> GpuSkyModel<'a> {
+    /// Uploads `model`'s maps; an error for a model the GPU cannot evaluate yet
+    /// (aerosols in the higher orders) or above the device's limits.
+    pub fn new(gpu: &Gpu, model: &'a SkyModel) -> Result<Self, GpuError> {
+        let arrays = model.arrays().ok_or_else(|| {
+            atmo::Error::Invalid(
+                "aerosols in the higher orders (--multiple-mie) run on the CPU only; \
+                 use --backend cpu"
+                    .into(),
+            )
         })?;
-        let bytes = gpu.read("the sky frame", &out, 0, pixels * 16)?;
-        Ok(Rendered {
-            frame: frame_of(view.width, view.height, &bytes),
-            gpu_ms,
+        let mut data: Vec<[f32; 4]> = Vec::new();
+        let mut at = |values: &[[f32; 4]]| {
+            let start = data.len() as u32;
+            data.extend_from_slice(values);
+            start
+        };
+        let shells: Vec<[f32; 4]> = arrays
+            .shell_radius
+            .iter()
+            .zip(arrays.light_mu_low.iter().zip(&arrays.light_scale))
+            .map(|(&r, (&low, &scale))| [r, low, scale, 0.0])
+            .collect();
+        let rgb: Vec<[f32; 4]> = arrays
+            .to_rgb
+            .iter()
+            .flat_map(|lane| lane.map(|[r, g, b]| [r, g, b, 0.0]))
+            .collect();
+        let common = ShellParams {
+            sun: [0.0; 4],
+            grid: [0.0; 4],
+            bottom: arrays.bottom_m,
+            top: arrays.top_m,
+            sun_radius: arrays.sun_radius,
+            ground_albedo: arrays.ground_albedo,
+            lanes: arrays.lanes as u32,
+            order: arrays.order,
+            shells: shells.len() as u32,
+            light_entries: arrays.light_map_entries as u32,
+            mu_size: arrays.mu_size as u32,
+            r_size: arrays.r_size as u32,
+            sun_bins: arrays.sun_bins as u32,
+            sun_bins_a: arrays.sun_bins_a,
+            rayleigh_kind: arrays.rayleigh_phase.kind,
+            rayleigh_g: arrays.rayleigh_phase.g,
+            mie_kind: arrays.mie_phase.kind,
+            mie_g: arrays.mie_phase.g,
+            rays_at: 0,
+            samples_at: 0,
+            rayleigh_at: 0,
+            mie_at: 0,
+            ground_at: 0,
+            shells_at: at(&shells),
+            light_at: at(&arrays.light_map),
+            irradiance_at: at(&arrays.irradiance),
+            transmittance_at: at(&arrays.transmittance),
+            moments_at: at(&arrays.moments),
+            rgb_at: at(&rgb),
+            pad: 0,
+        };
+        let mut of = |rays: &RayArrays| {
+            let records: Vec<[f32; 4]> = (0..rays.origin_r.len())
+                .map(|j| {
+                    [
+                        f32::from_bits(rays.ray_start[j]),
+                        f32::from_bits(rays.ray_start[j + 1]),
+                        rays.origin_r[j],
+                        rays.ground_distance[j],
+                    ]
+                })
+                .collect();
+            let samples: Vec<[f32; 4]> = (0..rays.shell.len())
+                .flat_map(|s| {
+                    [
+                        [
+                            f32::from_bits(rays.shell[s]),
+                            rays.between[s],
+                            rays.altitude[s],
+                            rays.distance[s],
+                        ],
+                        [rays.mu[s], 0.0, 0.0, 0.0],
+                    ]
+                })
+                .collect();
+            let g = &rays.grid;
+            ShellParams {
+                grid: [
+                    g.elevation_min as f32,
+                    g.elevation_max as f32,
+                    g.azimuths as f32,
+                    g.elevations as f32,
+                ],
+                rays_at: at(&records),
+                samples_at: at(&samples),
+                rayleigh_at: at(&rays.rayleigh),
+                mie_at: at(&rays.mie),
+                ground_at: at(&rays.ground),
+                ..common
+            }
+        };
+        let sky_params = of(&arrays.sky);
+        let ground_params = of(&arrays.ground_rays);
+        let bytes = bytemuck::cast_slice(&data);
+        let buffer = gpu.storage("the sky model's maps", bytes, "--shells or --directions")?;
+        let map = |grid: &DirectionGrid, what: &str| {
+            output(
+                gpu,
+                what,
+                (grid.azimuths * grid.elevations * 12) as u64,
+                "--directions",
+            )
+        };
+        let module = gpu.shader(
+            "sky_shells.wgsl",
+            include_str!("../shaders/sky_shells.wgsl"),
+        )?;
+        Ok(GpuSkyModel {
+            model,
+            data: buffer,
+            sky_params,
+            ground_params,
+            sky_map: map(&arrays.sky.grid, "the skylight map")?,
+            ground_map: map(&arrays.ground_rays.grid, "the ground map")?,
+            sky_grid: arrays.sky.grid,
+            ground_grid: arrays.ground_rays.grid,
+            shells: gpu.compute_pipeline(&module, "main", None)?,
+            frame_pass: FramePass::new(gpu)?,
         })
     }
 
-    fn frame_params(&self, sun: Sun, altitude_m: f64, view: &View) -> SkyFrameParams {
-        let atmosphere = self.table.atmosphere();
-        let grid = self.table.grid(altitude_m);
-        let lookup = GridLookup::new(&grid);
-        let direction = atmo::sky::frame::direction_of(sun.azimuth, sun.elevation).as_vec3();
-        let rgb = sun_disc_rgb(atmosphere, altitude_m, sun.elevation);
-        let (sin_a, cos_a) = sun.azimuth.sin_cos();
-        let v4 = |v: Vec3| [v.x, v.y, v.z, 0.0];
-        let basis = view.projection.pixel_basis(view.width, view.height);
-        let (sun_radius, pixel) = (atmosphere.sun_angular_radius as f32, basis.pixel_angle());
-        let mut p = SkyFrameParams {
-            origin: [0.0; 4],
-            right: [0.0; 4],
-            up: [0.0; 4],
-            sun_direction: [
-                direction.x,
-                direction.y,
-                direction.z,
-                (sun_radius + pixel).cos(),
-            ],
-            sun_rgb: [rgb[0], rgb[1], rgb[2], view.sun_disc as u32 as f32],
-            sun_horizontal: [sin_a as f32, cos_a as f32, 0.0, 0.0],
-            lookup: [lookup.x_scale, lookup.y_min, lookup.y_scale, lookup.x_last],
-            y_last: lookup.y_last,
-            ground_below: grid.elevation_min as f32,
-            radius: 1.0,
-            fisheye: 0,
-            width: view.width,
-            height: view.height,
-            azimuths: lookup.azimuths as u32,
-            sun_radius,
-            pixel,
-            pad0: 0,
-            pad1: 0,
-            pad2: 0,
-        };
-        match basis {
-            PixelBasis::Perspective { origin, right, up } => {
-                (p.origin, p.right, p.up) = (v4(origin), v4(right), v4(up));
-            }
-            PixelBasis::Fisheye { centre, radius } => {
-                p.fisheye = 1;
-                p.radius = radius;
-                p.sun_horizontal[2] = centre.x;
-                p.sun_horizontal[3] = centre.y;
-            }
+    /// Records the shell pass of both grids for a sun at `sun_elevation` rad.
+    fn record_maps(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder, sun_elevation: f64) {
+        let (sin_s, cos_s) = sun_elevation.sin_cos();
+        for (params, map, grid) in [
+            (&self.sky_params, &self.sky_map, &self.sky_grid),
+            (&self.ground_params, &self.ground_map, &self.ground_grid),
+        ] {
+            let params = ShellParams {
+                sun: [sin_s as f32, cos_s as f32, 0.0, 0.0],
+                ..*params
+            };
+            let uniform = gpu.uniform("the shell pass", &params);
+            let group = gpu.bind_group(
+                &self.shells.get_bind_group_layout(0),
+                &[
+                    uniform.as_entire_binding(),
+                    self.data.as_entire_binding(),
+                    map.as_entire_binding(),
+                ],
+            );
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.shells);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(
+                (grid.azimuths as u32).div_ceil(8),
+                (grid.elevations as u32).div_ceil(8),
+                1,
+            );
         }
-        p
     }
+
+    /// Fills the skylight and ground maps for a sun at `sun_elevation` rad, on the GPU
+    /// only (what a renderer does each frame); the GPU time, where timed, ms.
+    pub fn maps_timed(&self, gpu: &Gpu, sun_elevation: f64) -> Result<Option<f64>, GpuError> {
+        gpu.run("the shell pass", |encoder, _| {
+            self.record_maps(gpu, encoder, sun_elevation)
+        })
+    }
+
+    /// The skylight map and the ground map (linear sRGB, `[elevation][azimuth]`) for a
+    /// sun at `sun_elevation` rad, as `SkyModel::skylight_map` and `ground_map` give
+    /// them on the CPU, converted to RGB.
+    pub fn maps(&self, gpu: &Gpu, sun_elevation: f64) -> Result<[Vec<Vec3>; 2], GpuError> {
+        self.maps_timed(gpu, sun_elevation)?;
+        let read = |map: &wgpu::Buffer| -> Result<Vec<Vec3>, GpuError> {
+            let bytes = gpu.read("the shell maps", map, 0, map.size())?;
+            let values: &[f32] = bytemuck::cast_slice(&bytes);
+            Ok(values.chunks(3).map(Vec3::from_slice).collect())
+        };
+        Ok([read(&self.sky_map)?, read(&self.ground_map)?])
+    }
+
+    /// The picture of `view` for `sun`, as `SkyPicture::new(model, sun).render(view)`.
+    pub fn render(&self, gpu: &Gpu, sun: Sun, view: &View) -> Result<Rendered, GpuError> {
+        let atmosphere = self.model.atmosphere();
+        let mut spectrum = vec![0.0f32; atmosphere.channels()];
+        self.model.sun_radiance(sun.elevation, &mut spectrum);
+        let inputs = FrameInputs {
+            sky: &self.sky_map,
+            sky_grid: self.sky_grid.clone(),
+            ground: Some((&self.ground_map, self.ground_grid.clone())),
+            ground_below: -atmo::atmosphere::geometry::horizon_dip(
+                atmosphere.bottom_radius_m,
+                self.model.altitude_m(),
+            ),
+            sun_rgb: SpectrumToRgb::new(&atmosphere.wavelengths_nm).rgb(&spectrum),
+            sun_radius: atmosphere.sun_angular_radius,
+        };
+        picture(gpu, &self.frame_pass, &inputs, sun, view, |encoder| {
+            self.record_maps(gpu, encoder, sun.elevation)
+        })
+    }
+}
+
+/// Records `maps` (the passes that fill the maps) and the picture pass in one
+/// submission, and reads the picture back.
+fn picture(
+    gpu: &Gpu,
+    pass: &FramePass,
+    inputs: &FrameInputs,
+    sun: Sun,
+    view: &View,
+    maps: impl FnOnce(&mut wgpu::CommandEncoder),
+) -> Result<Rendered, GpuError> {
+    let pixels = view.width as u64 * view.height as u64;
+    let out = output(gpu, "the sky frame", pixels * 16, "the image size")?;
+    let gpu_ms = gpu.run("the sky frame", |encoder, _| {
+        maps(encoder);
+        pass.record(gpu, encoder, inputs, sun, view, &out);
+    })?;
+    let bytes = gpu.read("the sky frame", &out, 0, pixels * 16)?;
+    Ok(Rendered {
+        frame: frame_of(view.width, view.height, &bytes),
+        gpu_ms,
+    })
 }
 
 /// A storage buffer the GPU writes and the CPU reads back, checked against the limits.

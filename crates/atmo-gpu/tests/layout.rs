@@ -48,6 +48,7 @@ fn check<T: GpuStruct>() {
 fn sky_structs_match_their_wgsl() {
     check::<atmo_gpu::sky::SkyMapParams>();
     check::<atmo_gpu::sky::SkyFrameParams>();
+    check::<atmo_gpu::sky::ShellParams>();
 }
 
 #[test]

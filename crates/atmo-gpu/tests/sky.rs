@@ -4,11 +4,12 @@ mod common;
 
 use std::sync::OnceLock;
 
+use atmo::atmosphere::spectrum::SpectrumToRgb;
 use atmo::sky::frame::{Projection, SkyPicture, View};
 use atmo::sky::table::{SkylightTable, TableSettings};
-use atmo::sky::{SkySettings, Sun};
+use atmo::sky::{SkyModel, SkySettings, Sun};
 use atmo::Atmosphere;
-use atmo_gpu::sky::GpuSkyTable;
+use atmo_gpu::sky::{GpuSkyModel, GpuSkyTable};
 use common::{assert_close, gpu, mean_level};
 
 /// A coarse table (16 x 16 directions, 12 suns, 4 altitudes) that builds in a second.
@@ -89,4 +90,101 @@ fn a_sun_outside_the_table_is_refused_before_any_gpu_work() {
         err.to_string().contains("altitude") || err.to_string().contains("sun"),
         "{err}"
     );
+}
+
+/// A model with coarse settings (a fraction of a second to build).
+fn model(atmosphere: &Atmosphere, order: u32, altitude: f64) -> SkyModel {
+    let settings = SkySettings {
+        directions: 24,
+        shells: 24,
+        scattering_directions: 32,
+        sun_bins: 32,
+        order,
+        ..SkySettings::default()
+    };
+    SkyModel::new(atmosphere, &settings, altitude).unwrap()
+}
+
+#[test]
+fn the_shell_method_maps_equal_the_cpu_maps() {
+    let Some(gpu) = gpu() else { return };
+    let earth = Atmosphere::earth();
+    let paper = Atmosphere::preset("paper").unwrap();
+    for (atmosphere, order, altitude, sun_deg) in [
+        (&earth, 2, 0.0, 30.0f64),
+        (&earth, 2, 9000.0, -2.0),
+        (&earth, 3, 2000.0, 4.0),
+        (&paper, 1, 500.0, 60.0),
+    ] {
+        let model = model(atmosphere, order, altitude);
+        let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+        let sky = GpuSkyModel::new(&gpu, &model).unwrap();
+        let sun = sun_deg.to_radians();
+        let [sky_map, ground_map] = sky.maps(&gpu, sun).unwrap();
+        for (what, gpu_map, cpu_map) in [
+            ("sky", sky_map, model.skylight_map(sun).to_rgb(&colour)),
+            ("ground", ground_map, model.ground_map(sun).to_rgb(&colour)),
+        ] {
+            assert_eq!(gpu_map.len(), cpu_map.len());
+            let brightest = cpu_map
+                .iter()
+                .map(|v| v[0].max(v[1]).max(v[2]))
+                .fold(0.0, f32::max);
+            // From the ground itself the ground map is black (the rays end at once).
+            assert!(
+                brightest > 0.0 || (what, altitude) == ("ground", 0.0),
+                "{what}: black"
+            );
+            for (d, (a, b)) in gpu_map.iter().zip(&cpu_map).enumerate() {
+                // f32 where the CPU keeps some f64 (radii, distances): a few 1e-4 of the
+                // brightest value at most.
+                let b = glam::Vec3::from(*b);
+                assert!(
+                    (*a - b).abs().max_element() <= 3e-4 * brightest,
+                    "{} order {order} at {altitude} m, sun {sun_deg} deg, {what} {d}: {a} vs {b}",
+                    atmosphere.name
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_shell_method_picture_matches_the_cpu_picture() {
+    let Some(gpu) = gpu() else { return };
+    let earth = Atmosphere::earth();
+    let model = model(&earth, 2, 3000.0);
+    let sky = GpuSkyModel::new(&gpu, &model).unwrap();
+    let sun = Sun::from_degrees(6.0, 200.0).unwrap();
+    for projection in [
+        // Looking down past the horizon: the ground map, the horizon's edge, the sun.
+        Projection::perspective_degrees(200.0, -2.0, 60.0).unwrap(),
+        Projection::Fisheye,
+    ] {
+        let view = View {
+            width: 96,
+            height: 64,
+            projection,
+            sun_disc: true,
+        };
+        let cpu = SkyPicture::new(&model, sun).render(&view);
+        let out = sky.render(&gpu, sun, &view).unwrap().frame;
+        assert!(mean_level(&out, 0.15) > 20.0, "{projection:?}: dark");
+        assert_close(&out, &cpu, 0.15, &format!("shells {projection:?}"));
+    }
+}
+
+#[test]
+fn aerosols_in_the_higher_orders_are_refused_with_a_way_out() {
+    let Some(gpu) = gpu() else { return };
+    let settings = SkySettings {
+        directions: 8,
+        shells: 8,
+        scattering_directions: 8,
+        multiple_mie: true,
+        ..SkySettings::default()
+    };
+    let model = SkyModel::new(&Atmosphere::earth(), &settings, 0.0).unwrap();
+    let err = GpuSkyModel::new(&gpu, &model).err().unwrap().to_string();
+    assert!(err.contains("--backend cpu"), "{err}");
 }

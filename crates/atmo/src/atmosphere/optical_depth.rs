@@ -63,14 +63,14 @@ pub fn transmittance_to_sun(atmosphere: &Atmosphere, r: f64, mu_s: f64, out: &mu
 /// which [`TransmittanceTable::to_sun`] then scales by the visible part of the disc.
 #[derive(Debug, Clone)]
 pub struct TransmittanceTable {
-    bottom: f64,
-    top: f64,
-    sun_radius: f64,
-    channels: usize,
-    mu_size: usize,
-    r_size: usize,
+    pub(crate) bottom: f64,
+    pub(crate) top: f64,
+    pub(crate) sun_radius: f64,
+    pub(crate) channels: usize,
+    pub(crate) mu_size: usize,
+    pub(crate) r_size: usize,
     /// `[r][mu][channel]`, transmittance in (0, 1].
-    values: Vec<f32>,
+    pub(crate) values: Vec<f32>,
 }
 
 impl TransmittanceTable {

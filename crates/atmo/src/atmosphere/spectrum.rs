@@ -59,7 +59,7 @@ pub fn blackbody_srgb(kelvin: f64) -> [f64; 3] {
 #[derive(Debug, Clone)]
 pub struct SpectrumToRgb {
     /// `weights[rgb][channel]`: contribution of each sampled wavelength to each primary.
-    weights: [Vec<f32>; 3],
+    pub(crate) weights: [Vec<f32>; 3],
 }
 
 impl SpectrumToRgb {

@@ -26,20 +26,20 @@ use crate::quadrature::SymmetricSphereRule;
 /// Entries per shell of the sunlight light map: uniform in `mu_s` from the last light
 /// to the zenith, about 0.001 apart (a tenth of the sun disc's passage through the
 /// horizon), so a lookup is one multiply.
-const LIGHT_MAP_SIZE: usize = 1024;
+pub(crate) const LIGHT_MAP_SIZE: usize = 1024;
 
 /// Sunlight `I_sun exp(-tau)` reaching each shell, over the sun's zenith cosine, sky (6).
 #[derive(Debug, Clone)]
 pub struct LightMap {
     /// For samples between shells.
-    table: Arc<TransmittanceTable>,
-    irradiance: Vec<f32>,
+    pub(crate) table: Arc<TransmittanceTable>,
+    pub(crate) irradiance: Vec<f32>,
     /// Per shell, the lowest `mu_s` with any sunlight (the disc's last edge setting).
-    mu_low: Vec<f64>,
+    pub(crate) mu_low: Vec<f64>,
     /// Per shell, entries per unit of `mu_s`.
-    scale: Vec<f64>,
+    pub(crate) scale: Vec<f64>,
     /// `[shell][entry][lane]`; entry `k` is at `mu_s = mu_low + k / scale`.
-    values: Vec<Lane>,
+    pub(crate) values: Vec<Lane>,
 }
 
 impl LightMap {
@@ -127,12 +127,12 @@ fn sunlight(table: &TransmittanceTable, irradiance: &[f32], r: f64, mu_s: f64, o
 /// Bins over the sun's zenith cosine: uniform in `x` in [-1, 1] with
 /// `mu_s = x (a + (1 - a)|x|)`, three times denser near the horizon than at the zenith.
 #[derive(Debug, Clone, Copy)]
-struct SunBins {
-    count: usize,
+pub(crate) struct SunBins {
+    pub(crate) count: usize,
 }
 
 impl SunBins {
-    const A: f64 = 0.3;
+    pub(crate) const A: f64 = 0.3;
 
     fn mu_s(&self, b: usize) -> f64 {
         let x = 2.0 * b as f64 / (self.count - 1) as f64 - 1.0;
@@ -156,7 +156,7 @@ impl SunBins {
 
 /// Number of moments that reduce a Rayleigh-phase integral: the integral of the light
 /// itself and of `x^2`, `y^2`, `z^2` and `xz` times it.
-const MOMENTS: usize = 5;
+pub(crate) const MOMENTS: usize = 5;
 
 /// The light map of scattered light of one order, `I_t(P_k, omega_i)` of sky (10)-(11):
 /// radiance arriving at each shell, for each sun zenith bin, from each of `N_omega`
@@ -164,14 +164,14 @@ const MOMENTS: usize = 5;
 #[derive(Debug, Clone)]
 pub struct ScatteredLightMap {
     channels: usize,
-    bins: SunBins,
+    pub(crate) bins: SunBins,
     /// The directions of each shell, split at its horizon.
     rules: Vec<SymmetricSphereRule>,
     /// `[shell][bin][direction][channel]`, radiance.
     values: Vec<f32>,
     /// `[shell][bin][moment][lane]`: the quadrature of sky (11) reduced to moments,
     /// radiance x sr, packed.
-    moments: Vec<Lane>,
+    pub(crate) moments: Vec<Lane>,
 }
 
 impl ScatteredLightMap {

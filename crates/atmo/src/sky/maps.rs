@@ -65,32 +65,32 @@ const INTERVAL_SEGMENTS: usize = 2;
 /// rays, each starting on a shell.
 #[derive(Debug, Clone)]
 pub struct ScatteringMaps {
-    channels: usize,
+    pub(crate) channels: usize,
     /// Sample range of each ray: `ray_start[i]..ray_start[i + 1]`.
-    ray_start: Vec<u32>,
+    pub(crate) ray_start: Vec<u32>,
     /// Radius (m) of each ray's origin.
-    origin_r: Vec<f64>,
+    pub(crate) origin_r: Vec<f64>,
     /// Shell of each sample: the one it lies on, or the one just below it.
-    shell: Vec<u16>,
+    pub(crate) shell: Vec<u16>,
     /// 0 for a sample on its shell; otherwise its fractional position in radius
     /// between `shell` and the next shell up (a sub-sample of a long interval).
-    between: Vec<f32>,
+    pub(crate) between: Vec<f32>,
     /// Radius (m) of each sample.
-    radius: Vec<f64>,
+    pub(crate) radius: Vec<f64>,
     /// Distance (m) of each sample from its ray's origin.
-    distance: Vec<f64>,
+    pub(crate) distance: Vec<f64>,
     /// Zenith cosine of the ray's direction at each sample.
-    mu: Vec<f64>,
+    pub(crate) mu: Vec<f64>,
     /// `[sample][lane]`: Rayleigh scattering coefficient x density map x attenuation
     /// map x quadrature weight (m^-1 x m = dimensionless), packed.
-    rayleigh: Vec<Lane>,
+    pub(crate) rayleigh: Vec<Lane>,
     /// The same for aerosols.
-    mie: Vec<Lane>,
+    pub(crate) mie: Vec<Lane>,
     /// `[ray][channel]`: ground albedo / pi x attenuation to the ground; zero for rays
     /// that do not end on the ground or over a black one.
-    ground: Vec<f32>,
+    pub(crate) ground: Vec<f32>,
     /// Distance to the ground (m) of each ray, or a negative value.
-    ground_distance: Vec<f64>,
+    pub(crate) ground_distance: Vec<f64>,
 }
 
 /// Where the sun is, seen from a ray's origin, and the ray's angle to it.

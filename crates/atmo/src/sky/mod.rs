@@ -9,6 +9,7 @@
 //! elevation and altitude, compressed by SVD, for drawing in well under a millisecond
 //! (docs/sky-table.md).
 
+pub mod export;
 pub mod frame;
 pub mod grid;
 pub mod light_map;

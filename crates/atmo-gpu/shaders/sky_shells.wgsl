@@ -1,0 +1,231 @@
+// The skylight map of a sun by the shell method (sky 3): for each view direction of a
+// grid, the sum over its ray's shell crossings of the light map x phase map x density
+// map x attenuation map, sky (3), plus the scattered light of the orders below through
+// the moments of the scattered light maps, sky (11), and the sunlit ground at the end of
+// the ray. The sun-independent maps come from atmo::sky::export::ModelArrays; this is
+// ScatteringMaps::radiance operation for operation, one invocation per direction.
+
+// Mirrors atmo_gpu::sky::ShellParams.
+struct ShellParams {
+    // sin and cos of the sun's elevation.
+    sun: vec4<f32>,
+    // Grid: lowest and highest elevation (rad), azimuths, elevations.
+    grid: vec4<f32>,
+    bottom: f32,
+    top: f32,
+    sun_radius: f32,
+    ground_albedo: f32,
+    lanes: u32,
+    order: u32,
+    shells: u32,
+    light_entries: u32,
+    mu_size: u32,
+    r_size: u32,
+    sun_bins: u32,
+    sun_bins_a: f32,
+    rayleigh_kind: u32,
+    rayleigh_g: f32,
+    mie_kind: u32,
+    mie_g: f32,
+    // Where each region starts in `data`, in vec4s.
+    rays_at: u32,
+    samples_at: u32,
+    rayleigh_at: u32,
+    mie_at: u32,
+    ground_at: u32,
+    shells_at: u32,
+    light_at: u32,
+    irradiance_at: u32,
+    transmittance_at: u32,
+    moments_at: u32,
+    rgb_at: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: ShellParams;
+// Rays (start bits, end bits, origin radius, ground distance), samples (2 vec4: shell
+// bits, between, altitude, distance; mu), the Rayleigh and aerosol maps [sample][lane],
+// the ground [ray][lane], shells (radius, mu_low, scale), the light map
+// [shell][entry][lane], the irradiance [lane], the transmittance [r][mu][lane], the
+// moments [order][shell][bin][moment][lane] and the colour matrix [lane][rgb].
+@group(0) @binding(1) var<storage, read> data: array<vec4<f32>>;
+// Out: linear sRGB, [elevation][azimuth][rgb].
+@group(0) @binding(2) var<storage, read_write> map: array<f32>;
+
+const PI: f32 = 3.14159265;
+const MOMENTS: u32 = 5u;
+const MAX_LANES: u32 = 16u;
+
+fn phase(kind: u32, g: f32, c: f32) -> f32 {
+    if kind == 0u {
+        return 3.0 / (16.0 * PI) * (1.0 + c * c);
+    }
+    if kind == 1u {
+        let half = 0.5 * (1.0 + c);
+        return (1.0 + 50.0 * half * half * half) / (54.0 * PI);
+    }
+    let denom = 1.0 + g * g - 2.0 * g * c;
+    if kind == 2u {
+        return (1.0 - g * g) / (4.0 * PI * denom * sqrt(denom));
+    }
+    return 3.0 / (8.0 * PI) * (1.0 - g * g) * (1.0 + c * c) / ((2.0 + g * g) * denom * sqrt(denom));
+}
+
+// The light map of sunlight at shell `shell`, lane `l` (LightMap::sample).
+fn light_map(shell: u32, mu_s: f32, l: u32) -> vec4<f32> {
+    let s = data[params.shells_at + shell];
+    if mu_s <= s.y {
+        return vec4<f32>(0.0);
+    }
+    let x = (mu_s - s.y) * s.z;
+    let k = min(u32(x), params.light_entries - 2u);
+    let f = x - f32(k);
+    let base = params.light_at + (shell * params.light_entries + k) * params.lanes + l;
+    let a = data[base];
+    return a + (data[base + params.lanes] - a) * f;
+}
+
+// Sunlight at altitude h (between shells), exactly as LightMap::sample_at: the
+// transmittance table to the top, times the visible part of the disc and the irradiance.
+fn sunlight(h: f32, mu_s: f32, l: u32) -> vec4<f32> {
+    let b = params.bottom;
+    let r = b + h;
+    let rho = sqrt(max(h * (2.0 * b + h), 0.0));
+    let cos_h = -rho / r;
+    let half_width = b / r * params.sun_radius;
+    let visible = clamp((mu_s - cos_h + half_width) / (2.0 * half_width), 0.0, 1.0);
+    if visible == 0.0 {
+        return vec4<f32>(0.0);
+    }
+    // TransmittanceTable::coords, with r^2 - b^2 and top^2 - r^2 from altitudes.
+    let top = params.top;
+    let big_h = sqrt((top - b) * (top + b));
+    let mu = max(mu_s, cos_h);
+    let disc = ((top - b) - h) * (top + r) + r * r * mu * mu;
+    let d = max(-r * mu + sqrt(max(disc, 0.0)), 0.0);
+    let d_min = top - r;
+    let d_max = rho + big_h;
+    var x_mu = 0.0;
+    if d_max > d_min {
+        x_mu = (d - d_min) / (d_max - d_min);
+    }
+    let x = clamp(x_mu, 0.0, 1.0) * f32(params.mu_size - 1u);
+    let y = clamp(rho / big_h, 0.0, 1.0) * f32(params.r_size - 1u);
+    let i = min(u32(x), params.mu_size - 2u);
+    let j = min(u32(y), params.r_size - 2u);
+    let fx = x - f32(i);
+    let fy = y - f32(j);
+    let at = params.transmittance_at;
+    let n = params.lanes;
+    let v00 = data[at + (j * params.mu_size + i) * n + l];
+    let v10 = data[at + (j * params.mu_size + i + 1u) * n + l];
+    let v01 = data[at + ((j + 1u) * params.mu_size + i) * n + l];
+    let v11 = data[at + ((j + 1u) * params.mu_size + i + 1u) * n + l];
+    let lo = v00 + (v10 - v00) * fx;
+    let hi = v01 + (v11 - v01) * fx;
+    return (lo + (hi - lo) * fy) * visible * data[params.irradiance_at + l];
+}
+
+// The ray's direction in the local frame of a sample (maps::local_direction).
+fn local_direction(mu: f32, mu_s: f32, nu: f32) -> vec3<f32> {
+    let sin_d = sqrt(max(1.0 - mu * mu, 0.0));
+    let sin_s = sqrt(max(1.0 - mu_s * mu_s, 0.0));
+    var cos_phi = 1.0;
+    if sin_d * sin_s > 1e-9 {
+        cos_phi = clamp((nu - mu * mu_s) / (sin_d * sin_s), -1.0, 1.0);
+    }
+    let sin_phi = sqrt(max(1.0 - cos_phi * cos_phi, 0.0));
+    return vec3<f32>(sin_d * cos_phi, sin_d * sin_phi, mu);
+}
+
+// Rayleigh in-scattering of the scattered light map of order `o` + 2 at `shell`
+// toward local direction d, from its five moments (ScatteredLightMap::inscatter).
+fn inscatter(o: u32, shell: u32, mu_s: f32, d: vec3<f32>, l: u32) -> vec4<f32> {
+    let a = params.sun_bins_a;
+    let m = min(abs(mu_s), 1.0);
+    let x = (-a + sqrt(a * a + 4.0 * (1.0 - a) * m)) / (2.0 * (1.0 - a));
+    let coordinate = 0.5 * (select(-x, x, mu_s >= 0.0) + 1.0) * f32(params.sun_bins - 1u);
+    let b = min(u32(coordinate), params.sun_bins - 2u);
+    let f = coordinate - f32(b);
+    let k = 3.0 / (16.0 * PI);
+    let g = array<f32, 5>(k, k * d.x * d.x, k * d.y * d.y, k * d.z * d.z, 2.0 * k * d.x * d.z);
+    let n = params.lanes;
+    let at = params.moments_at + ((o * params.shells + shell) * params.sun_bins + b) * MOMENTS * n;
+    var out = vec4<f32>(0.0);
+    for (var i = 0u; i < MOMENTS; i++) {
+        let m0 = data[at + i * n + l];
+        let m1 = data[at + MOMENTS * n + i * n + l];
+        out += g[i] * (m0 + (m1 - m0) * f);
+    }
+    return out;
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let azimuths = u32(params.grid.z);
+    let elevations = u32(params.grid.w);
+    if id.x >= azimuths || id.y >= elevations {
+        return;
+    }
+    let j = id.y;
+    let elevation = params.grid.x + (params.grid.y - params.grid.x) * f32(j) / f32(elevations - 1u);
+    let azimuth = PI * f32(id.x) / f32(azimuths - 1u);
+    let sin_s = params.sun.x;
+    let nu = cos(elevation) * cos(azimuth) * params.sun.y + sin(elevation) * sin_s;
+    let ray = data[params.rays_at + j];
+    let r0_mu_s = ray.z * sin_s;
+    let phase_r = phase(params.rayleigh_kind, params.rayleigh_g, nu);
+    let phase_m = phase(params.mie_kind, params.mie_g, nu);
+    let n = params.lanes;
+    var total: array<vec4<f32>, MAX_LANES>;
+    for (var s = bitcast<u32>(ray.x); s < bitcast<u32>(ray.y); s++) {
+        let a = data[params.samples_at + 2u * s];
+        let mu = data[params.samples_at + 2u * s + 1u].x;
+        let shell = bitcast<u32>(a.x);
+        let between = a.y;
+        let r = params.bottom + a.z;
+        let mu_s = clamp((r0_mu_s + a.w * nu) / r, -1.0, 1.0);
+        var d = vec3<f32>(0.0);
+        if params.order >= 2u {
+            d = local_direction(mu, mu_s, nu);
+        }
+        for (var l = 0u; l < n; l++) {
+            let ray_r = data[params.rayleigh_at + s * n + l];
+            let ray_m = data[params.mie_at + s * n + l];
+            var light: vec4<f32>;
+            if between == 0.0 {
+                light = light_map(shell, mu_s, l);
+            } else {
+                light = sunlight(a.z, mu_s, l);
+            }
+            total[l] += light * (ray_r * phase_r + ray_m * phase_m);
+            for (var o = 0u; o + 2u <= params.order; o++) {
+                var scattered = inscatter(o, shell, mu_s, d, l);
+                if between > 0.0 {
+                    scattered += (inscatter(o, shell + 1u, mu_s, d, l) - scattered) * between;
+                }
+                total[l] += ray_r * scattered;
+            }
+        }
+    }
+    // Sunlight reflected by a Lambertian ground at the end of the ray.
+    if ray.w >= 0.0 && params.ground_albedo > 0.0 {
+        let mu_s = clamp((r0_mu_s + ray.w * nu) / data[params.shells_at].x, -1.0, 1.0);
+        if mu_s > 0.0 {
+            for (var l = 0u; l < n; l++) {
+                total[l] += light_map(0u, mu_s, l) * data[params.ground_at + j * n + l] * mu_s;
+            }
+        }
+    }
+    var rgb = vec3<f32>(0.0);
+    for (var l = 0u; l < n; l++) {
+        for (var c = 0u; c < 4u; c++) {
+            let w = data[params.rgb_at + 4u * l + c].xyz;
+            rgb += w * total[l][c];
+        }
+    }
+    let at = 3u * (j * azimuths + id.x);
+    map[at] = rgb.x;
+    map[at + 1u] = rgb.y;
+    map[at + 2u] = rgb.z;
+}
