@@ -13,7 +13,6 @@ use atmo::image::Frame;
 use atmo::shafts::camera::Camera;
 use glam::Vec3;
 
-use crate::sky::frame_of;
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
 gpu_struct! {
@@ -347,7 +346,7 @@ impl GpuClouds {
         })?;
         let bytes = gpu.read_texture("the cloud frame", &target, w, h)?;
         Ok(Rendered {
-            frame: frame_of(w, h, &bytes),
+            frame: crate::frame_of(w, h, &bytes),
             gpu_ms,
         })
     }

@@ -177,6 +177,25 @@ impl Gpu {
             }))
     }
 
+    /// A storage buffer the GPU writes (and the CPU may read back), checked against the
+    /// binding limit before it is allocated.
+    pub fn output(&self, what: &str, bytes: u64, setting: &str) -> Result<wgpu::Buffer, GpuError> {
+        let limits = self.limits();
+        self.check_limit(
+            what,
+            bytes,
+            limits.max_storage_buffer_binding_size,
+            "max_storage_buffer_binding_size",
+            setting,
+        )?;
+        Ok(self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(what),
+            size: bytes.max(4),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        }))
+    }
+
     /// A uniform buffer holding `value`.
     pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
         self.device

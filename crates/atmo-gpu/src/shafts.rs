@@ -12,7 +12,6 @@ use atmo::shafts::tables::{AttenuationTable, LightMap, PhaseTable};
 use atmo::shafts::Scene;
 use glam::Vec3;
 
-use crate::sky::{frame_of, output};
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
 gpu_struct! {
@@ -117,11 +116,7 @@ impl GpuShafts {
             "the number of lights",
         )?;
         let geometry = Geometry::of(scene);
-        let storage = |what: &str, bytes: u64, setting: &str| -> Result<wgpu::Buffer, GpuError> {
-            let buffer = output(gpu, what, bytes, setting)?;
-            Ok(buffer)
-        };
-        let depth = storage(
+        let depth = gpu.output(
             "the shadow maps",
             lights.max(1) as u64 * (size as u64).pow(2) * 4,
             "render.shadow_map",
@@ -133,18 +128,18 @@ impl GpuShafts {
             mapped_at_creation: false,
         });
         let n = AttenuationTable::SIZE as u64;
-        let derived = storage(
+        let derived = gpu.output(
             "the planes and the attenuation table",
             4 * (PLANE_FLOATS * lights.max(1) as u64 + 4 + n * n),
             "the number of lights",
         )?;
         let pixels = w as u64 * h as u64;
-        let ends = storage(
+        let ends = gpu.output(
             "the rays' ends",
             pixels * (k * k) as u64 * 4,
             "camera.width, camera.height or render.supersampling",
         )?;
-        let out = storage("the picture", pixels * 16, "camera.width or camera.height")?;
+        let out = gpu.output("the picture", pixels * 16, "camera.width or camera.height")?;
         let params = ShaftsParams {
             position: v4(camera.position, camera.far),
             forward: v4(camera.forward, camera.tan_half_width),
@@ -376,7 +371,7 @@ impl GpuShafts {
         })?;
         let bytes = gpu.read("the light shafts", &self.out, 0, self.out.size())?;
         Ok(Rendered {
-            frame: frame_of(p.width, p.height, &bytes),
+            frame: crate::frame_of(p.width, p.height, &bytes),
             gpu_ms,
         })
     }

@@ -10,7 +10,6 @@
 //!   sums every view ray's shell crossings into the skylight map and the ground map.
 
 use atmo::atmosphere::spectrum::SpectrumToRgb;
-use atmo::image::Frame;
 use atmo::sky::export::RayArrays;
 use atmo::sky::frame::{direction_of, sun_disc_rgb, GridLookup, PixelBasis, View};
 use atmo::sky::table::SkylightTable;
@@ -232,7 +231,7 @@ impl<'a> GpuSkyTable<'a> {
             setting,
         )?;
         let map_bytes = (f.directions * 3 * 4) as u64;
-        let map = output(gpu, "the skylight map", map_bytes, setting)?;
+        let map = gpu.output("the skylight map", map_bytes, setting)?;
         let map_module = gpu.shader("sky_map.wgsl", include_str!("../shaders/sky_map.wgsl"))?;
         Ok(GpuSkyTable {
             table,
@@ -455,8 +454,7 @@ impl<'a> GpuSkyModel<'a> {
         let bytes = bytemuck::cast_slice(&data);
         let buffer = gpu.storage("the sky model's maps", bytes, "--shells or --directions")?;
         let map = |grid: &DirectionGrid, what: &str| {
-            output(
-                gpu,
+            gpu.output(
                 what,
                 (grid.azimuths * grid.elevations * 12) as u64,
                 "--directions",
@@ -565,47 +563,14 @@ fn picture(
     maps: impl FnOnce(&mut wgpu::CommandEncoder),
 ) -> Result<Rendered, GpuError> {
     let pixels = view.width as u64 * view.height as u64;
-    let out = output(gpu, "the sky frame", pixels * 16, "the image size")?;
+    let out = gpu.output("the sky frame", pixels * 16, "the image size")?;
     let gpu_ms = gpu.run("the sky frame", |encoder, _| {
         maps(encoder);
         pass.record(gpu, encoder, inputs, sun, view, &out);
     })?;
     let bytes = gpu.read("the sky frame", &out, 0, pixels * 16)?;
     Ok(Rendered {
-        frame: frame_of(view.width, view.height, &bytes),
+        frame: crate::frame_of(view.width, view.height, &bytes),
         gpu_ms,
     })
-}
-
-/// A storage buffer the GPU writes and the CPU reads back, checked against the limits.
-pub(crate) fn output(
-    gpu: &Gpu,
-    what: &str,
-    bytes: u64,
-    setting: &str,
-) -> Result<wgpu::Buffer, GpuError> {
-    let limits = gpu.limits();
-    gpu.check_limit(
-        what,
-        bytes,
-        limits.max_storage_buffer_binding_size,
-        "max_storage_buffer_binding_size",
-        setting,
-    )?;
-    Ok(gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(what),
-        size: bytes.max(4),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    }))
-}
-
-/// A frame of `width` x `height` from RGBA f32 pixels, alpha dropped.
-pub(crate) fn frame_of(width: u32, height: u32, bytes: &[u8]) -> Frame {
-    let values: &[f32] = bytemuck::cast_slice(bytes);
-    let mut frame = Frame::new(width, height);
-    for (pixel, v) in frame.pixels.iter_mut().zip(values.chunks(4)) {
-        *pixel = Vec3::new(v[0], v[1], v[2]);
-    }
-    frame
 }
