@@ -77,12 +77,14 @@ struct GpuLight {
 // ends, their largest squared distance to the lamp and to the eye, their box min, max.
 @group(0) @binding(6) var<storage, read_write> extents: array<atomic<u32>>;
 // Per light 12 floats (eye in light space, lamp in haze, box min, z_near, box max,
-// z_far), then 4 (s_scale, t_scale, ds, dt), then s^2 h(s, t) [t][s].
+// z_far), then the attenuation table's scales (s_scale, t_scale, ds, dt).
 @group(0) @binding(7) var<storage, read_write> derived: array<f32>;
 // Where each sub-pixel ray ends (m from the eye), [sub-pixel][pixel].
 @group(0) @binding(8) var<storage, read_write> ends: array<f32>;
 // The picture, linear RGB.
 @group(0) @binding(9) var<storage, read_write> out: array<vec4<f32>>;
+// s^2 h(s, t) of shafts (6) over (s, t), made each frame by shafts_attenuation.wgsl.
+@group(0) @binding(10) var attenuation_table: texture_2d<f32>;
 
 const RAY_EPSILON: f32 = 1e-4;
 const NO_HIT: f32 = 3.4e38;
@@ -413,15 +415,14 @@ fn attenuation(s_haze: f32, t_haze: f32) -> f32 {
     let last = f32(n - 1u);
     let x = clamp(s_haze * derived[at], 0.0, last);
     let y = clamp(t_haze * derived[at + 1u], 0.0, last);
-    let i = min(u32(x), n - 2u);
-    let j = min(u32(y), n - 2u);
+    let i = min(i32(x), i32(n) - 2);
+    let j = min(i32(y), i32(n) - 2);
     let a = x - f32(i);
     let b = y - f32(j);
-    let base = at + 4u;
-    let r00 = derived[base + j * n + i];
-    let r01 = derived[base + j * n + i + 1u];
-    let r10 = derived[base + (j + 1u) * n + i];
-    let r11 = derived[base + (j + 1u) * n + i + 1u];
+    let r00 = textureLoad(attenuation_table, vec2<i32>(i, j), 0).x;
+    let r01 = textureLoad(attenuation_table, vec2<i32>(i + 1, j), 0).x;
+    let r10 = textureLoad(attenuation_table, vec2<i32>(i, j + 1), 0).x;
+    let r11 = textureLoad(attenuation_table, vec2<i32>(i + 1, j + 1), 0).x;
     return (r00 + a * (r01 - r00)) * (1.0 - b) + (r10 + a * (r11 - r10)) * b;
 }
 

@@ -1,6 +1,6 @@
 // After the shadow maps: each light's planes (the camera-depth range of its lit volume,
-// clipped to the haze box, SamplePlanes::prepare), then the table s^2 h(s, t) of
-// shafts (6) up to the largest distances the planes reach (AttenuationTable::new).
+// clipped to the haze box, SamplePlanes::prepare), and the scales of the attenuation
+// table up to the largest distances the planes reach (AttenuationTable::new).
 
 fn decode(u: u32) -> f32 {
     return bitcast<f32>(select(~u, u & 0x7fffffffu, (u & 0x80000000u) != 0u));
@@ -66,17 +66,4 @@ fn planes() {
     derived[at + 1u] = 1.0 / dt;
     derived[at + 2u] = ds;
     derived[at + 3u] = dt;
-}
-
-@compute @workgroup_size(16, 16)
-fn attenuation_table(@builtin(global_invocation_id) id: vec3<u32>) {
-    let n = params.attenuation_size;
-    if id.x >= n || id.y >= n {
-        return;
-    }
-    let at = scales_at();
-    let ds = derived[at + 2u];
-    let dt = derived[at + 3u];
-    derived[at + 4u + id.y * n + id.x] =
-        params.haze_max.w * exp(-params.haze_min.w * (f32(id.x) * ds + f32(id.y) * dt));
 }

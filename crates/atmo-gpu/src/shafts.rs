@@ -87,6 +87,8 @@ pub struct GpuShafts {
     shadow: wgpu::ComputePipeline,
     prepare: wgpu::ComputePipeline,
     attenuation: wgpu::ComputePipeline,
+    /// The attenuation pass's own bindings (it writes the table the others read).
+    attenuation_group: wgpu::BindGroup,
     surface: wgpu::ComputePipeline,
     compute: wgpu::ComputePipeline,
     planes: wgpu::RenderPipeline,
@@ -127,12 +129,27 @@ impl GpuShafts {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let n = AttenuationTable::SIZE as u64;
         let derived = gpu.output(
-            "the planes and the attenuation table",
-            4 * (PLANE_FLOATS * lights.max(1) as u64 + 4 + n * n),
+            "the planes",
+            4 * (PLANE_FLOATS * lights.max(1) as u64 + 4),
             "the number of lights",
         )?;
+        let n = AttenuationTable::SIZE as u32;
+        let attenuation_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("the attenuation table"),
+            size: wgpu::Extent3d {
+                width: n,
+                height: n,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let attenuation_view = attenuation_texture.create_view(&Default::default());
         let pixels = w as u64 * h as u64;
         let ends = gpu.output(
             "the rays' ends",
@@ -229,6 +246,7 @@ impl GpuShafts {
                         entry(7, derived.as_entire_binding()),
                         entry(8, ends.as_entire_binding()),
                         entry(9, out.as_entire_binding()),
+                        entry(10, wgpu::BindingResource::TextureView(&attenuation_view)),
                     ],
                 });
                 let layout = gpu
@@ -273,6 +291,22 @@ impl GpuShafts {
             include_str!("../shaders/shafts_composite.wgsl"),
         )?;
         let with = Some(&compute_layout);
+        // The table's own pass, with its own bindings: the texture is written there and
+        // read (as a texture) by every pass after it.
+        let table = module(
+            "shafts_attenuation.wgsl",
+            include_str!("../shaders/shafts_attenuation.wgsl"),
+        )?;
+        let attenuation = gpu.compute_pipeline(&table, "main", None)?;
+        let attenuation_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("the attenuation table"),
+            layout: &attenuation.get_bind_group_layout(0),
+            entries: &[
+                entry(0, uniform.as_entire_binding()),
+                entry(7, derived.as_entire_binding()),
+                entry(11, wgpu::BindingResource::TextureView(&attenuation_view)),
+            ],
+        });
         let mut extents_init = Vec::new();
         for _ in 0..lights {
             let (lo, hi, zero) = (
@@ -291,7 +325,8 @@ impl GpuShafts {
             render_group,
             shadow: gpu.compute_pipeline(&shadow, "main", with)?,
             prepare: gpu.compute_pipeline(&prepare, "planes", with)?,
-            attenuation: gpu.compute_pipeline(&prepare, "attenuation_table", with)?,
+            attenuation,
+            attenuation_group,
             surface: gpu.compute_pipeline(&surface, "main", with)?,
             compute: gpu.compute_pipeline(&compute, "main", with)?,
             // Additive: the planes' terms sum up (shafts (7)).
@@ -334,8 +369,10 @@ impl GpuShafts {
                 pass.set_pipeline(&self.prepare);
                 pass.dispatch_workgroups(1, 1, 1);
                 pass.set_pipeline(&self.attenuation);
+                pass.set_bind_group(0, &self.attenuation_group, &[]);
                 let groups = p.attenuation_size.div_ceil(16);
                 pass.dispatch_workgroups(groups, groups, 1);
+                pass.set_bind_group(0, &self.group, &[]);
                 pass.set_pipeline(&self.surface);
                 pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
                 if method == ShaftsMethod::Compute {
@@ -447,6 +484,7 @@ fn bind_group_layout(gpu: &Gpu, read_only: bool) -> wgpu::BindGroupLayout {
                 storage(7, false),
                 storage(8, false),
                 storage(9, false),
+                texture(10),
             ],
         })
 }
