@@ -53,6 +53,7 @@ struct ShellParams {
 @group(0) @binding(2) var<storage, read_write> map: array<f32>;
 
 const PI: f32 = 3.14159265;
+// The moments a Rayleigh in-scattering needs (atmo::sky::light_map's MOMENTS).
 const MOMENTS: u32 = 5u;
 const MAX_LANES: u32 = 16u;
 

@@ -213,7 +213,7 @@ impl GpuClouds {
             let max = gpu.limits().max_compute_workgroups_per_dimension;
             (count.min(max), count.div_ceil(max))
         };
-        let time = gpu.run("the clouds' light pass", |encoder, _| {
+        let time = gpu.run("the clouds' light pass", |encoder| {
             encoder.clear_buffer(&self.cells, 0, None);
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.splat);
@@ -326,7 +326,7 @@ impl GpuClouds {
         );
         let target = target_texture(gpu, w, h, background);
         let view = target.create_view(&Default::default());
-        let gpu_ms = gpu.run("the cloud draw", |encoder, _| {
+        let gpu_ms = gpu.run("the cloud draw", |encoder| {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("billboards"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {

@@ -308,7 +308,7 @@ impl Gpu {
     pub fn run(
         &self,
         what: &str,
-        record: impl FnOnce(&mut wgpu::CommandEncoder, Option<&wgpu::QuerySet>),
+        record: impl FnOnce(&mut wgpu::CommandEncoder),
     ) -> Result<Option<f64>, GpuError> {
         let resolved = self.scoped(what, || self.submit(what, record))??;
         match resolved {
@@ -350,7 +350,7 @@ impl Gpu {
     fn submit(
         &self,
         what: &str,
-        record: impl FnOnce(&mut wgpu::CommandEncoder, Option<&wgpu::QuerySet>),
+        record: impl FnOnce(&mut wgpu::CommandEncoder),
     ) -> Result<Option<wgpu::Buffer>, GpuError> {
         let queries = self.timestamps.then(|| {
             self.device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -365,7 +365,7 @@ impl Gpu {
         if let Some(q) = &queries {
             encoder.write_timestamp(q, 0);
         }
-        record(&mut encoder, queries.as_ref());
+        record(&mut encoder);
         let resolved = queries.as_ref().map(|q| {
             encoder.write_timestamp(q, 1);
             let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -464,7 +464,7 @@ impl Gpu {
             usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        self.run(what, |encoder, _| {
+        self.run(what, |encoder| {
             encoder.copy_texture_to_buffer(
                 texture.as_image_copy(),
                 wgpu::TexelCopyBufferInfo {

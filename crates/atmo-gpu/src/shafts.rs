@@ -357,7 +357,7 @@ impl GpuShafts {
                 self.out.as_entire_binding(),
             ],
         );
-        let gpu_ms = gpu.run("the light shafts", |encoder, _| {
+        let gpu_ms = gpu.run("the light shafts", |encoder| {
             {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
                 pass.set_bind_group(0, &self.group, &[]);

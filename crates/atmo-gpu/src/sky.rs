@@ -299,7 +299,7 @@ impl<'a> GpuSkyTable<'a> {
         altitude_m: f64,
     ) -> Result<(Vec<Vec3>, Option<f64>), GpuError> {
         let (coefficients, params) = self.map_inputs(gpu, sun_elevation, altitude_m)?;
-        let gpu_ms = gpu.run("the skylight map", |encoder, _| {
+        let gpu_ms = gpu.run("the skylight map", |encoder| {
             self.record_map(gpu, encoder, &coefficients, &params)
         })?;
         let bytes = gpu.read("the skylight map", &self.map, 0, self.map.size())?;
@@ -512,7 +512,7 @@ impl<'a> GpuSkyModel<'a> {
     /// Fills the skylight and ground maps for a sun at `sun_elevation` rad, on the GPU
     /// only (what a renderer does each frame); the GPU time, where timed, ms.
     pub fn maps_timed(&self, gpu: &Gpu, sun_elevation: f64) -> Result<Option<f64>, GpuError> {
-        gpu.run("the shell pass", |encoder, _| {
+        gpu.run("the shell pass", |encoder| {
             self.record_maps(gpu, encoder, sun_elevation)
         })
     }
@@ -564,7 +564,7 @@ fn picture(
 ) -> Result<Rendered, GpuError> {
     let pixels = view.width as u64 * view.height as u64;
     let out = gpu.output("the sky frame", pixels * 16, "the image size")?;
-    let gpu_ms = gpu.run("the sky frame", |encoder, _| {
+    let gpu_ms = gpu.run("the sky frame", |encoder| {
         maps(encoder);
         pass.record(gpu, encoder, inputs, sun, view, &out);
     })?;

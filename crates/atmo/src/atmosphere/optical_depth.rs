@@ -63,10 +63,10 @@ pub fn transmittance_to_sun(atmosphere: &Atmosphere, r: f64, mu_s: f64, out: &mu
 /// which [`TransmittanceTable::to_sun`] then scales by the visible part of the disc.
 #[derive(Debug, Clone)]
 pub struct TransmittanceTable {
-    pub(crate) bottom: f64,
-    pub(crate) top: f64,
-    pub(crate) sun_radius: f64,
-    pub(crate) channels: usize,
+    bottom: f64,
+    top: f64,
+    sun_radius: f64,
+    channels: usize,
     pub(crate) mu_size: usize,
     pub(crate) r_size: usize,
     /// `[r][mu][channel]`, transmittance in (0, 1].

@@ -5,7 +5,7 @@
 //! samples between shells, the scattered light maps' moments, and the colour matrix.
 //! Spectra are packed four wavelengths to a `[f32; 4]` lane, as the CPU packs them.
 
-use super::light_map::{SunBins, LIGHT_MAP_SIZE, MOMENTS};
+use super::light_map::{SunBins, LIGHT_MAP_SIZE};
 use super::maps::{lanes, ScatteringMaps};
 use super::{DirectionGrid, SkyModel};
 use crate::atmosphere::spectrum::SpectrumToRgb;
@@ -157,9 +157,6 @@ impl SkyModel {
         })
     }
 }
-
-/// Moments per (shell, bin) of a scattered light map: [`MOMENTS`].
-pub const MOMENTS_PER_BIN: usize = MOMENTS;
 
 fn phase(p: &PhaseFunction) -> PhaseArrays {
     let (kind, g) = match *p {

@@ -65,7 +65,7 @@ const INTERVAL_SEGMENTS: usize = 2;
 /// rays, each starting on a shell.
 #[derive(Debug, Clone)]
 pub struct ScatteringMaps {
-    pub(crate) channels: usize,
+    channels: usize,
     /// Sample range of each ray: `ray_start[i]..ray_start[i + 1]`.
     pub(crate) ray_start: Vec<u32>,
     /// Radius (m) of each ray's origin.
