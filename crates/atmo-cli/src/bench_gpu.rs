@@ -10,7 +10,7 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::render::{render, CloudPhase, Lighting};
 use atmo::image::{Display, Frame, ToneMap};
-use atmo::shafts::{SamplePlanes, Scene};
+use atmo::shafts::Scene;
 use atmo::sky::frame::{Projection, SkyPicture, View};
 use atmo::sky::table::{SkylightTable, TableSettings};
 use atmo::sky::{SkyModel, SkySettings, Sun};
@@ -24,6 +24,7 @@ use serde_json::{json, Value};
 use crate::backend::gpu_error;
 use crate::bench::{median, time_ms};
 use crate::bench_clouds::camera;
+use crate::bench_shafts::time_planes;
 use crate::bench_table::emit;
 use crate::clouds::sun_direction;
 
@@ -209,8 +210,7 @@ pub fn bench_sky_table(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         gpu,
         Case {
             name: "sky-table.map.gpu",
-            params: json!({"directions": settings.sky.directions, "terms": table.max_terms(),
-                           "max_relative_difference": worst}),
+            params: json!({"table": params.clone(), "max_relative_difference": worst}),
             wall_ms: wall,
             gpu_ms,
             cpu_ms: cpu_map_ms,
@@ -238,12 +238,7 @@ pub fn bench_shafts(gpu: &Gpu, quick: bool, json: bool, scenes: &Path) -> Result
         ("shafts.stage", "stage.toml"),
     ] {
         let scene = Scene::from_file(&scenes.join(file))?;
-        let mut cpu = SamplePlanes::new(&scene).render();
-        let cpu_ms = median(
-            (0..runs)
-                .map(|_| time_ms(|| cpu = SamplePlanes::new(&scene).render()))
-                .collect(),
-        );
+        let (cpu_ms, cpu) = time_planes(&scene, runs);
         let shafts = GpuShafts::new(gpu, &scene).map_err(gpu_error)?;
         for method in [ShaftsMethod::Planes, ShaftsMethod::Compute] {
             let (wall, gpu_ms, frame) = time_gpu(runs, || {

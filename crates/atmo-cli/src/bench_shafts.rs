@@ -17,7 +17,7 @@ use crate::bench_table::emit;
 
 /// Median time of `runs` renders by the plane method after one warm-up, and the last
 /// frame.
-fn time_planes(scene: &Scene, runs: usize) -> (f64, Frame) {
+pub(crate) fn time_planes(scene: &Scene, runs: usize) -> (f64, Frame) {
     let mut frame = SamplePlanes::new(scene).render();
     let ms = median(
         (0..runs)

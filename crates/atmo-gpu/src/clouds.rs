@@ -259,21 +259,8 @@ impl GpuClouds {
                 .into());
             }
         }
-        let max = gpu.limits().max_texture_dimension_2d;
-        gpu.check_limit(
-            "the image width",
-            w as u64,
-            max as u64,
-            "max_texture_dimension_2d",
-            "the width",
-        )?;
-        gpu.check_limit(
-            "the image height",
-            h as u64,
-            max as u64,
-            "max_texture_dimension_2d",
-            "the height",
-        )?;
+        gpu.check_texture_side("the image width", w, "the width")?;
+        gpu.check_texture_side("the image height", h, "the height")?;
         // Farthest first; ties in reverse index order, the CPU's front-to-back reversed.
         let depth: Vec<f32> = self
             .particles

@@ -177,6 +177,18 @@ impl Gpu {
             }))
     }
 
+    /// Refuses a 2-D texture side `side` above the device's `max_texture_dimension_2d`.
+    pub fn check_texture_side(&self, what: &str, side: u32, setting: &str) -> Result<(), GpuError> {
+        let max = self.limits().max_texture_dimension_2d;
+        self.check_limit(
+            what,
+            side as u64,
+            max as u64,
+            "max_texture_dimension_2d",
+            setting,
+        )
+    }
+
     /// A storage buffer the GPU writes (and the CPU may read back), checked against the
     /// binding limit before it is allocated.
     pub fn output(&self, what: &str, bytes: u64, setting: &str) -> Result<wgpu::Buffer, GpuError> {

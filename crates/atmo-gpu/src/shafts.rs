@@ -105,18 +105,9 @@ impl GpuShafts {
         let (w, h, k) = (camera.width, camera.height, camera.supersampling);
         let lights = scene.lights.len() as u32;
         let size = scene.planes.shadow_map;
-        let limits = gpu.limits();
-        let max_2d = limits.max_texture_dimension_2d as u64;
-        let dim = "max_texture_dimension_2d";
-        gpu.check_limit("the image width", w as u64, max_2d, dim, "camera.width")?;
-        gpu.check_limit("the image height", h as u64, max_2d, dim, "camera.height")?;
-        gpu.check_limit(
-            "the light maps",
-            lights.max(1) as u64,
-            max_2d,
-            dim,
-            "the number of lights",
-        )?;
+        gpu.check_texture_side("the image width", w, "camera.width")?;
+        gpu.check_texture_side("the image height", h, "camera.height")?;
+        gpu.check_texture_side("the light maps", lights.max(1), "the number of lights")?;
         let geometry = Geometry::of(scene);
         let depth = gpu.output(
             "the shadow maps",
