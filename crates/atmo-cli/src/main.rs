@@ -3,20 +3,14 @@
 //! Exit codes: 0 on success, 2 for bad input (a message names the field and the
 //! allowed range; no output file is left behind), 1 for anything else.
 
+mod args;
 mod backend;
 mod bench;
-mod bench_clouds;
-mod bench_gpu;
-mod bench_shafts;
-mod bench_table;
-mod clouds;
-mod inspect;
-mod precompute;
-mod shafts;
-mod sky;
-mod sky_table;
+mod commands;
+mod output;
 
 use clap::{Parser, Subcommand};
+use commands::{clouds, compare, inspect, precompute, shafts, sky};
 
 #[derive(Parser)]
 #[command(
@@ -38,7 +32,7 @@ enum Command {
     Shafts(shafts::ShaftsArgs),
     /// How far two .exr renders are apart: RMS and max in 8-bit levels, and a
     /// difference image.
-    Compare(shafts::CompareArgs),
+    Compare(compare::CompareArgs),
     /// Render a particle cloud lit by the sun through a 3-D intensity buffer; still, or
     /// animated with the sun or the wind moving.
     Clouds(clouds::CloudsArgs),
@@ -59,10 +53,10 @@ fn main() {
     }
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Sky(args) => sky::run(args),
+        Command::Sky(args) => sky::run(args).map_err(|e| with_flag(e, sky::FLAGS)),
         Command::Shafts(args) => shafts::run(args),
-        Command::Compare(args) => shafts::compare(args),
-        Command::Clouds(args) => clouds::run(args),
+        Command::Compare(args) => compare::run(args),
+        Command::Clouds(args) => clouds::run(args).map_err(|e| with_flag(e, clouds::FLAGS)),
         Command::Precompute(args) => precompute::run(args),
         Command::Inspect(args) => inspect::run(args),
         Command::Bench(args) => bench::run(args),
@@ -76,5 +70,19 @@ fn main() {
             1
         };
         std::process::exit(code);
+    }
+}
+
+/// The library names what was wrong as its own field (`sun.elevation_deg`); where a
+/// command's flag sets that field, the message names the flag first, so that the user
+/// sees what to change: `--sun-elevation: sun.elevation_deg = 95 is out of range ...`.
+fn with_flag(error: anyhow::Error, flags: &[(&str, &str)]) -> anyhow::Error {
+    let field = match error.downcast_ref::<atmo::Error>() {
+        Some(atmo::Error::OutOfRange { field, .. }) => field.clone(),
+        _ => return error,
+    };
+    match flags.iter().find(|(f, _)| *f == field) {
+        Some((_, flag)) => error.context(flag.to_string()),
+        None => error,
     }
 }

@@ -6,6 +6,7 @@
 // Mirrors atmo_gpu::sky::SkyFrameParams.
 struct SkyFrameParams {
     // Perspective: direction of pixel (x, y) = origin + (x + 1/2) right - (y + 1/2) up.
+    // Fisheye: origin is the view axis, right and up the screen's unit axes.
     origin: vec4<f32>,
     right: vec4<f32>,
     up: vec4<f32>,
@@ -94,18 +95,20 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var d: vec3<f32>;
     var rgb = vec3<f32>(0.0);
     if params.fisheye != 0u {
-        let q = (params.sun_horizontal.zw - p) / params.radius;
+        let centre = params.sun_horizontal.zw;
+        let q = vec2<f32>(p.x - centre.x, centre.y - p.y) / params.radius;
         let rho = length(q);
         if rho > 1.0 {
             frame[id.y * params.width + id.x] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
             return;
         }
         let zenith = rho * HALF_PI;
-        var horizontal = vec2<f32>(0.0, 1.0);
+        var across = vec2<f32>(0.0, 1.0);
         if rho > 0.0 {
-            horizontal = q / rho;
+            across = q / rho;
         }
-        d = vec3<f32>(horizontal * sin(zenith), cos(zenith));
+        let s = sin(zenith);
+        d = cos(zenith) * params.origin.xyz + (s * across.x) * params.right.xyz + (s * across.y) * params.up.xyz;
     } else {
         d = params.origin.xyz + p.x * params.right.xyz - p.y * params.up.xyz;
     }

@@ -6,11 +6,12 @@
 //! between the light pass and the draw, so a moving sun costs one light pass and a
 //! moving camera none.
 
+use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{CloudPhase, Lighting};
+use atmo::clouds::render::Lighting;
 use atmo::image::Frame;
-use atmo::shafts::camera::Camera;
+use atmo::view::Camera;
 use glam::Vec3;
 
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
@@ -280,16 +281,24 @@ impl GpuClouds {
             bytemuck::cast_slice(&order),
             "the particle count",
         )?;
-        let focal = 0.5 * h as f32 / camera.tan_half_height;
+        let (tan_half_width, tan_half_height) = camera.pinhole("the clouds' billboards")?;
+        let focal = 0.5 * h as f32 / tan_half_height;
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
         let (kind, g) = match light.phase {
-            CloudPhase::HenyeyGreenstein { g } => (0.0, g),
-            CloudPhase::CloudMie => (1.0, 0.0),
+            PhaseFunction::HenyeyGreenstein { g } => (0.0, g as f32),
+            PhaseFunction::CloudMie => (1.0, 0.0),
+            other => {
+                return Err(atmo::Error::Invalid(format!(
+                    "the clouds on the GPU draw the henyey-greenstein and cloud-mie phases, not {}",
+                    other.to_toml()
+                ))
+                .into())
+            }
         };
         let params = DrawParams {
             position: v4(camera.position, focal),
-            forward: v4(camera.forward, camera.tan_half_width),
-            right: v4(camera.right, camera.tan_half_height),
+            forward: v4(camera.forward, tan_half_width),
+            right: v4(camera.right, tan_half_height),
             up: v4(camera.up, 0.0),
             to_sun: v4(light.to_sun, kind),
             sun: v4(light.sun, g),

@@ -6,7 +6,7 @@
 //! on the GPU from the scene's upload to the finished picture. Translates
 //! `atmo::shafts::SamplePlanes::render`, which the tests hold it to.
 
-use atmo::shafts::objects::Shape;
+use atmo::geometry::Shape;
 use atmo::shafts::spotlight::{Falloff, Sampling};
 use atmo::shafts::tables::{AttenuationTable, LightMap, PhaseTable};
 use atmo::shafts::Scene;
@@ -103,6 +103,7 @@ impl GpuShafts {
     pub fn new(gpu: &Gpu, scene: &Scene) -> Result<Self, GpuError> {
         let camera = &scene.camera;
         let (w, h, k) = (camera.width, camera.height, camera.supersampling);
+        let (tan_half_width, tan_half_height) = camera.pinhole("the sample planes")?;
         let lights = scene.lights.len() as u32;
         let size = scene.planes.shadow_map;
         gpu.check_texture_side("the image width", w, "camera.width")?;
@@ -150,8 +151,8 @@ impl GpuShafts {
         let out = gpu.output("the picture", pixels * 16, "camera.width or camera.height")?;
         let params = ShaftsParams {
             position: v4(camera.position, camera.far),
-            forward: v4(camera.forward, camera.tan_half_width),
-            right: v4(camera.right, camera.tan_half_height),
+            forward: v4(camera.forward, tan_half_width),
+            right: v4(camera.right, tan_half_height),
             up: v4(camera.up, 1.0 / (k * k) as f32),
             haze_min: v4(
                 scene.haze.bounds.map_or(Vec3::ZERO, |b| b.min),

@@ -6,14 +6,15 @@
 //!   storage buffers; per frame the CPU interpolates the few hundred `t_k` (sky (17))
 //!   and one compute pass sums the terms of every view direction into the map.
 //! - [`GpuSkyModel`], by the shell method (sky 3): a model's sun-independent maps
-//!   (`atmo::sky::export`) live in one storage buffer; per sun one compute pass a grid
+//!   (`atmo::sky::shells::export`) live in one storage buffer; per sun one compute pass a grid
 //!   sums every view ray's shell crossings into the skylight map and the ground map.
 
 use atmo::atmosphere::spectrum::SpectrumToRgb;
-use atmo::sky::export::RayArrays;
-use atmo::sky::frame::{direction_of, sun_disc_rgb, GridLookup, PixelBasis, View};
+use atmo::sky::frame::{sky_from_world, sun_disc_rgb, GridLookup, View};
+use atmo::sky::shells::export::RayArrays;
 use atmo::sky::table::SkylightTable;
-use atmo::sky::{DirectionGrid, SkyModel, Sun};
+use atmo::sky::{DirectionGrid, SkyModel};
+use atmo::view::{PixelBasis, Sun};
 use glam::Vec3;
 
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
@@ -146,18 +147,22 @@ impl FramePass {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(view.width.div_ceil(8), view.height.div_ceil(8), 1);
+        pass.dispatch_workgroups(
+            view.camera.width.div_ceil(8),
+            view.camera.height.div_ceil(8),
+            1,
+        );
     }
 }
 
 /// The picture pass's parameters (the CPU's `SkyPicture` and `PixelBasis`).
 fn frame_params(inputs: &FrameInputs, sun: Sun, view: &View) -> SkyFrameParams {
     let lookup = GridLookup::new(&inputs.sky_grid);
-    let direction = direction_of(sun.azimuth, sun.elevation).as_vec3();
+    let direction = sky_from_world(sun.toward());
     let rgb = inputs.sun_rgb;
-    let (sin_a, cos_a) = sun.azimuth.sin_cos();
+    let (sin_a, cos_a) = sun.azimuth().sin_cos();
     let v4 = |v: Vec3| [v.x, v.y, v.z, 0.0];
-    let basis = view.projection.pixel_basis(view.width, view.height);
+    let basis = view.camera.pixel_basis().rotated(sky_from_world);
     let (sun_radius, pixel) = (inputs.sun_radius as f32, basis.pixel_angle());
     let ground = inputs.ground.as_ref().map(|(_, g)| GridLookup::new(g));
     let mut p = SkyFrameParams {
@@ -177,8 +182,8 @@ fn frame_params(inputs: &FrameInputs, sun: Sun, view: &View) -> SkyFrameParams {
         ground_below: inputs.ground_below as f32,
         radius: 1.0,
         fisheye: 0,
-        width: view.width,
-        height: view.height,
+        width: view.camera.width,
+        height: view.camera.height,
         azimuths: lookup.azimuths as u32,
         sun_radius,
         pixel,
@@ -191,7 +196,14 @@ fn frame_params(inputs: &FrameInputs, sun: Sun, view: &View) -> SkyFrameParams {
         PixelBasis::Perspective { origin, right, up } => {
             (p.origin, p.right, p.up) = (v4(origin), v4(right), v4(up));
         }
-        PixelBasis::Fisheye { centre, radius } => {
+        PixelBasis::Fisheye {
+            centre,
+            radius,
+            forward,
+            right,
+            up,
+        } => {
+            (p.origin, p.right, p.up) = (v4(forward), v4(right), v4(up));
             p.fisheye = 1;
             p.radius = radius;
             p.sun_horizontal[2] = centre.x;
@@ -316,7 +328,7 @@ impl<'a> GpuSkyTable<'a> {
         altitude_m: f64,
         view: &View,
     ) -> Result<Rendered, GpuError> {
-        let (coefficients, map_params) = self.map_inputs(gpu, sun.elevation, altitude_m)?;
+        let (coefficients, map_params) = self.map_inputs(gpu, sun.elevation(), altitude_m)?;
         let atmosphere = self.table.atmosphere();
         let grid = self.table.grid(altitude_m);
         let inputs = FrameInputs {
@@ -324,7 +336,7 @@ impl<'a> GpuSkyTable<'a> {
             ground_below: grid.elevation_min,
             sky_grid: grid,
             ground: None,
-            sun_rgb: sun_disc_rgb(atmosphere, altitude_m, sun.elevation),
+            sun_rgb: sun_disc_rgb(atmosphere, altitude_m, sun.elevation()),
             sun_radius: atmosphere.sun_angular_radius,
         };
         picture(gpu, &self.frame_pass, &inputs, sun, view, |encoder| {
@@ -534,7 +546,7 @@ impl<'a> GpuSkyModel<'a> {
     pub fn render(&self, gpu: &Gpu, sun: Sun, view: &View) -> Result<Rendered, GpuError> {
         let atmosphere = self.model.atmosphere();
         let mut spectrum = vec![0.0f32; atmosphere.channels()];
-        self.model.sun_radiance(sun.elevation, &mut spectrum);
+        self.model.sun_radiance(sun.elevation(), &mut spectrum);
         let inputs = FrameInputs {
             sky: &self.sky_map,
             sky_grid: self.sky_grid.clone(),
@@ -547,7 +559,7 @@ impl<'a> GpuSkyModel<'a> {
             sun_radius: atmosphere.sun_angular_radius,
         };
         picture(gpu, &self.frame_pass, &inputs, sun, view, |encoder| {
-            self.record_maps(gpu, encoder, sun.elevation)
+            self.record_maps(gpu, encoder, sun.elevation())
         })
     }
 }
@@ -562,7 +574,7 @@ fn picture(
     view: &View,
     maps: impl FnOnce(&mut wgpu::CommandEncoder),
 ) -> Result<Rendered, GpuError> {
-    let pixels = view.width as u64 * view.height as u64;
+    let pixels = view.camera.width as u64 * view.camera.height as u64;
     let out = gpu.output("the sky frame", pixels * 16, "the image size")?;
     let gpu_ms = gpu.run("the sky frame", |encoder| {
         maps(encoder);
@@ -570,7 +582,7 @@ fn picture(
     })?;
     let bytes = gpu.read("the sky frame", &out, 0, pixels * 16)?;
     Ok(Rendered {
-        frame: crate::frame_of(view.width, view.height, &bytes),
+        frame: crate::frame_of(view.camera.width, view.camera.height, &bytes),
         gpu_ms,
     })
 }

@@ -3,12 +3,13 @@
 
 mod common;
 
+use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{render, CloudPhase, Lighting};
+use atmo::clouds::render::{render, Lighting};
 use atmo::image::Frame;
-use atmo::shafts::camera::Camera;
+use atmo::view::{Camera, Fov};
 use atmo_gpu::clouds::GpuClouds;
 use common::{assert_close, gpu, mean_level};
 use glam::Vec3;
@@ -62,7 +63,7 @@ fn the_drawn_cloud_matches_the_cpu_picture() {
         Vec3::new(0.0, 1700.0, -600.0),
         Vec3::new(0.0, 1650.0, 0.0),
         Vec3::Y,
-        (0.45 * 1.5, 0.45),
+        Fov::Vertical(2.0 * 0.45f32.atan().to_degrees()),
         (120, 80),
     )
     .unwrap();
@@ -74,8 +75,11 @@ fn the_drawn_cloud_matches_the_cpu_picture() {
     clouds.light(&gpu, to_sun(), 0.5, Splat::Pieces).unwrap();
     let buffer = IntensityBuffer::new(&particles, to_sun(), 48, 0.5, Splat::Pieces).unwrap();
     for (phase, back) in [
-        (CloudPhase::CloudMie, None),
-        (CloudPhase::HenyeyGreenstein { g: 0.6 }, Some(&background)),
+        (PhaseFunction::CloudMie, None),
+        (
+            PhaseFunction::HenyeyGreenstein { g: 0.6 },
+            Some(&background),
+        ),
     ] {
         let light = Lighting {
             to_sun: to_sun(),
@@ -83,7 +87,7 @@ fn the_drawn_cloud_matches_the_cpu_picture() {
             ambient: Vec3::new(0.03, 0.04, 0.06),
             phase,
         };
-        let cpu = render(&particles, &buffer, &camera, &light, back);
+        let cpu = render(&particles, &buffer, &camera, &light, back).unwrap();
         let out = clouds.render(&gpu, &camera, &light, back).unwrap().frame;
         assert!(
             mean_level(&out, 4.0) > 15.0,
@@ -98,13 +102,19 @@ fn drawing_before_the_light_pass_and_oversized_buffers_are_refused() {
     let Some(gpu) = gpu() else { return };
     let particles = cloud();
     let clouds = GpuClouds::new(&gpu, &particles, 8).unwrap();
-    let camera =
-        Camera::look_at(Vec3::Z * -2000.0, Vec3::ZERO, Vec3::Y, (0.5, 0.5), (8, 8)).unwrap();
+    let camera = Camera::look_at(
+        Vec3::Z * -2000.0,
+        Vec3::ZERO,
+        Vec3::Y,
+        Fov::Vertical(53.0),
+        (8, 8),
+    )
+    .unwrap();
     let light = Lighting {
         to_sun: to_sun(),
         sun: Vec3::ONE,
         ambient: Vec3::ZERO,
-        phase: CloudPhase::CloudMie,
+        phase: PhaseFunction::CloudMie,
     };
     let err = clouds.render(&gpu, &camera, &light, None).err().unwrap();
     assert!(err.to_string().contains("light pass"), "{err}");

@@ -5,12 +5,14 @@ mod common;
 use std::sync::OnceLock;
 
 use atmo::atmosphere::spectrum::SpectrumToRgb;
-use atmo::sky::frame::{Projection, SkyPicture, View};
 use atmo::sky::table::{SkylightTable, TableSettings};
-use atmo::sky::{SkyModel, SkySettings, Sun};
+use atmo::sky::{SkyModel, SkySettings};
+use atmo::sky::{SkyPicture, View};
+use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
 use atmo_gpu::sky::{GpuSkyModel, GpuSkyTable};
 use common::{assert_close, gpu, mean_level};
+use glam::Vec3;
 
 /// A coarse table (16 x 16 directions, 12 suns, 4 altitudes) that builds in a second.
 fn table() -> &'static SkylightTable {
@@ -58,14 +60,13 @@ fn perspective_and_fisheye_frames_match_the_cpu_picture() {
     let table = table();
     let sky = GpuSkyTable::new(&gpu, table).unwrap();
     let sun = Sun::from_degrees(8.0, 120.0).unwrap();
-    for projection in [
-        Projection::perspective_degrees(100.0, 10.0, 70.0).unwrap(),
-        Projection::Fisheye,
+    for camera in [
+        Camera::yaw_pitch(Vec3::ZERO, 100.0, 10.0, Fov::Vertical(70.0), (96, 64)).unwrap(),
+        Camera::dome(Vec3::ZERO, (96, 64)).unwrap(),
     ] {
+        let name = format!("{:?}", camera.lens);
         let view = View {
-            width: 96,
-            height: 64,
-            projection,
+            camera,
             sun_disc: true,
         };
         let altitude = 3000.0;
@@ -73,11 +74,8 @@ fn perspective_and_fisheye_frames_match_the_cpu_picture() {
             .unwrap()
             .render(&view);
         let out = sky.render(&gpu, sun, altitude, &view).unwrap().frame;
-        assert!(
-            mean_level(&out, 10.0) > 20.0,
-            "{projection:?}: the sky is dark"
-        );
-        assert_close(&out, &cpu, 10.0, &format!("{projection:?}"));
+        assert!(mean_level(&out, 10.0) > 20.0, "{name}: the sky is dark");
+        assert_close(&out, &cpu, 10.0, &name);
     }
 }
 
@@ -156,21 +154,20 @@ fn the_shell_method_picture_matches_the_cpu_picture() {
     let model = model(&earth, 2, 3000.0);
     let sky = GpuSkyModel::new(&gpu, &model).unwrap();
     let sun = Sun::from_degrees(6.0, 200.0).unwrap();
-    for projection in [
+    for camera in [
         // Looking down past the horizon: the ground map, the horizon's edge, the sun.
-        Projection::perspective_degrees(200.0, -2.0, 60.0).unwrap(),
-        Projection::Fisheye,
+        Camera::yaw_pitch(Vec3::ZERO, 200.0, -2.0, Fov::Vertical(60.0), (96, 64)).unwrap(),
+        Camera::dome(Vec3::ZERO, (96, 64)).unwrap(),
     ] {
+        let name = format!("{:?}", camera.lens);
         let view = View {
-            width: 96,
-            height: 64,
-            projection,
+            camera,
             sun_disc: true,
         };
         let cpu = SkyPicture::new(&model, sun).render(&view);
         let out = sky.render(&gpu, sun, &view).unwrap().frame;
-        assert!(mean_level(&out, 0.15) > 20.0, "{projection:?}: dark");
-        assert_close(&out, &cpu, 0.15, &format!("shells {projection:?}"));
+        assert!(mean_level(&out, 0.15) > 20.0, "{name}: dark");
+        assert_close(&out, &cpu, 0.15, &format!("shells {name}"));
     }
 }
 

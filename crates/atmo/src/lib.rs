@@ -17,11 +17,13 @@
 pub mod atmosphere;
 pub mod clouds;
 pub mod error;
+pub mod geometry;
 pub mod image;
 pub mod quadrature;
 pub mod reference;
 pub mod shafts;
 pub mod sky;
+pub mod view;
 
 pub use atmosphere::Atmosphere;
 pub use error::{Error, Result};

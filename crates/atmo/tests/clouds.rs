@@ -265,9 +265,10 @@ fn particle_files_round_trip_and_bad_ones_name_the_line() {
 
 #[test]
 fn billboards_composite_as_clouds_five_and_six() {
-    use atmo::clouds::render::{render, CloudPhase, Lighting};
+    use atmo::atmosphere::PhaseFunction;
+    use atmo::clouds::render::{render, Lighting};
     use atmo::image::Frame;
-    use atmo::shafts::camera::Camera;
+    use atmo::view::{Camera, Lens};
     // Two particles on the camera's axis, the pixel at the image centre looking through
     // both; only ambient light, so each source is a tau ambient.
     let particle = |z: f32, density: f32| Particle {
@@ -282,8 +283,10 @@ fn billboards_composite_as_clouds_five_and_six() {
         forward: Vec3::NEG_Z,
         right: Vec3::X,
         up: Vec3::Y,
-        tan_half_width: 0.1,
-        tan_half_height: 0.1,
+        lens: Lens::Pinhole {
+            tan_half_width: 0.1,
+            tan_half_height: 0.1,
+        },
         width: 65,
         height: 65,
         supersampling: 1,
@@ -293,7 +296,7 @@ fn billboards_composite_as_clouds_five_and_six() {
         to_sun: Vec3::Y,
         sun: Vec3::ZERO,
         ambient: Vec3::new(1.0, 0.5, 0.25),
-        phase: CloudPhase::CloudMie,
+        phase: PhaseFunction::CloudMie,
     };
     let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.5, Splat::Pieces).unwrap();
     let mut background = Frame::new(65, 65);
@@ -301,7 +304,7 @@ fn billboards_composite_as_clouds_five_and_six() {
         .pixels
         .iter_mut()
         .for_each(|p| *p = Vec3::splat(2.0));
-    let frame = render(&particles, &buffer, &camera, &light, Some(&background));
+    let frame = render(&particles, &buffer, &camera, &light, Some(&background)).unwrap();
     let tau = |p: &Particle| p.column(0.0, f64::NEG_INFINITY, f64::INFINITY) as f32;
     let (near, far) = (tau(&particles[1]), tau(&particles[0]));
     let a = 0.8;

@@ -90,7 +90,7 @@ fn the_example_scenes_load_with_their_gobo_and_mesh() {
         .list
         .iter()
         .find_map(|o| match &o.shape {
-            atmo::shafts::objects::Shape::Mesh(m) => Some(m.len()),
+            atmo::geometry::Shape::Mesh(m) => Some(m.len()),
             _ => None,
         })
         .expect("the stage has the knot");
@@ -186,7 +186,7 @@ fn malformed_obj_files_are_errors_not_panics() {
     let scene = small_scene("[[object]]\nkind = \"mesh\"\nfile = \"ok.obj\"\nalbedo = 0.5\n");
     let scene = Scene::from_toml_str(&scene, "test.toml", &dir).unwrap();
     match &scene.objects.list[1].shape {
-        atmo::shafts::objects::Shape::Mesh(m) => assert_eq!(m.len(), 2, "a quad is two triangles"),
+        atmo::geometry::Shape::Mesh(m) => assert_eq!(m.len(), 2, "a quad is two triangles"),
         _ => panic!("not a mesh"),
     }
     std::fs::remove_dir_all(&dir).unwrap();

@@ -275,8 +275,8 @@ fn bad_settings_and_altitudes_are_refused() {
 
 #[test]
 fn pictures_are_symmetric_about_the_suns_vertical_plane() {
-    use atmo::sky::frame::{direction_of, SkyPicture};
-    use atmo::sky::Sun;
+    use atmo::sky::SkyPicture;
+    use atmo::view::{direction_of, Sun};
     let a = Atmosphere::earth();
     let model = SkyModel::new(&a, &SkySettings::default(), 3000.0).unwrap();
     let sun = Sun::from_degrees(12.0, 237.0).unwrap();

@@ -5,7 +5,7 @@
 
 use std::sync::OnceLock;
 
-use atmo::sky::svd::TruncatedSvd;
+use atmo::sky::table::svd::TruncatedSvd;
 use atmo::sky::table::{SkylightTable, TableSettings, CHANNELS};
 use atmo::sky::SkySettings;
 use atmo::Atmosphere;
@@ -107,7 +107,7 @@ fn maps_are_nonnegative_and_drawing_outside_the_ranges_is_refused() {
         .unwrap_err()
         .to_string();
     assert!(
-        low.contains("sun elevation") && low.contains("-10"),
+        low.contains("sun.elevation_deg") && low.contains("-10"),
         "{low}"
     );
     let high = table.map(0.3, 13_500.0).unwrap_err().to_string();

@@ -1,14 +1,20 @@
-//! Phase functions: the angular distribution of scattered light.
+//! Phase functions: the angular distribution of scattered light, for every method.
 //!
 //! Each function takes `cos_theta`, the cosine of the scattering angle between the
 //! direction light travelled before and after scattering (1 = straight on), and returns
-//! a density in 1/sr normalised so that its integral over the sphere is 1. The paper's
-//! sky (10) writes the same quantity as `beta(alpha) / (4 pi)`.
+//! a density in 1/sr normalised so that its integral over the sphere is 1. The sky paper
+//! writes the same quantity as `beta(alpha) / (4 pi)` (sky (10)); the shafts paper as
+//! `F(alpha) / K` up to a constant (shafts (4)); the clouds paper as `p(omega, l)`
+//! (clouds (6)). The sky evaluates in f64 ([`PhaseFunction::eval`]), shafts and clouds in
+//! f32 ([`PhaseFunction::eval_f32`]); both come from one formula each.
 
 use serde::Deserialize;
-use std::f64::consts::PI;
+use std::ops::{Add, Div, Mul, Sub};
 
 use crate::error::{check_range, Result};
+
+/// Rayleigh's phase is `RAYLEIGH_NORM (1 + cos^2)`, 1/sr: `3 / (16 pi)`.
+pub const RAYLEIGH_NORM: f64 = 3.0 / (16.0 * std::f64::consts::PI);
 
 /// A phase function of one kind of particle.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -16,36 +22,136 @@ use crate::error::{check_range, Result};
 pub enum PhaseFunction {
     /// Rayleigh scattering by molecules, sky (A-1): `3/4 (1 + cos^2)`, normalised.
     Rayleigh,
-    /// The paper's aerosol phase, sky (A-4): `a (1 + 50 cos^6(alpha/2))` with
+    /// The sky paper's aerosol phase, sky (A-4): `a (1 + 50 cos^6(alpha/2))` with
     /// `a = 1 / (54 pi)` so that it integrates to 1.
     PaperMie,
+    /// The shafts paper's haze, shafts (4): `1 + 9 cos^n(alpha/2)`, normalised; the paper
+    /// takes `n = 16`.
+    PaperHaze { exponent: f64 },
     /// Henyey-Greenstein with asymmetry `g` in (-1, 1).
     HenyeyGreenstein { g: f64 },
     /// Cornette-Shanks with asymmetry `g` in (-1, 1): Henyey-Greenstein with a
     /// Rayleigh-like factor, closer to measured aerosol phase functions.
     CornetteShanks { g: f64 },
+    /// A Mie-like cloud phase: a strong forward Henyey-Greenstein lobe (g = 0.8) and a
+    /// weak backward one (g = -0.3), weighted 0.75 : 0.25 (after the two-lobe fits used
+    /// in games since Nishita 1996): the silver lining and a faint glory side.
+    CloudMie,
+}
+
+/// The arithmetic the formulas need, so that each is written once for f32 and f64.
+trait Real:
+    Copy
+    + PartialOrd
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+{
+    fn of(x: f64) -> Self;
+    fn sqrt(self) -> Self;
+    fn powf(self, e: Self) -> Self;
+}
+
+impl Real for f32 {
+    fn of(x: f64) -> Self {
+        x as f32
+    }
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    fn powf(self, e: Self) -> Self {
+        f32::powf(self, e)
+    }
+}
+
+impl Real for f64 {
+    fn of(x: f64) -> Self {
+        x
+    }
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    fn powf(self, e: Self) -> Self {
+        f64::powf(self, e)
+    }
+}
+
+/// Henyey-Greenstein with asymmetry `g`, 1/sr.
+#[inline]
+fn henyey_greenstein<R: Real>(g: R, c: R) -> R {
+    let one = R::of(1.0);
+    let denom = one + g * g - R::of(2.0) * g * c;
+    (one - g * g) / (R::of(4.0 * std::f64::consts::PI) * denom * denom.sqrt())
 }
 
 impl PhaseFunction {
+    #[inline]
+    fn value<R: Real>(&self, c: R) -> R {
+        use std::f64::consts::PI;
+        let one = R::of(1.0);
+        match *self {
+            PhaseFunction::Rayleigh => R::of(RAYLEIGH_NORM) * (one + c * c),
+            PhaseFunction::PaperMie => {
+                // cos^2(alpha/2) = (1 + cos alpha) / 2
+                let half = R::of(0.5) * (one + c);
+                (one + R::of(50.0) * half * half * half) / R::of(54.0 * PI)
+            }
+            PhaseFunction::PaperHaze { exponent } => {
+                // The integral of cos^n(alpha/2) over the sphere is 4 pi * 2 / (n + 2).
+                let half = R::of(0.5) * (one + c);
+                let half = if half > R::of(0.0) { half } else { R::of(0.0) };
+                let n = R::of(exponent);
+                let norm = R::of(4.0 * PI) * (one + R::of(18.0) / (n + R::of(2.0)));
+                (one + R::of(9.0) * half.powf(R::of(0.5) * n)) / norm
+            }
+            PhaseFunction::HenyeyGreenstein { g } => henyey_greenstein(R::of(g), c),
+            PhaseFunction::CornetteShanks { g } => {
+                let g = R::of(g);
+                let denom = one + g * g - R::of(2.0) * g * c;
+                R::of(3.0 / (8.0 * PI)) * (one - g * g) * (one + c * c)
+                    / ((R::of(2.0) + g * g) * denom * denom.sqrt())
+            }
+            PhaseFunction::CloudMie => {
+                R::of(0.75) * henyey_greenstein(R::of(0.8), c)
+                    + R::of(0.25) * henyey_greenstein(R::of(-0.3), c)
+            }
+        }
+    }
+
     /// The phase function's value in 1/sr for the scattering-angle cosine `cos_theta`.
     #[inline]
     pub fn eval(&self, cos_theta: f64) -> f64 {
+        self.value(cos_theta)
+    }
+
+    /// [`PhaseFunction::eval`] in f32, for the per-sample paths of shafts and clouds.
+    #[inline]
+    pub fn eval_f32(&self, cos_theta: f32) -> f32 {
+        self.value(cos_theta)
+    }
+
+    /// Every kind's name and code, as the GPU's phase function reads them (atmo-gpu
+    /// writes them into its shaders as `PHASE_<NAME>` constants).
+    pub const CODES: [(&'static str, u32); 6] = [
+        ("RAYLEIGH", 0),
+        ("PAPER_MIE", 1),
+        ("HENYEY_GREENSTEIN", 2),
+        ("CORNETTE_SHANKS", 3),
+        ("PAPER_HAZE", 4),
+        ("CLOUD_MIE", 5),
+    ];
+
+    /// This function's code in [`PhaseFunction::CODES`] and its one parameter (`g`, the
+    /// exponent, or 0).
+    pub fn code(&self) -> (u32, f64) {
         match *self {
-            PhaseFunction::Rayleigh => 3.0 / (16.0 * PI) * (1.0 + cos_theta * cos_theta),
-            PhaseFunction::PaperMie => {
-                // cos^2(alpha/2) = (1 + cos alpha) / 2
-                let half = 0.5 * (1.0 + cos_theta);
-                (1.0 + 50.0 * half * half * half) / (54.0 * PI)
-            }
-            PhaseFunction::HenyeyGreenstein { g } => {
-                let denom = 1.0 + g * g - 2.0 * g * cos_theta;
-                (1.0 - g * g) / (4.0 * PI * denom * denom.sqrt())
-            }
-            PhaseFunction::CornetteShanks { g } => {
-                let denom = 1.0 + g * g - 2.0 * g * cos_theta;
-                3.0 / (8.0 * PI) * (1.0 - g * g) * (1.0 + cos_theta * cos_theta)
-                    / ((2.0 + g * g) * denom * denom.sqrt())
-            }
+            PhaseFunction::Rayleigh => (0, 0.0),
+            PhaseFunction::PaperMie => (1, 0.0),
+            PhaseFunction::HenyeyGreenstein { g } => (2, g),
+            PhaseFunction::CornetteShanks { g } => (3, g),
+            PhaseFunction::PaperHaze { exponent } => (4, exponent),
+            PhaseFunction::CloudMie => (5, 0.0),
         }
     }
 
@@ -60,20 +166,28 @@ impl PhaseFunction {
         match *self {
             PhaseFunction::Rayleigh => r#"{ kind = "rayleigh" }"#.into(),
             PhaseFunction::PaperMie => r#"{ kind = "paper-mie" }"#.into(),
+            PhaseFunction::PaperHaze { exponent } => {
+                format!(r#"{{ kind = "paper-haze", exponent = {exponent:?} }}"#)
+            }
             PhaseFunction::HenyeyGreenstein { g } => {
                 format!(r#"{{ kind = "henyey-greenstein", g = {g:?} }}"#)
             }
             PhaseFunction::CornetteShanks { g } => {
                 format!(r#"{{ kind = "cornette-shanks", g = {g:?} }}"#)
             }
+            PhaseFunction::CloudMie => r#"{ kind = "cloud-mie" }"#.into(),
         }
     }
 
-    /// Checks the asymmetry parameter, naming `field` when it is out of range.
+    /// Checks the parameters (`g` in [-0.999, 0.999], the exponent in [0, 1000]),
+    /// naming `field` when one is out of range.
     pub fn validate(&self, field: &str) -> Result<()> {
         match *self {
             PhaseFunction::HenyeyGreenstein { g } | PhaseFunction::CornetteShanks { g } => {
                 check_range(&format!("{field}.g"), g, -0.999, 0.999)
+            }
+            PhaseFunction::PaperHaze { exponent } => {
+                check_range(&format!("{field}.exponent"), exponent, 0.0, 1000.0)
             }
             _ => Ok(()),
         }
@@ -84,6 +198,7 @@ impl PhaseFunction {
 mod tests {
     use super::*;
     use crate::quadrature::gauss_legendre;
+    use std::f64::consts::PI;
 
     fn sphere_integral(p: &PhaseFunction) -> f64 {
         // Integral over the sphere = 2 pi * integral over cos in [-1, 1].
@@ -101,6 +216,9 @@ mod tests {
             PhaseFunction::HenyeyGreenstein { g: -0.3 },
             PhaseFunction::CornetteShanks { g: 0.8 },
             PhaseFunction::CornetteShanks { g: 0.0 },
+            PhaseFunction::PaperHaze { exponent: 16.0 },
+            PhaseFunction::PaperHaze { exponent: 4.0 },
+            PhaseFunction::CloudMie,
         ] {
             let total = sphere_integral(&p);
             assert!((total - 1.0).abs() < 1e-6, "{p:?} integrates to {total}");
@@ -117,6 +235,28 @@ mod tests {
         ] {
             assert!(p.eval(1.0) > 10.0 * p.eval(-1.0), "{p:?}");
         }
+    }
+
+    #[test]
+    fn f32_and_f64_agree_and_the_papers_haze_has_its_ratio_of_ten() {
+        for p in [
+            PhaseFunction::Rayleigh,
+            PhaseFunction::PaperMie,
+            PhaseFunction::PaperHaze { exponent: 16.0 },
+            PhaseFunction::HenyeyGreenstein { g: 0.6 },
+            PhaseFunction::CornetteShanks { g: 0.76 },
+            PhaseFunction::CloudMie,
+        ] {
+            for c in [-1.0, -0.4, 0.0, 0.7, 0.999, 1.0] {
+                let (a, b) = (p.eval(c), p.eval_f32(c as f32) as f64);
+                assert!((a - b).abs() <= 1e-5 * a, "{p:?} at {c}: {a} vs {b}");
+            }
+        }
+        let haze = PhaseFunction::PaperHaze { exponent: 16.0 };
+        assert!((haze.eval(1.0) / haze.eval(-1.0) - 10.0).abs() < 1e-9);
+        assert!((haze.eval(1.0) - 10.0 / (8.0 * PI)).abs() < 1e-12);
+        let k = PhaseFunction::Rayleigh.eval(0.0);
+        assert_eq!(k, RAYLEIGH_NORM);
     }
 
     #[test]

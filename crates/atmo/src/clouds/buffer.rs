@@ -64,7 +64,7 @@ impl IntensityBuffer {
 
     /// Refuses a resolution outside [2, 2048] or over [`BUFFER_BUDGET_BYTES`].
     pub fn check_resolution(resolution: usize) -> Result<()> {
-        check_range("buffer resolution", resolution as f64, 2.0, 2048.0)?;
+        check_range("buffer.resolution", resolution as f64, 2.0, 2048.0)?;
         check_budget(
             &format!("a {resolution}^3 intensity buffer"),
             Self::bytes(resolution),
@@ -253,7 +253,7 @@ impl LightFrame {
     /// The frame for `particles` lit from `to_sun` (any length), with `forward` the
     /// forward-scattering share `p(l, l) / 4 pi` in [0, 1].
     pub fn new(particles: &[Particle], to_sun: Vec3, forward: f32) -> Result<LightFrame> {
-        check_range("forward scattering p(l,l)/4pi", forward as f64, 0.0, 1.0)?;
+        check_range("buffer.forward", forward as f64, 0.0, 1.0)?;
         if particles.is_empty() {
             return Err(Error::Invalid("the cloud has no particles".into()));
         }

@@ -22,7 +22,7 @@ pub fn light_per_particle(
     resolution: usize,
     forward: f32,
 ) -> Result<Vec<f32>> {
-    check_range("baseline buffer resolution", resolution as f64, 2.0, 8192.0)?;
+    check_range("buffer.resolution", resolution as f64, 2.0, 8192.0)?;
     // The view from the sun: x and z across the light, y along it (as the 3-D buffer).
     let frame = LightFrame::new(particles, to_sun, forward)?;
     let local: Vec<Vec3> = particles

@@ -15,30 +15,10 @@ use rayon::prelude::*;
 
 use super::buffer::IntensityBuffer;
 use super::particles::Particle;
+use crate::atmosphere::phase::PhaseFunction;
+use crate::error::Result;
 use crate::image::Frame;
-use crate::shafts::camera::Camera;
-
-/// The phase function of cloud droplets for the light scattered toward the eye.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum CloudPhase {
-    /// Henyey-Greenstein with asymmetry `g`.
-    HenyeyGreenstein { g: f32 },
-    /// A Mie-like cloud phase: a strong forward Henyey-Greenstein lobe (g = 0.8) and a
-    /// weak backward one (g = -0.3), weighted 0.75 : 0.25 (after the two-lobe fits used
-    /// in games since Nishita 1996): the silver lining and a faint glory side.
-    CloudMie,
-}
-
-impl CloudPhase {
-    /// The phase function in 1/sr at scattering-angle cosine `cos` (1: straight on).
-    pub fn eval(&self, cos: f32) -> f32 {
-        let hg = |g: f32| (1.0 - g * g) / (4.0 * PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
-        match *self {
-            CloudPhase::HenyeyGreenstein { g } => hg(g),
-            CloudPhase::CloudMie => 0.75 * hg(0.8) + 0.25 * hg(-0.3),
-        }
-    }
-}
+use crate::view::Camera;
 
 /// How the cloud is lit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,8 +31,9 @@ pub struct Lighting {
     /// Light from the sky scattered by the droplets, RGB radiance, the same everywhere
     /// (it keeps the undersides from black; the paper has none).
     pub ambient: Vec3,
-    /// The droplets' phase function.
-    pub phase: CloudPhase,
+    /// The droplets' phase function (clouds (6)'s `p`), e.g.
+    /// [`PhaseFunction::CloudMie`].
+    pub phase: PhaseFunction,
 }
 
 /// Rows drawn together by one thread.
@@ -62,16 +43,17 @@ const BAND: usize = 8;
 const BLOCK: usize = 16;
 
 /// Draws `particles` lit through `buffer` over `background` (same size as the camera's
-/// image, or black).
+/// image, or black); an error for a fisheye camera.
 pub fn render(
     particles: &[Particle],
     buffer: &IntensityBuffer,
     camera: &Camera,
     light: &Lighting,
     background: Option<&Frame>,
-) -> Frame {
+) -> Result<Frame> {
     let (w, h) = (camera.width as usize, camera.height as usize);
-    let focal = 0.5 * h as f32 / camera.tan_half_height;
+    let (_, tan_half_height) = camera.pinhole("the clouds' billboards")?;
+    let focal = 0.5 * h as f32 / tan_half_height;
     // Front to back: nearest first (see the module doc).
     let depth: Vec<f32> = particles.iter().map(|p| camera.depth(p.position)).collect();
     let mut order: Vec<usize> = (0..particles.len())
@@ -134,7 +116,7 @@ pub fn render(
                 let column = p.density * s * (2.0 * PI).sqrt();
                 // The phase at the particle's centre: the angle changes little over it.
                 let view = (p.position - camera.position).normalize();
-                let phase = light.phase.eval(light.to_sun.dot(view));
+                let phase = light.phase.eval_f32(light.to_sun.dot(view));
                 let lit = p.albedo * phase * light.sun;
                 let ambient = p.albedo * light.ambient;
                 let metres_per_pixel = z / focal;
@@ -178,7 +160,7 @@ pub fn render(
                 }
             }
         });
-    frame
+    Ok(frame)
 }
 
 /// A pixel that lets less than this through from behind is finished: the particles

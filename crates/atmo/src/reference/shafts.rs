@@ -15,8 +15,8 @@
 
 use glam::Vec3;
 
+use crate::geometry::Ray;
 use crate::image::Frame;
-use crate::shafts::objects::Ray;
 use crate::shafts::render_rays;
 use crate::shafts::spotlight::Spotlight;
 use crate::shafts::surface::{first_hit, surface_radiance, SurfacePoint};
@@ -108,7 +108,7 @@ impl RayMarcher {
             if scene.objects.occluded(&to_lamp, s) {
                 continue;
             }
-            let phase = haze.phase.eval(-from_lamp.dot(dir) / s);
+            let phase = haze.phase.eval_f32(-from_lamp.dot(dir) / s);
             let path = haze.length_inside(light.position, point) + haze.length_inside(eye, point);
             let g = haze.scattering() * phase * (-haze.extinction * path).exp() / (s * s);
             sum += intensity * g;

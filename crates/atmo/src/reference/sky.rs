@@ -13,7 +13,7 @@ use crate::atmosphere::geometry::{
 };
 use crate::atmosphere::{Atmosphere, CONSTITUENTS};
 use crate::quadrature::{fibonacci_sphere, gauss_legendre};
-use crate::sky::maps::MAX_CHANNELS;
+use crate::sky::shells::maps::MAX_CHANNELS;
 
 /// Resolution of the reference integrator.
 #[derive(Debug, Clone, Copy, PartialEq)]

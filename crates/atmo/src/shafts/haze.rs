@@ -8,41 +8,10 @@
 //! (1/sr). Then `rho F(alpha) = omega sigma_t p(alpha)`; for the paper's phase,
 //! `p = (1 + 9 cos^16(alpha/2)) / (8 pi)` and `omega = 8 pi K / kappa`.
 
-use std::f32::consts::PI;
-
 use glam::Vec3;
 
-use super::objects::Aabb;
-
-/// The phase function of the haze's particles.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum HazePhase {
-    /// The paper's shafts (4): `1 + 9 cos^n(alpha/2)`, normalised; `n = 16` in the paper.
-    Paper { exponent: f32 },
-    /// Henyey-Greenstein with asymmetry `g` in (-1, 1).
-    HenyeyGreenstein { g: f32 },
-}
-
-impl HazePhase {
-    /// The phase function in 1/sr at scattering angle `alpha` given as `cos alpha`
-    /// (1 = light travelling on toward the eye). Integrates to 1 over the sphere.
-    #[inline]
-    pub fn eval(&self, cos_alpha: f32) -> f32 {
-        match *self {
-            HazePhase::Paper { exponent } => {
-                // cos^2(alpha/2) = (1 + cos alpha) / 2; the integral of cos^n(alpha/2)
-                // over the sphere is 4 pi * 2 / (n + 2).
-                let half = (0.5 * (1.0 + cos_alpha)).max(0.0);
-                let norm = 4.0 * PI * (1.0 + 18.0 / (exponent + 2.0));
-                (1.0 + 9.0 * half.powf(0.5 * exponent)) / norm
-            }
-            HazePhase::HenyeyGreenstein { g } => {
-                let denom = 1.0 + g * g - 2.0 * g * cos_alpha;
-                (1.0 - g * g) / (4.0 * PI * denom * denom.sqrt())
-            }
-        }
-    }
-}
+use crate::atmosphere::phase::PhaseFunction;
+use crate::geometry::Aabb;
 
 /// The haze of a scene.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,8 +20,9 @@ pub struct Haze {
     pub extinction: f32,
     /// Single-scattering albedo `omega` in [0, 1]: scattering over extinction.
     pub albedo: f32,
-    /// Phase function.
-    pub phase: HazePhase,
+    /// Phase function of the haze's particles (the paper's is
+    /// [`PhaseFunction::PaperHaze`]).
+    pub phase: PhaseFunction,
     /// Where the haze is; `None` fills all space.
     pub bounds: Option<Aabb>,
 }
@@ -91,41 +61,12 @@ impl Haze {
 mod tests {
     use super::*;
 
-    /// Integral over the sphere by the midpoint rule in cos(alpha).
-    fn integral(p: HazePhase) -> f32 {
-        let n = 200_000;
-        (0..n)
-            .map(|k| -1.0 + (k as f32 + 0.5) * 2.0 / n as f32)
-            .map(|c| p.eval(c) as f64)
-            .sum::<f64>() as f32
-            * 2.0
-            / n as f32
-            * 2.0
-            * PI
-    }
-
-    #[test]
-    fn phase_functions_integrate_to_one_and_peak_forward() {
-        for p in [
-            HazePhase::Paper { exponent: 16.0 },
-            HazePhase::Paper { exponent: 4.0 },
-            HazePhase::HenyeyGreenstein { g: 0.6 },
-            HazePhase::HenyeyGreenstein { g: -0.3 },
-        ] {
-            assert!((integral(p) - 1.0).abs() < 1e-3, "{p:?} {}", integral(p));
-        }
-        let paper = HazePhase::Paper { exponent: 16.0 };
-        // shafts (4): forward is 10 times the backward value.
-        assert!((paper.eval(1.0) / paper.eval(-1.0) - 10.0).abs() < 1e-4);
-        assert!((paper.eval(1.0) - 10.0 / (8.0 * PI)).abs() < 1e-6);
-    }
-
     #[test]
     fn a_haze_box_limits_the_attenuating_path() {
         let mut haze = Haze {
             extinction: 0.1,
             albedo: 1.0,
-            phase: HazePhase::Paper { exponent: 16.0 },
+            phase: PhaseFunction::PaperHaze { exponent: 16.0 },
             bounds: None,
         };
         let (a, b) = (Vec3::new(-5.0, 0.5, 0.5), Vec3::new(5.0, 0.5, 0.5));

@@ -14,7 +14,7 @@
 //! the point's distances from the lamp and the eye (units and the paper's `rho`, `kappa`,
 //! `K`: see [`haze`]). The modules follow the paper's pieces:
 //!
-//! - [`scene`]: the scene file; [`camera`], [`haze`], [`spotlight`] (beam, falloff, gobo
+//! - [`scene`]: the scene file (its camera is a [`crate::view::Camera`]); [`haze`], [`spotlight`] (beam, falloff, gobo
 //!   as the projected light map), [`objects`] (planes, rectangles, spheres, boxes, OBJ
 //!   meshes).
 //! - [`shadow_map`]: `H` from a depth map per light (shafts 4.1).
@@ -24,7 +24,6 @@
 //! - [`surface`]: the first term of shafts (1), shared by the fast method and the
 //!   reference ([`crate::reference::shafts`]).
 
-pub mod camera;
 pub mod haze;
 pub mod objects;
 pub mod planes;
@@ -42,7 +41,7 @@ pub use scene::Scene;
 
 use crate::error::{check_range, Result};
 use crate::image::Frame;
-use camera::Camera;
+use crate::view::Camera;
 
 /// The resolution of the plane method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

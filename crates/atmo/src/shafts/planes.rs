@@ -27,12 +27,12 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::interleaved_offset;
-use super::objects::Aabb;
 use super::shadow_map::ShadowMap;
 use super::spotlight::Spotlight;
 use super::surface::{first_hit, surface_radiance, SurfacePoint};
 use super::tables::{AttenuationTable, LightMap, PhaseTable};
 use super::Scene;
+use crate::geometry::Aabb;
 use crate::image::Frame;
 
 /// Nearest camera depth a plane is put at, m.
@@ -162,8 +162,13 @@ impl<'a> SamplePlanes<'a> {
                 }
             })
             .collect();
-        // The longest camera ray per unit depth: to the image's corners.
-        let corner = (1.0 + camera.tan_half_width.powi(2) + camera.tan_half_height.powi(2)).sqrt();
+        // The longest camera ray per unit depth: to the image's corners (a scene's camera
+        // is a pinhole; see `Scene::camera`).
+        let corner = camera
+            .pinhole("the sample planes")
+            .map_or(f32::INFINITY, |(tw, th)| {
+                (1.0 + tw.powi(2) + th.powi(2)).sqrt()
+            });
         let t_max = t_max.min(camera.far * corner);
         SamplePlanes {
             scene,

@@ -8,19 +8,22 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use serde::Deserialize;
 
-use super::camera::Camera;
-use super::haze::{Haze, HazePhase};
-use super::objects::{Aabb, Mesh, Object, Objects, Shape};
+use super::haze::Haze;
+use super::objects::{Object, Objects};
 use super::spotlight::{light_frame, Falloff, Gobo, Sampling, Spotlight};
 use super::PlaneSettings;
+use crate::atmosphere::phase::PhaseFunction;
 use crate::atmosphere::spectrum::blackbody_srgb;
 use crate::error::{check_positive, check_range, Error, Result};
-use crate::image::{Display, Frame, ToneMap};
+use crate::geometry::{Aabb, Mesh, Shape};
+use crate::image::{Display, ToneMap};
+use crate::view::{Camera, Fov};
 
 /// A validated scene: everything a renderer needs.
 #[derive(Debug, Clone)]
 pub struct Scene {
-    /// The camera.
+    /// The camera: a pinhole, as scene files make it (the sample planes are parallel to
+    /// its screen, shafts 4.2).
     pub camera: Camera,
     /// The haze.
     pub haze: Haze,
@@ -394,34 +397,14 @@ impl CameraSpec {
     fn validate(&self) -> Result<Camera> {
         let position = vec3("camera.position", self.position)?;
         let look_at = vec3("camera.look_at", self.look_at)?;
-        if look_at == position {
-            return Err(Error::Invalid(format!(
-                "camera.look_at = {look_at:?} equals camera.position: the camera has no view direction"
-            )));
-        }
         let up = vec3("camera.up", self.up)?;
-        Frame::check_size(self.width, self.height)?;
-        check_range("camera.fov_deg", self.fov_deg as f64, 0.01, 179.0)?;
-        check_range("camera.supersampling", self.supersampling as f64, 1.0, 16.0)?;
-        check_positive("camera.far_m", self.far_m as f64, 1e7)?;
-        let tan = (0.5 * self.fov_deg.to_radians()).tan();
-        let aspect = self.width as f32 / self.height as f32;
-        let tan_half = match self.fov_axis {
-            FovAxis::Vertical => (tan * aspect, tan),
-            FovAxis::Horizontal => (tan, tan / aspect),
+        let fov = match self.fov_axis {
+            FovAxis::Vertical => Fov::Vertical(self.fov_deg),
+            FovAxis::Horizontal => Fov::Horizontal(self.fov_deg),
         };
-        let camera = Camera::look_at(position, look_at, up, tan_half, (self.width, self.height))
-            .ok_or_else(|| {
-                Error::Invalid(format!(
-                    "camera.up = {up:?} is zero or parallel to the view direction {:?}",
-                    (look_at - position).normalize()
-                ))
-            })?;
-        Ok(Camera {
-            supersampling: self.supersampling,
-            far: self.far_m,
-            ..camera
-        })
+        Camera::look_at(position, look_at, up, fov, (self.width, self.height))?
+            .with_supersampling(self.supersampling)?
+            .with_far(self.far_m)
     }
 }
 
@@ -432,11 +415,13 @@ impl HazeSpec {
         let phase = match self.phase {
             PhaseSpec::Paper { exponent } => {
                 check_range("haze.phase.exponent", exponent as f64, 0.0, 1000.0)?;
-                HazePhase::Paper { exponent }
+                PhaseFunction::PaperHaze {
+                    exponent: exponent as f64,
+                }
             }
             PhaseSpec::HenyeyGreenstein { g } => {
                 check_range("haze.phase.g", g as f64, -0.99, 0.99)?;
-                HazePhase::HenyeyGreenstein { g }
+                PhaseFunction::HenyeyGreenstein { g: g as f64 }
             }
         };
         let bounds = match &self.bounds {

@@ -7,8 +7,9 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::objects::{nearest_hit, Objects, Ray};
+use super::objects::{nearest_hit, Objects};
 use super::spotlight::Spotlight;
+use crate::geometry::Ray;
 
 /// Depths of the nearest surfaces seen from a light.
 #[derive(Debug, Clone)]

@@ -5,9 +5,9 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
 
-use super::objects::Ray;
 use super::spotlight::Spotlight;
 use super::Scene;
+use crate::geometry::Ray;
 
 /// The nearest surface along a camera ray.
 #[derive(Debug, Clone, Copy)]

@@ -31,7 +31,7 @@ impl PhaseTable {
             .map(|k| {
                 let half_sin = k as f32 / (Self::SIZE - 1) as f32;
                 // cos alpha = 1 - 2 sin^2(alpha/2)
-                haze.phase.eval(1.0 - 2.0 * half_sin * half_sin)
+                haze.phase.eval_f32(1.0 - 2.0 * half_sin * half_sin)
             })
             .collect();
         PhaseTable { values }
@@ -153,7 +153,7 @@ impl AttenuationTable {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shafts::haze::HazePhase;
+    use crate::atmosphere::phase::PhaseFunction;
 
     #[test]
     fn the_light_map_matches_the_exact_profile() {
@@ -183,8 +183,8 @@ mod tests {
     #[test]
     fn tables_match_the_functions_they_hold() {
         for phase in [
-            HazePhase::Paper { exponent: 16.0 },
-            HazePhase::HenyeyGreenstein { g: 0.8 },
+            PhaseFunction::PaperHaze { exponent: 16.0 },
+            PhaseFunction::HenyeyGreenstein { g: 0.8 },
         ] {
             let haze = Haze {
                 extinction: 0.05,
@@ -195,7 +195,7 @@ mod tests {
             let f = PhaseTable::new(&haze);
             for k in 0..=1000 {
                 let c = -1.0 + k as f32 / 500.0;
-                let want = phase.eval(c);
+                let want = phase.eval_f32(c);
                 assert!(
                     (f.get(c) - want).abs() <= 2e-3 * want,
                     "{phase:?} {c} {} {want}",

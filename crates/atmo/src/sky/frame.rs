@@ -2,121 +2,22 @@
 //! skylight map (bilinear, sky 4.2), with the ground below the horizon and the sun's
 //! disc.
 //!
-//! World frame: x east, y north, z up. Azimuths are measured clockwise from north
-//! (toward east), elevations up from the horizontal.
+//! The camera is in the world frame of [`crate::view`]; directions are turned into the
+//! sky's own frame (x east, y north, z up) by [`sky_from_world`].
 
 use glam::{DVec3, Vec2, Vec3, Vec3A};
 use rayon::prelude::*;
 
+use super::shells::sun_disc_radiance;
 use super::table::SkylightTable;
-use super::{sun_disc_radiance, DirectionGrid, SkyModel, SkylightMap, Sun};
+use super::{DirectionGrid, SkyModel, SkylightMap};
 use crate::atmosphere::geometry::horizon_dip;
 use crate::atmosphere::optical_depth::transmittance_to_sun;
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::Atmosphere;
-use crate::error::{check_range, Result};
+use crate::error::Result;
 use crate::image::Frame;
-
-/// How pixels map to directions.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Projection {
-    /// A pinhole camera looking at azimuth `yaw` and elevation `pitch` (rad), with
-    /// vertical field of view `fov_y` (rad).
-    Perspective { yaw: f64, pitch: f64, fov_y: f64 },
-    /// The whole dome in a circle: zenith at the centre, the horizontal at the rim,
-    /// equidistant in zenith angle, north up and east to the left (as seen from below).
-    Fisheye,
-}
-
-impl Projection {
-    /// A perspective camera from degrees, validated.
-    pub fn perspective_degrees(yaw: f64, pitch: f64, fov_y: f64) -> Result<Self> {
-        check_range("yaw (deg)", yaw, -360.0, 360.0)?;
-        check_range("pitch (deg)", pitch, -90.0, 90.0)?;
-        check_range("fov (deg)", fov_y, 1.0, 179.0)?;
-        Ok(Projection::Perspective {
-            yaw: yaw.to_radians(),
-            pitch: pitch.to_radians(),
-            fov_y: fov_y.to_radians(),
-        })
-    }
-
-    /// World direction through the centre of pixel (x, y) of a `width` x `height`
-    /// image, or `None` outside the fisheye's circle.
-    pub fn direction(&self, x: u32, y: u32, width: u32, height: u32) -> Option<DVec3> {
-        self.pixel_basis(width, height)
-            .direction(x, y)
-            .map(|d| d.as_dvec3().normalize())
-    }
-
-    /// The per-frame constants that turn pixels into directions, in f32: a frame's
-    /// millions of pixels need no more than the 1e-7 rad this resolves.
-    pub fn pixel_basis(&self, width: u32, height: u32) -> PixelBasis {
-        let (w, h) = (width as f32, height as f32);
-        match *self {
-            Projection::Perspective { yaw, pitch, fov_y } => {
-                let forward = direction_of(yaw, pitch);
-                let right = DVec3::new(yaw.cos(), -yaw.sin(), 0.0);
-                let up = right.cross(forward);
-                let t = (0.5 * fov_y).tan();
-                // Direction = forward + u right + v up, with u, v from the pixel centre.
-                let right = (right * t * 2.0 / height as f64).as_vec3();
-                let up = (up * t * 2.0 / height as f64).as_vec3();
-                PixelBasis::Perspective {
-                    origin: forward.as_vec3() - right * (0.5 * w) + up * (0.5 * h),
-                    right,
-                    up,
-                }
-            }
-            Projection::Fisheye => PixelBasis::Fisheye {
-                centre: Vec2::new(0.5 * w, 0.5 * h),
-                radius: 0.5 * w.min(h),
-            },
-        }
-    }
-}
-
-/// [`Projection`] prepared for one frame size.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PixelBasis {
-    /// Direction of pixel (x, y) = `origin + (x + 1/2) right - (y + 1/2) up` (not unit).
-    Perspective { origin: Vec3, right: Vec3, up: Vec3 },
-    /// Zenith angle proportional to the distance from `centre` (pixels), 90 deg at
-    /// `radius`; north (+y) up and east (+x) to the left.
-    Fisheye { centre: Vec2, radius: f32 },
-}
-
-impl PixelBasis {
-    /// The angle a pixel spans at the centre of the picture, rad.
-    pub fn pixel_angle(&self) -> f32 {
-        match *self {
-            // |up| is the tangent step of one pixel at the centre.
-            PixelBasis::Perspective { up, .. } => up.length().atan(),
-            PixelBasis::Fisheye { radius, .. } => std::f32::consts::FRAC_PI_2 / radius,
-        }
-    }
-
-    /// The direction (not unit) through the centre of pixel (x, y), or `None` outside
-    /// the fisheye's circle.
-    #[inline]
-    pub fn direction(&self, x: u32, y: u32) -> Option<Vec3> {
-        let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
-        match *self {
-            PixelBasis::Perspective { origin, right, up } => Some(origin + px * right - py * up),
-            PixelBasis::Fisheye { centre, radius } => {
-                // North (+y) up and east (+x) to the left, as seen from below.
-                let q = (centre - Vec2::new(px, py)) / radius;
-                let rho = q.length();
-                if rho > 1.0 {
-                    return None;
-                }
-                let (sin_z, cos_z) = (rho * std::f32::consts::FRAC_PI_2).sin_cos();
-                let horizontal = if rho > 0.0 { q / rho } else { Vec2::Y };
-                Some(Vec3::new(horizontal.x * sin_z, horizontal.y * sin_z, cos_z))
-            }
-        }
-    }
-}
+use crate::view::{Camera, Sun};
 
 /// `acos(x)` within 7e-5 rad for x in [-1, 1] (Abramowitz and Stegun 4.4.45), with no
 /// library call, so loops over it vectorise; grid cells are 0.05 rad wide, so pictures
@@ -135,22 +36,20 @@ fn fast_acos(x: f32) -> f32 {
     }
 }
 
-/// Unit vector at `azimuth` (clockwise from north) and `elevation`, rad.
-pub fn direction_of(azimuth: f64, elevation: f64) -> DVec3 {
-    let (sa, ca) = azimuth.sin_cos();
-    let (se, ce) = elevation.sin_cos();
-    DVec3::new(sa * ce, ca * ce, se)
+/// The sky's own frame (x east, y north, z up, centred on the planet's axis through
+/// the viewpoint) from the world frame (x east, y up, z south; [`crate::view`]): a
+/// rotation, exact in floating point.
+#[inline]
+pub fn sky_from_world(v: Vec3) -> Vec3 {
+    Vec3::new(v.x, -v.z, v.y)
 }
 
-/// What to draw and how big.
-#[derive(Debug, Clone, Copy)]
+/// What to draw: the camera (its orientation and lens; the viewpoint's altitude is the
+/// model's or the table's) and whether the sun's disc is in the picture.
+#[derive(Debug, Clone)]
 pub struct View {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Camera.
-    pub projection: Projection,
+    /// The camera, world frame.
+    pub camera: Camera,
     /// Whether to draw the sun's disc.
     pub sun_disc: bool,
 }
@@ -257,12 +156,12 @@ impl SkyPicture {
         let atmosphere = model.atmosphere();
         let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
         let mut sun_spectrum = vec![0.0; atmosphere.channels()];
-        model.sun_radiance(sun.elevation, &mut sun_spectrum);
+        model.sun_radiance(sun.elevation(), &mut sun_spectrum);
         Self::with_maps(
             atmosphere,
             sun,
-            RgbGrid::of_map(&model.skylight_map(sun.elevation), &colour),
-            Some(RgbGrid::of_map(&model.ground_map(sun.elevation), &colour)),
+            RgbGrid::of_map(&model.skylight_map(sun.elevation()), &colour),
+            Some(RgbGrid::of_map(&model.ground_map(sun.elevation()), &colour)),
             -horizon_dip(atmosphere.bottom_radius_m, model.altitude_m()),
             colour.rgb(&sun_spectrum),
         )
@@ -272,7 +171,7 @@ impl SkyPicture {
     /// an error outside the table's ranges. The table holds the sky above the horizon;
     /// below it, where an application draws its terrain, the picture is black.
     pub fn from_table(table: &SkylightTable, sun: Sun, altitude_m: f64) -> Result<Self> {
-        let map = table.map(sun.elevation, altitude_m)?;
+        let map = table.map(sun.elevation(), altitude_m)?;
         Ok(Self::from_table_map(table, sun, altitude_m, map))
     }
 
@@ -292,7 +191,7 @@ impl SkyPicture {
             RgbGrid::new(&grid, map),
             None,
             ground_below,
-            sun_disc_rgb(atmosphere, altitude_m, sun.elevation),
+            sun_disc_rgb(atmosphere, altitude_m, sun.elevation()),
         )
     }
 
@@ -304,23 +203,23 @@ impl SkyPicture {
         ground_below: f64,
         sun_rgb: [f32; 3],
     ) -> Self {
-        let (sin_a, cos_a) = sun.azimuth.sin_cos();
+        let (sin_a, cos_a) = sun.azimuth().sin_cos();
         SkyPicture {
             sky,
             ground,
             ground_below: ground_below as f32,
             sun_horizontal: Vec2::new(sin_a as f32, cos_a as f32),
-            sun_direction: direction_of(sun.azimuth, sun.elevation).as_vec3(),
+            sun_direction: sky_from_world(sun.toward()),
             sun_rgb: Vec3A::from(sun_rgb),
             sun_cos_radius: atmosphere.sun_angular_radius.cos() as f32,
             sun_radius: atmosphere.sun_angular_radius as f32,
         }
     }
 
-    /// Linear sRGB radiance seen along the world direction `d`.
+    /// Linear sRGB radiance seen along the world direction `d` (world frame).
     pub fn radiance(&self, d: DVec3, sun_disc: bool) -> Vec3 {
         let mut rays = Rays::default();
-        rays.fill(1, |_| d.normalize().as_vec3());
+        rays.fill(1, |_| sky_from_world(d.normalize().as_vec3()));
         let mut out = [Vec3::ZERO];
         let edges = Edges {
             sun_disc,
@@ -389,14 +288,14 @@ impl SkyPicture {
 
     /// Renders `view`, rows in parallel.
     pub fn render(&self, view: &View) -> Frame {
-        let mut frame = Frame::new(view.width, view.height);
+        let mut frame = Frame::new(view.camera.width, view.camera.height);
         self.render_into(view, &mut frame);
         frame
     }
 
     /// Renders `view` into `frame` (of the view's size), rows in parallel.
     pub fn render_into(&self, view: &View, frame: &mut Frame) {
-        let camera = view.projection.pixel_basis(view.width, view.height);
+        let camera = view.camera.pixel_basis().rotated(sky_from_world);
         let pixel = camera.pixel_angle();
         let edges = Edges {
             sun_disc: view.sun_disc,
@@ -405,7 +304,7 @@ impl SkyPicture {
         };
         frame
             .pixels
-            .par_chunks_mut(view.width as usize)
+            .par_chunks_mut(view.camera.width as usize)
             .enumerate()
             .for_each_init(Rays::default, |rays, (y, row)| {
                 rays.fill(row.len(), |x| {
@@ -491,14 +390,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn perspective_centre_looks_along_yaw_and_pitch() {
-        let p = Projection::perspective_degrees(90.0, 10.0, 60.0).unwrap();
-        let d = p.direction(50, 50, 101, 101).unwrap();
-        let want = direction_of(90f64.to_radians(), 10f64.to_radians());
-        assert!((d - want).length() < 1e-6, "{d} {want}");
-        // Pixels to the right are clockwise (toward larger azimuth).
-        let right = p.direction(100, 50, 101, 101).unwrap();
-        assert!(right.x.atan2(right.y) > d.x.atan2(d.y));
+    fn the_sky_sees_the_world_camera_in_its_own_frame() {
+        use crate::view::Fov;
+        // Yaw 90 (east), pitch 10: in the sky's frame x east, y north, z up.
+        let cam = Camera::yaw_pitch(Vec3::ZERO, 90.0, 10.0, Fov::Vertical(60.0), (101, 101));
+        let basis = cam.unwrap().pixel_basis().rotated(sky_from_world);
+        let d = basis.direction(50, 50).unwrap().normalize();
+        let e = 10f32.to_radians();
+        assert!(
+            (d - Vec3::new(e.cos(), 0.0, e.sin())).length() < 1e-6,
+            "{d}"
+        );
+        // Pixels to the right are clockwise (toward larger azimuth, here south: -y).
+        let right = basis.direction(100, 50).unwrap();
+        assert!(right.y < 0.0, "{right}");
+        // The dome: zenith in the middle, north on top, east on the left.
+        let dome = Camera::dome(Vec3::ZERO, (101, 101)).unwrap();
+        let basis = dome.pixel_basis().rotated(sky_from_world);
+        assert!((basis.direction(50, 50).unwrap().z - 1.0).abs() < 1e-6);
+        assert!(basis.direction(50, 0).unwrap().y > 0.99);
+        assert!(basis.direction(0, 50).unwrap().x > 0.99);
     }
 
     #[test]
@@ -547,36 +458,5 @@ mod tests {
             .fold(0.0, f32::max);
         assert!(worst < 7e-5, "{worst}");
         assert!(fast_acos(f32::NAN).is_nan());
-    }
-
-    #[test]
-    fn perspective_pixels_match_the_pinhole_formula() {
-        let p = Projection::perspective_degrees(30.0, 20.0, 60.0).unwrap();
-        let (yaw, pitch, t) = (
-            30f64.to_radians(),
-            20f64.to_radians(),
-            30f64.to_radians().tan(),
-        );
-        let forward = direction_of(yaw, pitch);
-        let right = DVec3::new(yaw.cos(), -yaw.sin(), 0.0);
-        let up = right.cross(forward);
-        for (x, y) in [(0, 0), (319, 0), (100, 179), (319, 179)] {
-            let u = (2.0 * (x as f64 + 0.5) / 320.0 - 1.0) * t * 320.0 / 180.0;
-            let v = (1.0 - 2.0 * (y as f64 + 0.5) / 180.0) * t;
-            let want = (forward + u * right + v * up).normalize();
-            let got = p.direction(x, y, 320, 180).unwrap();
-            assert!((got - want).length() < 1e-6, "({x}, {y}): {got} {want}");
-        }
-    }
-
-    #[test]
-    fn fisheye_centre_is_the_zenith_and_north_is_up() {
-        let p = Projection::Fisheye;
-        assert!((p.direction(50, 50, 101, 101).unwrap().z - 1.0).abs() < 1e-6);
-        let north = p.direction(50, 0, 101, 101).unwrap();
-        assert!(north.y > 0.99, "{north}");
-        let east = p.direction(0, 50, 101, 101).unwrap();
-        assert!(east.x > 0.99, "{east}");
-        assert!(p.direction(0, 0, 101, 101).is_none());
     }
 }

@@ -107,7 +107,8 @@ impl SkyModel {
             }
             out
         };
-        let lanes_of = |v: &[crate::sky::maps::Lane]| v.iter().map(|x| x.to_array()).collect();
+        let lanes_of =
+            |v: &[crate::sky::shells::maps::Lane]| v.iter().map(|x| x.to_array()).collect();
         let table = &self.sunlight.table;
         let colour = SpectrumToRgb::new(&a.wavelengths_nm);
         let mut to_rgb = vec![[[0.0f32; 3]; 4]; l];
@@ -159,12 +160,7 @@ impl SkyModel {
 }
 
 fn phase(p: &PhaseFunction) -> PhaseArrays {
-    let (kind, g) = match *p {
-        PhaseFunction::Rayleigh => (0, 0.0),
-        PhaseFunction::PaperMie => (1, 0.0),
-        PhaseFunction::HenyeyGreenstein { g } => (2, g),
-        PhaseFunction::CornetteShanks { g } => (3, g),
-    };
+    let (kind, g) = p.code();
     PhaseArrays { kind, g: g as f32 }
 }
 

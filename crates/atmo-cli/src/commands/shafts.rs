@@ -1,18 +1,18 @@
 //! `atmo shafts`: a scene of spotlights in haze, by the sample-plane method or the
-//! ray-marching reference; `atmo compare`: how far two renders are apart.
+//! ray-marching reference.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Result;
-use atmo::image::{check_folder, Display, Frame, ImageKind};
+use atmo::image::{check_folder, Frame, ImageKind};
 use atmo::reference::shafts::RayMarcher;
 use atmo::shafts::{SamplePlanes, Scene};
 use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};
 use clap::{Args, ValueEnum};
 
+use crate::args::ToneMapArg;
 use crate::backend::{gpu_error, Backend, BackendArgs};
-use crate::sky::ToneMapArg;
 
 #[derive(Args)]
 pub struct ShaftsArgs {
@@ -175,73 +175,5 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         scene.lights.len(),
         scene.unit.radiance_unit()
     );
-    Ok(())
-}
-
-#[derive(Args)]
-pub struct CompareArgs {
-    /// First picture (.exr, linear radiance).
-    a: PathBuf,
-    /// Second picture (.exr), e.g. the reference.
-    b: PathBuf,
-    /// Difference image: |A - B| in 8-bit levels after the display below, times 10
-    /// (white = 25.5 levels or more).
-    #[arg(short, long, value_name = "FILE.png", default_value = "difference.png")]
-    output: PathBuf,
-    /// Exposure the levels are measured after.
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
-    /// Tone map the levels are measured after.
-    #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]
-    tone_map: ToneMapArg,
-}
-
-pub fn compare(args: CompareArgs) -> Result<()> {
-    atmo::error::check_positive("--exposure", args.exposure as f64, 1e12)?;
-    if ImageKind::of(&args.output)? != ImageKind::Png {
-        return Err(
-            atmo::Error::out_of_range("--output", args.output.display(), "a .png file").into(),
-        );
-    }
-    check_folder(&args.output)?;
-    let (a, b) = (Frame::read_exr(&args.a)?, Frame::read_exr(&args.b)?);
-    let display = Display {
-        exposure: args.exposure,
-        tone: args.tone_map.into(),
-    };
-    let levels = a.level_errors(&b, display)?;
-    let mut difference = Frame::new(a.width, a.height);
-    let (mut sum, mut sum_b, mut max) = (0.0f64, 0.0f64, 0.0f64);
-    for ((d, pa), pb) in difference.pixels.iter_mut().zip(&a.pixels).zip(&b.pixels) {
-        for c in 0..3 {
-            let diff = (pa[c] - pb[c]) as f64;
-            sum += diff * diff;
-            sum_b += (pb[c] as f64).powi(2);
-            max = max.max(diff.abs());
-            d[c] = 10.0 * (display.value(pa[c]) - display.value(pb[c])).abs();
-        }
-    }
-    // The difference is already in display units: written with exposure 1, clamped.
-    difference
-        .pixels
-        .iter_mut()
-        .for_each(|p| *p = p.map(atmo::image::srgb_decode));
-    difference.write(&args.output, 1.0, atmo::image::ToneMap::Clamp)?;
-    let n = 3.0 * a.pixels.len() as f64;
-    println!(
-        "levels (8-bit, after exposure {} and the {:?} tone map): rms {:.3} ({:.3} % of 255), max {:.2}",
-        args.exposure,
-        display.tone,
-        levels.rms,
-        100.0 * levels.rms / 255.0,
-        levels.max
-    );
-    println!(
-        "linear: rms {:.4e} ({:.3} % of B's rms), max {:.4e}",
-        (sum / n).sqrt(),
-        100.0 * (sum / sum_b.max(1e-300)).sqrt(),
-        max
-    );
-    println!("difference image: {}", args.output.display());
     Ok(())
 }

@@ -10,7 +10,7 @@ use atmo::sky::table::{ErrorBound, SkylightTable, TableSettings};
 use clap::{Args, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::sky::{AtmosphereArgs, ShellArgs, ToneMapArg};
+use crate::args::{AtmosphereArgs, ShellArgs, ToneMapArg};
 
 #[derive(Args)]
 pub struct PrecomputeArgs {

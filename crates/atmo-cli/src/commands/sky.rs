@@ -4,16 +4,30 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
-use atmo::image::{Display, Frame, ImageKind, ToneMap};
-use atmo::sky::frame::{Projection, SkyPicture, View};
-use atmo::sky::table::SkylightTable;
-use atmo::sky::{SkyModel, SkySettings, Sun};
+use atmo::image::{Display, ImageKind};
+use atmo::sky::{SkyModel, SkyPicture, SkylightTable, View};
+use atmo::view::{Camera, Fov, Sun};
 use atmo::{Atmosphere, Error};
 use atmo_gpu::sky::GpuSkyModel;
-use clap::{Args, ValueEnum};
+use clap::Args;
+use glam::Vec3;
 use indicatif::ProgressBar;
 
-use crate::backend::gpu_error;
+use super::sky_table::{self, Animate, Animation, TableDrawer};
+use crate::args::{AtmosphereArgs, ShellArgs, ToneMapArg};
+use crate::backend::{gpu_error, BackendArgs};
+
+/// The library's fields that this command's flags set, for error messages.
+pub const FLAGS: &[(&str, &str)] = &[
+    ("sun.elevation_deg", "--sun-elevation"),
+    ("sun.azimuth_deg", "--sun-azimuth"),
+    ("altitude_m", "--altitude"),
+    ("camera.yaw_deg", "--yaw"),
+    ("camera.pitch_deg", "--pitch"),
+    ("camera.fov_deg", "--fov"),
+    ("width", "--width"),
+    ("height", "--height"),
+];
 
 #[derive(Args)]
 pub struct SkyArgs {
@@ -81,96 +95,7 @@ pub struct SkyArgs {
     #[arg(short, long, value_name = "FILE", required_unless_present = "probe")]
     output: Option<PathBuf>,
     #[command(flatten)]
-    device: crate::backend::BackendArgs,
-}
-
-/// What `--animate` moves.
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Animate {
-    /// The sun sets: elevation from --sun-elevation down to the table's lowest.
-    Sun,
-    /// The viewpoint climbs: altitude from --altitude up to the table's highest.
-    Altitude,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-pub enum ToneMapArg {
-    Exponential,
-    Aces,
-    Clamp,
-}
-
-impl From<ToneMapArg> for ToneMap {
-    fn from(t: ToneMapArg) -> Self {
-        match t {
-            ToneMapArg::Exponential => ToneMap::Exponential,
-            ToneMapArg::Aces => ToneMap::Aces,
-            ToneMapArg::Clamp => ToneMap::Clamp,
-        }
-    }
-}
-
-/// Which atmosphere: a file, or an embedded preset; ozone on or off.
-#[derive(Args)]
-pub struct AtmosphereArgs {
-    /// Atmosphere TOML file (see docs/atmospheres.md); default: the `--preset`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub atmosphere: Option<PathBuf>,
-    /// Embedded atmosphere: `earth` (measured coefficients) or `paper`.
-    #[arg(long, default_value = "earth")]
-    pub preset: String,
-    /// Switch on the atmosphere's ozone layer.
-    #[arg(long)]
-    pub ozone: bool,
-}
-
-/// The shell method's settings (sky 3).
-#[derive(Args)]
-pub struct ShellArgs {
-    /// Highest scattering order: 1, 2 (the paper) or 3.
-    #[arg(long, default_value_t = 2)]
-    order: u32,
-    /// Sampling shells (paper: 40).
-    #[arg(long, default_value_t = SkySettings::default().shells)]
-    shells: usize,
-    /// View directions per axis L of the skylight map (sky (11)-(12); paper: 64).
-    #[arg(long, default_value_t = SkySettings::default().directions)]
-    directions: usize,
-    /// Directions of the higher-order quadrature (paper: 15).
-    #[arg(long, default_value_t = SkySettings::default().scattering_directions)]
-    scattering_directions: usize,
-    /// Let aerosols scatter the higher orders too (the paper: Rayleigh only).
-    #[arg(long)]
-    multiple_mie: bool,
-}
-
-impl ShellArgs {
-    /// The settings, not yet validated.
-    pub fn settings(&self) -> SkySettings {
-        SkySettings {
-            shells: self.shells,
-            directions: self.directions,
-            scattering_directions: self.scattering_directions,
-            order: self.order,
-            multiple_mie: self.multiple_mie,
-            ..SkySettings::default()
-        }
-    }
-}
-
-impl AtmosphereArgs {
-    /// The atmosphere from `--atmosphere` or `--preset`, with `--ozone` applied.
-    pub fn load(&self) -> atmo::Result<Atmosphere> {
-        let atmosphere = match &self.atmosphere {
-            Some(path) => Atmosphere::from_toml_file(path)?,
-            None => Atmosphere::preset(&self.preset)?,
-        };
-        if self.ozone {
-            atmosphere.with_ozone(true)
-        } else {
-            Ok(atmosphere)
-        }
-    }
+    device: BackendArgs,
 }
 
 pub fn run(args: SkyArgs) -> Result<()> {
@@ -185,43 +110,40 @@ pub fn run(args: SkyArgs) -> Result<()> {
             if args.animate.is_none() {
                 ImageKind::of(path)?;
             }
-            Frame::check_size(args.width, args.height)?;
-            let projection = if args.fisheye {
-                Projection::Fisheye
+            // The sky's pictures are seen from the model's altitude; the camera turns.
+            let eye = Vec3::new(0.0, args.altitude as f32, 0.0);
+            let size = (args.width, args.height);
+            let camera = if args.fisheye {
+                Camera::dome(eye, size)?
             } else {
-                Projection::perspective_degrees(
-                    args.yaw.unwrap_or(args.sun_azimuth),
-                    args.pitch,
-                    args.fov,
-                )?
+                let yaw = args.yaw.unwrap_or(args.sun_azimuth);
+                Camera::yaw_pitch(eye, yaw, args.pitch, Fov::Vertical(args.fov as f32), size)?
             };
             Some(View {
-                width: args.width,
-                height: args.height,
-                projection,
+                camera,
                 sun_disc: !args.no_sun_disc,
             })
         }
         None => None,
     };
-    if let (Some(table), Some(view), Some(path)) = (&args.table, view, &args.output) {
+    if let (Some(table), Some(view), Some(path)) = (&args.table, &view, &args.output) {
         let table = SkylightTable::read(table)?;
         let display = Display {
             exposure: args.exposure,
             tone: args.tone_map.into(),
         };
         let gpu = args.device.open()?;
-        let drawer = crate::sky_table::TableDrawer::new(&table, gpu.as_ref())?;
+        let drawer = TableDrawer::new(&table, gpu.as_ref())?;
         return match args.animate {
-            None => crate::sky_table::draw(&drawer, sun, args.altitude, &view, display, path),
+            None => sky_table::draw(&drawer, sun, args.altitude, view, display, path),
             Some(what) => {
-                let frames = crate::sky_table::Animation {
+                let frames = Animation {
                     what,
                     frames: args.frames,
                     sun,
                     altitude_m: args.altitude,
                 };
-                crate::sky_table::animate(&drawer, &table, &frames, &view, display, path)
+                sky_table::animate(&drawer, &table, &frames, view, display, path)
             }
         };
     }
@@ -253,8 +175,8 @@ pub fn run(args: SkyArgs) -> Result<()> {
     eprintln!(
         "atmo: {} ({}x{}, {}, order {}) in {:.0} ms",
         path.display(),
-        view.width,
-        view.height,
+        view.camera.width,
+        view.camera.height,
         atmosphere.name,
         settings.order,
         start.elapsed().as_secs_f64() * 1e3
@@ -331,7 +253,7 @@ fn print_probe(
             (relative, e.to_radians())
         })
         .collect();
-    let spectra = model.radiance_along(sun.elevation, &rad);
+    let spectra = model.radiance_along(sun.elevation(), &rad);
     let mut out = String::from("azimuth_deg,elevation_deg");
     for l in &atmosphere.wavelengths_nm {
         out.push_str(&format!(",radiance_{l}nm"));

@@ -5,16 +5,25 @@ use std::time::Instant;
 
 use anyhow::Result;
 use atmo::error::check_range;
-use atmo::image::{write_atomically, Display, Frame};
-use atmo::sky::frame::{SkyPicture, View};
-use atmo::sky::table::SkylightTable;
-use atmo::sky::Sun;
+use atmo::image::{Display, Frame};
+use atmo::sky::{SkyPicture, SkylightTable, View};
+use atmo::view::Sun;
 use atmo::Error;
 use atmo_gpu::sky::GpuSkyTable;
 use atmo_gpu::Gpu;
+use clap::ValueEnum;
 
 use crate::backend::gpu_error;
-use crate::sky::Animate;
+use crate::output::write_animation;
+
+/// What `--animate` moves.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Animate {
+    /// The sun sets: elevation from --sun-elevation down to the table's lowest.
+    Sun,
+    /// The viewpoint climbs: altitude from --altitude up to the table's highest.
+    Altitude,
+}
 
 /// Draws pictures from a table, on the CPU or on the GPU.
 pub enum TableDrawer<'a> {
@@ -60,8 +69,8 @@ pub fn draw(
     eprintln!(
         "atmo: {} ({}x{}) from the table in {total_ms:.1} ms",
         path.display(),
-        view.width,
-        view.height,
+        view.camera.width,
+        view.camera.height,
     );
     Ok(())
 }
@@ -85,11 +94,11 @@ impl Animation {
         match self.what {
             Animate::Sun => {
                 let end = table.sun_axis().min();
-                (self.sun.elevation * (1.0 - u) + end * u, self.altitude_m)
+                (self.sun.elevation() * (1.0 - u) + end * u, self.altitude_m)
             }
             Animate::Altitude => {
                 let end = table.altitude_axis().max();
-                (self.sun.elevation, self.altitude_m * (1.0 - u) + end * u)
+                (self.sun.elevation(), self.altitude_m * (1.0 - u) + end * u)
             }
         }
     }
@@ -118,13 +127,10 @@ pub fn animate(
         table.map(sun, altitude)?;
     }
     let start = Instant::now();
-    let size = (view.width, view.height);
+    let size = (view.camera.width, view.camera.height);
     let apng = write_animation(folder, animation.frames, size, display, |k, frame| {
         let (elevation, altitude) = animation.at(table, k);
-        let sun = Sun {
-            elevation,
-            ..animation.sun
-        };
+        let sun = animation.sun.with_elevation(elevation);
         *frame = drawer.frame(sun, altitude, view)?;
         Ok(())
     })?;
@@ -135,65 +141,4 @@ pub fn animate(
         start.elapsed().as_secs_f64()
     );
     Ok(())
-}
-
-/// Writes the frames `fill` draws (given the frame number and a `size` frame to draw
-/// into) into the folder `folder` (created) as `frame-0000.png` ... and
-/// `animation.png`, an animated PNG at 30 frames/s, each file atomically. Returns the
-/// animation's path.
-pub fn write_animation(
-    folder: &Path,
-    frames: usize,
-    (width, height): (u32, u32),
-    display: Display,
-    mut fill: impl FnMut(usize, &mut Frame) -> anyhow::Result<()>,
-) -> anyhow::Result<std::path::PathBuf> {
-    if folder.extension().is_some_and(|e| e == "png" || e == "exr") {
-        return Err(Error::Invalid(format!(
-            "{}: with --animate, -o names a folder for the frames",
-            folder.display()
-        ))
-        .into());
-    }
-    std::fs::create_dir_all(folder).map_err(|source| Error::Io {
-        path: folder.to_path_buf(),
-        source,
-    })?;
-    let apng = folder.join("animation.png");
-    let png_error = |e: png::EncodingError| Error::Image {
-        path: apng.clone(),
-        message: e.to_string(),
-    };
-    // A frame's own error, kept whole (it may not be atmo's) while the file is dropped.
-    let mut failed: Option<anyhow::Error> = None;
-    let written = write_atomically(&apng, |w| {
-        let mut encoder = png::Encoder::new(w, width, height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_animated(frames as u32, 0).map_err(png_error)?;
-        encoder.set_frame_delay(1, 30).map_err(png_error)?;
-        let mut writer = encoder.write_header().map_err(png_error)?;
-        let mut frame = Frame::new(width, height);
-        for k in 0..frames {
-            if let Err(e) = fill(k, &mut frame) {
-                let message = format!("frame {k}: {e:#}");
-                failed = Some(e);
-                return Err(Error::Invalid(message));
-            }
-            frame.write(
-                &folder.join(format!("frame-{k:04}.png")),
-                display.exposure,
-                display.tone,
-            )?;
-            writer
-                .write_image_data(&frame.to_srgb8(display.exposure, display.tone))
-                .map_err(png_error)?;
-        }
-        writer.finish().map_err(png_error)
-    });
-    match (written, failed) {
-        (_, Some(e)) => Err(e),
-        (Err(e), None) => Err(e.into()),
-        (Ok(()), None) => Ok(apng),
-    }
 }

@@ -5,26 +5,36 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Result;
-use atmo::atmosphere::spectrum::SpectrumToRgb;
+use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::files;
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{render, CloudPhase, Lighting};
+use atmo::clouds::render::{render, Lighting};
 use atmo::error::check_range;
 use atmo::image::{check_folder, Display, Frame, ImageKind};
-use atmo::shafts::camera::Camera;
-use atmo::sky::frame::{Projection, SkyPicture, View};
-use atmo::sky::{SkyModel, SkySettings, Sun};
+use atmo::sky::{Daylight, SkyModel, SkyPicture, SkySettings, View};
+use atmo::view::{Camera, Fov, Sun};
+use atmo::Atmosphere;
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 
 use atmo_gpu::clouds::GpuClouds;
 use atmo_gpu::Gpu;
 
+use crate::args::ToneMapArg;
 use crate::backend::{gpu_error, BackendArgs};
-use crate::sky::ToneMapArg;
-use crate::sky_table::write_animation;
+use crate::output::write_animation;
+
+/// The library's fields that this command's flags set, for error messages.
+pub const FLAGS: &[(&str, &str)] = &[
+    ("sun.azimuth_deg", "--sun-azimuth"),
+    ("camera.fov_deg", "--fov"),
+    ("buffer.resolution", "--resolution"),
+    ("buffer.forward", "--forward"),
+    ("width", "--width"),
+    ("height", "--height"),
+];
 
 #[derive(Args)]
 pub struct CloudsArgs {
@@ -164,7 +174,7 @@ impl Renderer {
         Ok(match self {
             Renderer::Cpu(buffer, _) => {
                 let buffer = buffer.as_ref().expect("a light pass comes first");
-                render(particles, buffer, camera, light, background)
+                render(particles, buffer, camera, light, background)?
             }
             Renderer::Gpu(boxed) => {
                 let (gpu, clouds) = &**boxed;
@@ -200,10 +210,9 @@ enum Animate {
     Wind,
 }
 
-/// Unit vector toward the sun in the cloud frame (x east, y up, z south).
-pub fn sun_direction(elevation_deg: f32, azimuth_deg: f32) -> Vec3 {
-    let (e, a) = (elevation_deg.to_radians(), azimuth_deg.to_radians());
-    Vec3::new(a.sin() * e.cos(), e.sin(), -a.cos() * e.cos())
+/// Unit vector toward the sun at `elevation_deg` and `azimuth_deg` (world frame).
+fn toward_sun(elevation_deg: f32, azimuth_deg: f32) -> atmo::Result<Vec3> {
+    Ok(Sun::from_degrees(elevation_deg as f64, azimuth_deg as f64)?.toward())
 }
 
 /// The camera looking at `particles`' centre from `azimuth_deg`, `distance` widths
@@ -224,17 +233,8 @@ fn camera_for(particles: &[Particle], args: &CloudsArgs) -> atmo::Result<Camera>
         args.view_height,
         centre.z - a.cos() * width * args.distance,
     );
-    let tan = (0.5 * args.fov.to_radians()).tan();
-    let aspect = args.width as f32 / args.height as f32;
-    // The camera stands at least a tenth of a width off the cloud's axis: never above it.
-    Camera::look_at(
-        position,
-        centre,
-        Vec3::Y,
-        (tan * aspect, tan),
-        (args.width, args.height),
-    )
-    .ok_or_else(|| atmo::Error::Invalid("the camera looks straight up or down at the cloud".into()))
+    let fov = Fov::Vertical(args.fov);
+    Camera::look_at(position, centre, Vec3::Y, fov, (args.width, args.height))
 }
 
 pub fn run(args: CloudsArgs) -> Result<()> {
@@ -275,10 +275,10 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         SplatArg::Whole => Splat::Whole,
     };
     let phase = match args.phase {
-        PhaseArg::Mie => CloudPhase::CloudMie,
+        PhaseArg::Mie => PhaseFunction::CloudMie,
         PhaseArg::Hg => {
             check_range("--g", args.g as f64, -0.99, 0.99)?;
-            CloudPhase::HenyeyGreenstein { g: args.g }
+            PhaseFunction::HenyeyGreenstein { g: args.g as f64 }
         }
     };
     let display = Display {
@@ -286,7 +286,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         tone: args.tone_map.into(),
     };
     let sky = if args.sky {
-        Some(SkyLight::new(&particles, &camera)?)
+        Some(SkyAround::new(&particles, &camera)?)
     } else {
         None
     };
@@ -303,7 +303,8 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                 None,
             ),
             Some(sky) => {
-                let (sun, ambient, background) = sky.at(args.sun_elevation, azimuth, &camera)?;
+                let sun = Sun::from_degrees(args.sun_elevation as f64, azimuth as f64)?;
+                let (sun, ambient, background) = sky.at(sun, &camera);
                 let light = Lighting {
                     to_sun,
                     sun,
@@ -314,7 +315,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
             }
         })
     };
-    let to_sun = sun_direction(args.sun_elevation, args.sun_azimuth);
+    let to_sun = toward_sun(args.sun_elevation, args.sun_azimuth)?;
     let mut renderer = match args.device.open()? {
         Some(gpu) => {
             let clouds = GpuClouds::new(&gpu, &particles, args.resolution).map_err(gpu_error)?;
@@ -354,7 +355,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                         Animate::Wind => args.sun_azimuth,
                     };
                     let to_sun = match animate {
-                        Animate::Sun => sun_direction(args.sun_elevation, azimuth),
+                        Animate::Sun => toward_sun(args.sun_elevation, azimuth)?,
                         Animate::Wind => {
                             // A sheared breeze: 6 m/s at the base, faster aloft, 4 s a frame.
                             if k > 0 {
@@ -387,61 +388,40 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     Ok(())
 }
 
-/// The sky around a cloud: the sky module's models at the camera's and the cloud's
-/// altitudes (Earth atmosphere, default settings).
-struct SkyLight {
-    atmosphere: atmo::Atmosphere,
+/// The sky around a cloud (Earth atmosphere, default settings): its light at the
+/// cloud's mean height, and the sky behind it from the camera's height.
+struct SkyAround {
+    at_cloud: Daylight,
     at_camera: SkyModel,
-    at_cloud: SkyModel,
 }
 
-impl SkyLight {
-    fn new(particles: &[Particle], camera: &Camera) -> atmo::Result<SkyLight> {
-        let atmosphere = atmo::Atmosphere::earth();
+impl SkyAround {
+    fn new(particles: &[Particle], camera: &Camera) -> atmo::Result<SkyAround> {
+        let atmosphere = Atmosphere::earth();
         let settings = SkySettings::default();
         let height =
             particles.iter().map(|p| p.position.y as f64).sum::<f64>() / particles.len() as f64;
         let top = atmosphere.top_radius_m - atmosphere.bottom_radius_m - 1.0;
         let altitude = |h: f64| h.clamp(0.0, top);
-        let at_camera = SkyModel::new(&atmosphere, &settings, altitude(camera.position.y as f64))?;
-        let at_cloud = SkyModel::new(&atmosphere, &settings, altitude(height))?;
-        Ok(SkyLight {
-            atmosphere,
-            at_camera,
-            at_cloud,
+        Ok(SkyAround {
+            at_cloud: Daylight::new(&atmosphere, &settings, altitude(height))?,
+            at_camera: SkyModel::new(&atmosphere, &settings, altitude(camera.position.y as f64))?,
         })
     }
 
-    /// For a sun at `elevation` and `azimuth` (degrees): the sun's irradiance at the
-    /// cloud (RGB, through the atmosphere), the zenith sky's radiance there (the cloud's
-    /// ambient light), and the sky behind the cloud as the camera sees it.
-    fn at(
-        &self,
-        elevation: f32,
-        azimuth: f32,
-        camera: &Camera,
-    ) -> atmo::Result<(Vec3, Vec3, Frame)> {
-        let sun = Sun::from_degrees(elevation as f64, azimuth as f64)?;
-        let mut spectrum = vec![0.0f32; self.atmosphere.wavelengths_nm.len()];
-        self.at_cloud.sun_radiance(sun.elevation, &mut spectrum);
-        let disc = std::f64::consts::PI * self.atmosphere.sun_angular_radius.powi(2);
-        spectrum.iter_mut().for_each(|v| *v *= disc as f32);
-        let sunlight =
-            Vec3::from(SpectrumToRgb::new(&self.atmosphere.wavelengths_nm).rgb(&spectrum));
-        let ambient = SkyPicture::new(&self.at_cloud, sun).radiance(glam::DVec3::Z, false);
-        // The camera in the sky's frame (x east, y north, z up; ours is x east, y up,
-        // z south): yaw clockwise from north, pitch above the horizontal.
-        let f = camera.forward;
-        let yaw = f.x.atan2(-f.z).to_degrees() as f64;
-        let pitch = f.y.clamp(-1.0, 1.0).asin().to_degrees() as f64;
-        let fov = 2.0 * camera.tan_half_height.atan().to_degrees() as f64;
+    /// For `sun`: the sun's irradiance at the cloud (RGB, through the atmosphere), the
+    /// zenith sky's radiance there (the cloud's ambient light), and the sky behind the
+    /// cloud as `camera` sees it.
+    fn at(&self, sun: Sun, camera: &Camera) -> (Vec3, Vec3, Frame) {
         let view = View {
-            width: camera.width,
-            height: camera.height,
-            projection: Projection::perspective_degrees(yaw, pitch, fov)?,
+            camera: camera.clone(),
             sun_disc: true,
         };
         let background = SkyPicture::new(&self.at_camera, sun).render(&view);
-        Ok((sunlight, ambient, background))
+        (
+            self.at_cloud.sunlight(sun),
+            self.at_cloud.skylight(sun),
+            background,
+        )
     }
 }

@@ -18,7 +18,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::light_map::{LightMap, ScatteredLightMap};
-use super::shells::SamplingShells;
+use super::sampling_shells::SamplingShells;
 use crate::atmosphere::geometry::radius_at;
 use crate::atmosphere::optical_depth::column_densities;
 use crate::atmosphere::{Atmosphere, CONSTITUENTS};

@@ -34,13 +34,12 @@ use flate2::read::ZlibDecoder;
 use flate2::write::ZlibEncoder;
 use flate2::Compression;
 
-use super::table::{
-    dequantize, to_fixed, ErrorBound, Factors, SkylightTable, TableSettings, CHANNELS,
-};
-use super::SkySettings;
+use super::factors::{dequantize, to_fixed, Factors};
+use super::{ErrorBound, SkylightTable, TableSettings, CHANNELS};
 use crate::atmosphere::Atmosphere;
 use crate::error::{Error, Result};
 use crate::image::{write_atomically, Display, ToneMap};
+use crate::sky::SkySettings;
 
 /// The first bytes of every table file.
 pub const MAGIC: &[u8; 8] = b"atmo-sky";

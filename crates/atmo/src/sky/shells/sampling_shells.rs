@@ -54,11 +54,6 @@ impl SamplingShells {
         self.radii.len()
     }
 
-    /// Always false: there are at least the ground and the top.
-    pub fn is_empty(&self) -> bool {
-        false
-    }
-
     /// Index of the shell through the viewpoint.
     pub fn viewpoint(&self) -> usize {
         self.viewpoint

@@ -10,10 +10,12 @@ use anyhow::Result;
 use atmo::image::{write_atomically, Frame};
 use atmo::reference::shafts::RayMarcher;
 use atmo::shafts::{SamplePlanes, Scene};
+use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};
+use atmo_gpu::{Gpu, Rendered};
 use serde_json::json;
 
-use crate::bench::{median, time_ms};
-use crate::bench_table::emit;
+use super::{emit, median, report, time_gpu, time_ms, Case};
+use crate::backend::gpu_error;
 
 /// Median time of `runs` renders by the plane method after one warm-up, and the last
 /// frame.
@@ -27,7 +29,7 @@ pub(crate) fn time_planes(scene: &Scene, runs: usize) -> (f64, Frame) {
     (ms, frame)
 }
 
-pub fn bench_shafts(quick: bool, json: bool, scenes: &Path, sweep: &Path) -> Result<()> {
+pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: &Path) -> Result<()> {
     let fig6 = Scene::from_file(&scenes.join("spotlight-sphere.toml"))?;
     let stage = Scene::from_file(&scenes.join("stage.toml"))?;
     let runs = if quick { 5 } else { 21 };
@@ -297,4 +299,43 @@ fn plot(rows: &[SweepRow], split: usize) -> String {
     }
     svg.push_str("</svg>\n");
     svg
+}
+
+pub fn gpu(gpu: &Gpu, quick: bool, json: bool, scenes: &Path) -> Result<()> {
+    let runs = if quick { 3 } else { 7 };
+    for (name, file) in [
+        ("shafts.fig6", "spotlight-sphere.toml"),
+        ("shafts.stage", "stage.toml"),
+    ] {
+        let scene = Scene::from_file(&scenes.join(file))?;
+        let (cpu_ms, cpu) = time_planes(&scene, runs);
+        let shafts = GpuShafts::new(gpu, &scene).map_err(gpu_error)?;
+        for method in [ShaftsMethod::Planes, ShaftsMethod::Compute] {
+            let (wall, gpu_ms, frame) = time_gpu(runs, || {
+                let Rendered { frame, gpu_ms } = shafts.render(gpu, method)?;
+                Ok((frame, gpu_ms))
+            })?;
+            let suffix = match method {
+                ShaftsMethod::Planes => "gpu-planes",
+                ShaftsMethod::Compute => "gpu-compute",
+            };
+            report(
+                json,
+                gpu,
+                Case {
+                    name: &format!("{name}.{suffix}"),
+                    params: json!({
+                        "width": scene.camera.width, "height": scene.camera.height,
+                        "lights": scene.lights.len(), "planes": scene.planes.planes,
+                        "sub_planes": scene.planes.sub_planes, "shadow_map": scene.planes.shadow_map,
+                    }),
+                    wall_ms: wall,
+                    gpu_ms,
+                    cpu_ms,
+                    error: Some(frame.level_errors(&cpu, scene.display)?),
+                },
+            );
+        }
+    }
+    Ok(())
 }

@@ -4,20 +4,30 @@
 //! and the time to draw a 1280 x 720 frame.
 
 use anyhow::Result;
+use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::{Cumulus, SplitMix64};
 use atmo::clouds::harris::light_per_particle;
-use atmo::clouds::render::{render, CloudPhase, Lighting};
+use atmo::clouds::render::{render, Lighting};
+use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::clouds::transmittance;
-use atmo::shafts::camera::Camera;
+use atmo::view::{Camera, Fov, Sun};
+use atmo_gpu::clouds::GpuClouds;
+use atmo_gpu::{Gpu, Rendered};
 use glam::Vec3;
 use serde_json::json;
 
-use crate::bench::{median, time_ms};
-use crate::bench_table::emit;
-use crate::clouds::sun_direction;
+use super::{emit, median, report, time_gpu, time_ms, Case};
+use crate::backend::gpu_error;
 
-pub fn bench_clouds(quick: bool, json: bool) -> Result<()> {
+/// Unit vector toward a sun at `elevation_deg` and `azimuth_deg` (valid values).
+fn toward_sun(elevation_deg: f32, azimuth_deg: f32) -> Vec3 {
+    Sun::from_degrees(elevation_deg as f64, azimuth_deg as f64)
+        .expect("a bench's sun is valid")
+        .toward()
+}
+
+pub fn cpu(quick: bool, json: bool) -> Result<()> {
     let counts: &[usize] = if quick {
         &[9_382]
     } else {
@@ -25,7 +35,7 @@ pub fn bench_clouds(quick: bool, json: bool) -> Result<()> {
     };
     let sizes: &[usize] = if quick { &[128] } else { &[128, 256, 384] };
     let runs = if quick { 3 } else { 7 };
-    let to_sun = sun_direction(20.0, 40.0);
+    let to_sun = toward_sun(20.0, 40.0);
     let forward = 0.5;
     for &count in counts {
         let particles = Cumulus {
@@ -44,7 +54,7 @@ pub fn bench_clouds(quick: bool, json: bool) -> Result<()> {
             let ms = median(
                 (0..runs)
                     .map(|k| {
-                        let sun = sun_direction(20.0 + 0.01 * k as f32, 40.0);
+                        let sun = toward_sun(20.0 + 0.01 * k as f32, 40.0);
                         time_ms(|| {
                             buffer
                                 .update(&particles, sun, forward, Splat::Pieces)
@@ -89,7 +99,7 @@ pub fn bench_clouds(quick: bool, json: bool) -> Result<()> {
         to_sun,
         sun: Vec3::ONE,
         ambient: Vec3::splat(0.04),
-        phase: CloudPhase::CloudMie,
+        phase: PhaseFunction::CloudMie,
     };
     let frame_ms = median(
         (0..runs.min(5))
@@ -130,16 +140,98 @@ fn mean_error(
 }
 
 /// The bench's camera: 1280 x 720, 40 degrees, looking at the cloud from 1.6 widths.
-pub(crate) fn camera(particles: &[atmo::clouds::particles::Particle]) -> Camera {
+fn camera(particles: &[atmo::clouds::particles::Particle]) -> Camera {
     let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
     let position = centre + Vec3::new(-700.0, -600.0, 1900.0);
-    let tan = 20f32.to_radians().tan();
-    Camera::look_at(
-        position,
-        centre,
-        Vec3::Y,
-        (tan * 1280.0 / 720.0, tan),
-        (1280, 720),
-    )
-    .expect("the view is oblique: not along up")
+    Camera::look_at(position, centre, Vec3::Y, Fov::Vertical(40.0), (1280, 720))
+        .expect("the view is oblique: not along up")
+}
+
+pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
+    let runs = if quick { 3 } else { 7 };
+    let particles = Cumulus::default().generate();
+    let to_sun = toward_sun(20.0, 40.0);
+    let forward = 0.5;
+    let sizes: &[usize] = if quick { &[128] } else { &[128, 256] };
+    for &n in sizes {
+        let mut buffer = IntensityBuffer::new(&particles, to_sun, n, forward, Splat::Pieces)?;
+        let cpu_ms = median(
+            (0..runs)
+                .map(|_| {
+                    time_ms(|| {
+                        buffer
+                            .update(&particles, to_sun, forward, Splat::Pieces)
+                            .expect("valid")
+                    })
+                })
+                .collect(),
+        );
+        let mut clouds = GpuClouds::new(gpu, &particles, n).map_err(gpu_error)?;
+        let (wall, gpu_ms, ()) = time_gpu(runs, || {
+            let ms = clouds.light(gpu, to_sun, forward, Splat::Pieces)?;
+            Ok(((), ms))
+        })?;
+        let log_gamma = clouds.log_gamma(gpu).map_err(gpu_error)?;
+        let worst = log_gamma
+            .iter()
+            .zip(&buffer.log_gamma)
+            .map(|(a, b)| (a - b).abs() * b.exp())
+            .fold(0.0f32, f32::max);
+        report(
+            json,
+            gpu,
+            Case {
+                name: "clouds.light-pass.gpu",
+                params: json!({"particles": particles.len(), "resolution": n, "splat": "pieces",
+                               "max_gamma_difference": worst}),
+                wall_ms: wall,
+                gpu_ms,
+                cpu_ms,
+                error: None,
+            },
+        );
+    }
+    let buffer = IntensityBuffer::new(&particles, to_sun, 256, forward, Splat::Pieces)?;
+    let mut clouds = GpuClouds::new(gpu, &particles, 256).map_err(gpu_error)?;
+    clouds
+        .light(gpu, to_sun, forward, Splat::Pieces)
+        .map_err(gpu_error)?;
+    let camera = camera(&particles);
+    let light = Lighting {
+        to_sun,
+        sun: glam::Vec3::ONE,
+        ambient: glam::Vec3::splat(0.04),
+        phase: PhaseFunction::CloudMie,
+    };
+    let mut cpu = Frame::new(1, 1);
+    let cpu_ms = median(
+        (0..runs)
+            .map(|_| {
+                time_ms(|| {
+                    cpu = render(&particles, &buffer, &camera, &light, None).expect("a pinhole")
+                })
+            })
+            .collect(),
+    );
+    let (wall, gpu_ms, frame) = time_gpu(runs, || {
+        let Rendered { frame, gpu_ms } = clouds.render(gpu, &camera, &light, None)?;
+        Ok((frame, gpu_ms))
+    })?;
+    let display = Display {
+        exposure: 10.0,
+        tone: ToneMap::Exponential,
+    };
+    report(
+        json,
+        gpu,
+        Case {
+            name: "clouds.frame.gpu",
+            params: json!({"particles": particles.len(), "width": camera.width, "height": camera.height}),
+            wall_ms: wall,
+            gpu_ms,
+            cpu_ms,
+            error: Some(frame.level_errors(&cpu, display)?),
+        },
+    );
+    Ok(())
 }

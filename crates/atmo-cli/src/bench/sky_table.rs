@@ -5,15 +5,18 @@ use std::time::Instant;
 
 use anyhow::Result;
 use atmo::image::Frame;
-use atmo::sky::frame::{Projection, SkyPicture, View};
-use atmo::sky::table::{SkylightTable, TableSettings};
-use atmo::sky::{SkyModel, Sun};
+use atmo::sky::{SkyModel, SkyPicture, SkylightTable, TableSettings};
+use atmo::view::Sun;
 use atmo::Atmosphere;
+use atmo_gpu::sky::GpuSkyTable;
+use atmo_gpu::Gpu;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use serde_json::{json, Value};
+use serde_json::json;
 
-use crate::bench::{median, time_ms};
+use super::sky::{hd_view, sky_frame};
+use super::{emit, median, report, time_gpu, time_ms, Case};
+use crate::backend::gpu_error;
 
 /// The `i`-th point of the van der Corput sequence in `base`: well-spread, reproducible
 /// positions in [0, 1) for the off-grid samples.
@@ -33,15 +36,7 @@ fn quantile(v: &mut [f32], q: f64) -> f32 {
     v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
-pub fn emit(json: bool, line: Value, text: String) {
-    if json {
-        println!("{line}");
-    } else {
-        println!("{text}");
-    }
-}
-
-pub fn bench_sky_table(quick: bool, json: bool) -> Result<()> {
+pub fn cpu(quick: bool, json: bool) -> Result<()> {
     let atmosphere = Atmosphere::earth();
     let mut settings = TableSettings::default();
     // --quick: a coarse table (a tenth of a minute), for a smoke test; not the figures.
@@ -204,15 +199,10 @@ pub fn bench_sky_table(quick: bool, json: bool) -> Result<()> {
 
     // A 1920 x 1080 frame from the table's map, against the same frame from the shell
     // method's maps (computed at that altitude, warm).
-    let view = View {
-        width: 1920,
-        height: 1080,
-        projection: Projection::perspective_degrees(0.0, 15.0, 70.0)?,
-        sun_disc: true,
-    };
+    let view = hd_view()?;
     let sun = Sun::from_degrees(30.0, 0.0)?;
     let picture = SkyPicture::from_table(&table, sun, 7000.0)?;
-    let mut frame = Frame::new(view.width, view.height);
+    let mut frame = Frame::new(view.camera.width, view.camera.height);
     picture.render_into(&view, &mut frame);
     let frame_ms = median(
         (0..frame_runs)
@@ -228,7 +218,7 @@ pub fn bench_sky_table(quick: bool, json: bool) -> Result<()> {
         json,
         json!({
             "bench": "sky-table.frame", "params": params, "median_ms": frame_ms,
-            "runs": frame_runs, "width": view.width, "height": view.height,
+            "runs": frame_runs, "width": view.camera.width, "height": view.camera.height,
             "baseline": "sky.frame (shell method's maps, then the same frame)",
             "baseline_median_ms": direct_ms, "ratio": direct_ms / frame_ms,
         }),
@@ -238,4 +228,55 @@ pub fn bench_sky_table(quick: bool, json: bool) -> Result<()> {
         ),
     );
     Ok(())
+}
+
+pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
+    let mut settings = TableSettings::default();
+    if quick {
+        settings.sky.directions = 32;
+        settings.sun_steps = 32;
+        settings.altitude_steps = 8;
+    }
+    eprintln!("atmo: precomputing the table on the CPU (a minute at the defaults)");
+    let table = SkylightTable::precompute(&Atmosphere::earth(), &settings, &|_, _| {})?;
+    let sky = GpuSkyTable::new(gpu, &table).map_err(gpu_error)?;
+    let runs = if quick { 5 } else { 21 };
+    let (sun, altitude) = (Sun::from_degrees(30.0, 0.0)?, 7000.0);
+    let (wall, gpu_ms, map) = time_gpu(runs, || sky.map(gpu, sun.elevation(), altitude))?;
+    let cpu_map_ms = median(
+        (0..runs)
+            .map(|_| time_ms(|| drop(table.map(sun.elevation(), altitude))))
+            .collect(),
+    );
+    let cpu_map = table.map(sun.elevation(), altitude)?;
+    let worst = map
+        .iter()
+        .zip(&cpu_map)
+        .map(|(a, b)| ((*a - *b).abs() / b.max(glam::Vec3::splat(1e-6))).max_element())
+        .fold(0.0f32, f32::max);
+    let params = json!({"directions": settings.sky.directions, "terms": table.max_terms()});
+    report(
+        json,
+        gpu,
+        Case {
+            name: "sky-table.map.gpu",
+            params: json!({"table": params.clone(), "max_relative_difference": worst}),
+            wall_ms: wall,
+            gpu_ms,
+            cpu_ms: cpu_map_ms,
+            error: None,
+        },
+    );
+    sky_frame(
+        gpu,
+        json,
+        ("sky-table.frame.gpu", json!({"table": params})),
+        runs.min(7),
+        |view| sky.render(gpu, sun, altitude, view),
+        |view, frame| {
+            SkyPicture::from_table(&table, sun, altitude)
+                .expect("inside the table")
+                .render_into(view, frame)
+        },
+    )
 }

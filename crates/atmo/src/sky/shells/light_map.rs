@@ -18,8 +18,9 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::maps::{lanes, pack, Lane, Orders, ScatteringMaps, Sources, SunGeometry, MAX_CHANNELS};
-use super::shells::SamplingShells;
+use super::sampling_shells::SamplingShells;
 use crate::atmosphere::geometry::horizon_mu;
+use crate::atmosphere::phase::RAYLEIGH_NORM;
 use crate::atmosphere::{Atmosphere, PhaseFunction, TransmittanceTable};
 use crate::quadrature::SymmetricSphereRule;
 
@@ -289,7 +290,7 @@ impl ScatteredLightMap {
         let l = out.len();
         let (b, f) = self.bins.lerp(mu_s);
         if phase.is_rayleigh() {
-            let k = 3.0 / (16.0 * std::f64::consts::PI);
+            let k = RAYLEIGH_NORM;
             let g = [
                 k,
                 k * d.x * d.x,
@@ -363,7 +364,7 @@ mod tests {
                 let mu_s = -0.2 + 1.2 * k as f64 / 199.0;
                 map.sample(j, mu_s, &mut lanes_out);
                 let mut got = vec![0.0f32; n];
-                crate::sky::maps::unpack_add(&lanes_out, &mut got);
+                crate::sky::shells::maps::unpack_add(&lanes_out, &mut got);
                 table.to_sun(r, mu_s, &mut want);
                 for c in 0..n {
                     let w = want[c] * a.solar_irradiance[c] as f32;

@@ -1,102 +1,33 @@
-//! `atmo bench`: each method timed against its baseline in the same run, as
-//! DESIGN.md describes: medians after a warm-up, ratios, and the error between them.
+//! `atmo bench sky`: the skylight map by sampling shells against the reference
+//! integrator; with `--backend gpu`, the shell method on the GPU beside the CPU.
 
 use std::time::Instant;
 
 use anyhow::Result;
+use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::sky::{ReferenceSettings, ReferenceSky};
-use atmo::sky::{SkyModel, SkySettings};
+use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
+use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
-use clap::{Args, ValueEnum};
+use atmo_gpu::sky::GpuSkyModel;
+use atmo_gpu::{Gpu, GpuError, Rendered};
+use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use serde_json::json;
+use serde_json::{json, Value};
 
-use crate::backend::{Backend, BackendArgs};
+use super::{median, report, time_gpu, time_ms, Case};
+use crate::backend::gpu_error;
 
-#[derive(Args)]
-pub struct BenchArgs {
-    /// What to time.
-    #[arg(value_enum)]
-    area: Area,
-    /// Fewer repetitions and reference directions: a minute instead of several.
-    #[arg(long)]
-    quick: bool,
-    /// One JSON object per case on its own line, instead of a table.
-    #[arg(long)]
-    json: bool,
-    /// shafts: the folder holding spotlight-sphere.toml and stage.toml.
-    #[arg(long, default_value = "scenes")]
-    scenes: std::path::PathBuf,
-    /// shafts: where the plane sweep's shafts-sweep.csv and .svg are written.
-    #[arg(long, default_value = ".")]
-    sweep_dir: std::path::PathBuf,
-    /// cpu: each method against its baseline; gpu: each GPU pipeline beside the same
-    /// method on the CPU.
-    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
-    backend: Backend,
-    /// With --backend gpu: the adapter (part of its name, or a backend).
-    #[arg(long, value_name = "NAME")]
-    adapter: Option<String>,
+/// The frame the sky benches draw: 1920 x 1080, looking north 15 deg up, 70 deg high.
+pub(super) fn hd_view() -> atmo::Result<View> {
+    Ok(View {
+        camera: Camera::yaw_pitch(Vec3::ZERO, 0.0, 15.0, Fov::Vertical(70.0), (1920, 1080))?,
+        sun_disc: true,
+    })
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum Area {
-    /// The skylight map by sampling shells against the reference integrator.
-    Sky,
-    /// The SVD skylight table: precompute, size, error against the shell method, and
-    /// drawing a map and a 1920 x 1080 frame from it.
-    SkyTable,
-    /// Shafts of light: sample planes against ray marching on the paper's Fig. 6 scene,
-    /// the five-light stage, and the sweep of plane and sub-plane counts.
-    Shafts,
-    /// Clouds: the intensity buffer's light pass against the Harris baseline, its error,
-    /// and a frame.
-    Clouds,
-}
-
-pub fn run(args: BenchArgs) -> Result<()> {
-    if args.backend != Backend::Cpu {
-        let device = BackendArgs {
-            backend: Backend::Gpu,
-            adapter: args.adapter.clone(),
-        };
-        let gpu = device
-            .open()?
-            .expect("--backend gpu opens a device or fails");
-        return match args.area {
-            Area::Sky => crate::bench_gpu::bench_sky(&gpu, args.quick, args.json),
-            Area::SkyTable => crate::bench_gpu::bench_sky_table(&gpu, args.quick, args.json),
-            Area::Shafts => {
-                crate::bench_gpu::bench_shafts(&gpu, args.quick, args.json, &args.scenes)
-            }
-            Area::Clouds => crate::bench_gpu::bench_clouds(&gpu, args.quick, args.json),
-        };
-    }
-    match args.area {
-        Area::Sky => bench_sky(args.quick, args.json),
-        Area::SkyTable => crate::bench_table::bench_sky_table(args.quick, args.json),
-        Area::Clouds => crate::bench_clouds::bench_clouds(args.quick, args.json),
-        Area::Shafts => {
-            atmo::image::check_folder(&args.sweep_dir.join("shafts-sweep.csv"))?;
-            crate::bench_shafts::bench_shafts(args.quick, args.json, &args.scenes, &args.sweep_dir)
-        }
-    }
-}
-
-pub fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
-
-/// Milliseconds taken by `f`.
-pub fn time_ms(f: impl FnOnce()) -> f64 {
-    let start = Instant::now();
-    f();
-    start.elapsed().as_secs_f64() * 1e3
-}
-
-fn bench_sky(quick: bool, json: bool) -> Result<()> {
+pub fn cpu(quick: bool, json: bool) -> Result<()> {
     // The paper's Fig. 7(a): 7000 m, sun at 30 degrees; its default map settings.
     let (altitude, sun_deg) = (7000.0, 30.0f64);
     let atmosphere = Atmosphere::earth();
@@ -226,5 +157,90 @@ fn bench_sky(quick: bool, json: bool) -> Result<()> {
             doubling_change.map_or("(not checked with --quick)".into(), |c| format!("{:.3} %", 100.0 * c))
         );
     }
+    Ok(())
+}
+
+pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
+    // The CPU bench's case: the paper's Fig. 7(a), 7000 m, sun at 30 degrees.
+    let atmosphere = Atmosphere::earth();
+    let settings = SkySettings::default();
+    let model = SkyModel::new(&atmosphere, &settings, 7000.0)?;
+    let sky = GpuSkyModel::new(gpu, &model).map_err(gpu_error)?;
+    let runs = if quick { 5 } else { 21 };
+    let sun = Sun::from_degrees(30.0, 0.0)?;
+    let (wall, gpu_ms, ()) = time_gpu(runs, || Ok(((), sky.maps_timed(gpu, sun.elevation())?)))?;
+    let cpu_ms = median(
+        (0..runs)
+            .map(|_| {
+                time_ms(|| {
+                    std::hint::black_box((
+                        model.skylight_map(sun.elevation()),
+                        model.ground_map(sun.elevation()),
+                    ));
+                })
+            })
+            .collect(),
+    );
+    let params = json!({"altitude_m": 7000.0, "sun_elevation_deg": 30.0,
+        "directions": settings.directions, "shells": settings.shells, "order": settings.order});
+    report(
+        json,
+        gpu,
+        Case {
+            name: "sky.maps.gpu",
+            params: params.clone(),
+            wall_ms: wall,
+            gpu_ms,
+            cpu_ms,
+            error: None,
+        },
+    );
+    sky_frame(
+        gpu,
+        json,
+        ("sky.frame.gpu", json!({"model": params})),
+        runs.min(7),
+        |view| sky.render(gpu, sun, view),
+        |view, frame| SkyPicture::new(&model, sun).render_into(view, frame),
+    )
+}
+
+/// A 1920 x 1080 sky frame drawn `runs` times on the GPU and on the CPU, timed and
+/// compared at the sky's exposure.
+pub(super) fn sky_frame(
+    gpu: &Gpu,
+    json: bool,
+    (name, params): (&str, Value),
+    runs: usize,
+    mut on_gpu: impl FnMut(&View) -> Result<Rendered, GpuError>,
+    mut on_cpu: impl FnMut(&View, &mut Frame),
+) -> Result<()> {
+    let view = hd_view()?;
+    let (wall, gpu_ms, frame) = time_gpu(runs, || {
+        let r = on_gpu(&view)?;
+        Ok((r.frame, r.gpu_ms))
+    })?;
+    let mut cpu = Frame::new(view.camera.width, view.camera.height);
+    let cpu_ms = median(
+        (0..runs)
+            .map(|_| time_ms(|| on_cpu(&view, &mut cpu)))
+            .collect(),
+    );
+    let display = Display {
+        exposure: 0.15,
+        tone: ToneMap::Exponential,
+    };
+    report(
+        json,
+        gpu,
+        Case {
+            name,
+            params: json!({"of": params, "width": view.camera.width, "height": view.camera.height}),
+            wall_ms: wall,
+            gpu_ms,
+            cpu_ms,
+            error: Some(frame.level_errors(&cpu, display)?),
+        },
+    );
     Ok(())
 }

@@ -1,0 +1,168 @@
+//! `atmo bench`: each method timed against its baseline in the same run, as
+//! DESIGN.md describes: medians after a warm-up, ratios, and the error between them.
+
+mod clouds;
+mod shafts;
+mod sky;
+mod sky_table;
+
+use std::time::Instant;
+
+use anyhow::Result;
+use atmo_gpu::{Gpu, GpuError};
+use clap::{Args, ValueEnum};
+use serde_json::{json, Value};
+
+use crate::backend::{gpu_error, Backend, BackendArgs};
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// What to time.
+    #[arg(value_enum)]
+    area: Area,
+    /// Fewer repetitions and reference directions: a minute instead of several.
+    #[arg(long)]
+    quick: bool,
+    /// One JSON object per case on its own line, instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// shafts: the folder holding spotlight-sphere.toml and stage.toml.
+    #[arg(long, default_value = "scenes")]
+    scenes: std::path::PathBuf,
+    /// shafts: where the plane sweep's shafts-sweep.csv and .svg are written.
+    #[arg(long, default_value = ".")]
+    sweep_dir: std::path::PathBuf,
+    /// cpu: each method against its baseline; gpu: each GPU pipeline beside the same
+    /// method on the CPU.
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    backend: Backend,
+    /// With --backend gpu: the adapter (part of its name, or a backend).
+    #[arg(long, value_name = "NAME")]
+    adapter: Option<String>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Area {
+    /// The skylight map by sampling shells against the reference integrator.
+    Sky,
+    /// The SVD skylight table: precompute, size, error against the shell method, and
+    /// drawing a map and a 1920 x 1080 frame from it.
+    SkyTable,
+    /// Shafts of light: sample planes against ray marching on the paper's Fig. 6 scene,
+    /// the five-light stage, and the sweep of plane and sub-plane counts.
+    Shafts,
+    /// Clouds: the intensity buffer's light pass against the Harris baseline, its error,
+    /// and a frame.
+    Clouds,
+}
+
+pub fn run(args: BenchArgs) -> Result<()> {
+    if args.backend != Backend::Cpu {
+        let device = BackendArgs {
+            backend: Backend::Gpu,
+            adapter: args.adapter.clone(),
+        };
+        let gpu = device
+            .open()?
+            .expect("--backend gpu opens a device or fails");
+        return match args.area {
+            Area::Sky => sky::gpu(&gpu, args.quick, args.json),
+            Area::SkyTable => sky_table::gpu(&gpu, args.quick, args.json),
+            Area::Shafts => shafts::gpu(&gpu, args.quick, args.json, &args.scenes),
+            Area::Clouds => clouds::gpu(&gpu, args.quick, args.json),
+        };
+    }
+    match args.area {
+        Area::Sky => sky::cpu(args.quick, args.json),
+        Area::SkyTable => sky_table::cpu(args.quick, args.json),
+        Area::Clouds => clouds::cpu(args.quick, args.json),
+        Area::Shafts => {
+            atmo::image::check_folder(&args.sweep_dir.join("shafts-sweep.csv"))?;
+            shafts::cpu(args.quick, args.json, &args.scenes, &args.sweep_dir)
+        }
+    }
+}
+
+/// The median of `v` (the upper one of an even count).
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Milliseconds taken by `f`.
+pub fn time_ms(f: impl FnOnce()) -> f64 {
+    let start = Instant::now();
+    f();
+    start.elapsed().as_secs_f64() * 1e3
+}
+
+/// Medians of `runs` GPU runs after a warm-up: (wall ms, GPU ms if timed) and the last
+/// result.
+pub(crate) fn time_gpu<T>(
+    runs: usize,
+    mut run: impl FnMut() -> Result<(T, Option<f64>), GpuError>,
+) -> Result<(f64, Option<f64>, T)> {
+    let (mut last, _) = run().map_err(gpu_error)?;
+    let (mut walls, mut gpus) = (Vec::new(), Vec::new());
+    for _ in 0..runs {
+        let mut result = Ok(());
+        walls.push(time_ms(|| match run() {
+            Ok((value, gpu_ms)) => {
+                last = value;
+                gpus.extend(gpu_ms);
+            }
+            Err(e) => result = Err(e),
+        }));
+        result.map_err(gpu_error)?;
+    }
+    let gpu_ms = (!gpus.is_empty()).then(|| median(gpus));
+    Ok((median(walls), gpu_ms, last))
+}
+
+/// One case: the GPU's times beside the CPU's, and how far the pictures are apart.
+pub(crate) struct Case<'a> {
+    name: &'a str,
+    params: Value,
+    wall_ms: f64,
+    gpu_ms: Option<f64>,
+    cpu_ms: f64,
+    error: Option<atmo::image::LevelErrors>,
+}
+
+pub(crate) fn report(json: bool, gpu: &Gpu, case: Case) {
+    let device = json!({"adapter": gpu.describe(), "software": gpu.is_software()});
+    let error = case
+        .error
+        .map(|e| json!({"rms_levels": e.rms, "max_levels": e.max}));
+    emit(
+        json,
+        json!({
+            "bench": case.name, "params": case.params, "device": device,
+            "median_ms": case.wall_ms, "gpu_ms": case.gpu_ms,
+            "baseline": "the same method on the CPU", "baseline_median_ms": case.cpu_ms,
+            "ratio": case.cpu_ms / case.wall_ms, "error": error,
+        }),
+        format!(
+            "{:<24} GPU {:>9.2} ms (GPU time {})   CPU {:>8.2} ms   ratio {:>6.3}{}",
+            case.name,
+            case.wall_ms,
+            case.gpu_ms
+                .map_or("not measured".into(), |ms| format!("{ms:.2} ms")),
+            case.cpu_ms,
+            case.cpu_ms / case.wall_ms,
+            case.error.map_or(String::new(), |e| format!(
+                "   error rms {:.3} max {:.2} levels",
+                e.rms, e.max
+            ))
+        ),
+    );
+}
+
+/// Prints `line` as JSON with --json, else `text`.
+pub fn emit(json: bool, line: Value, text: String) {
+    if json {
+        println!("{line}");
+    } else {
+        println!("{text}");
+    }
+}

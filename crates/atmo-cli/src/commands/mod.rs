@@ -1,0 +1,9 @@
+//! One module a subcommand: its arguments and `run`.
+
+pub mod clouds;
+pub mod compare;
+pub mod inspect;
+pub mod precompute;
+pub mod shafts;
+pub mod sky;
+mod sky_table;

@@ -1,0 +1,136 @@
+//! `atmo clouds`: from the generator or a file, animated, in front of the sky; bad
+//! input refused.
+
+mod common;
+
+use common::{atmo, scratch, SMALL_CLOUD};
+
+#[test]
+fn clouds_render_from_the_generator_or_a_file_and_animate() {
+    let dir = scratch("clouds");
+    let (png, saved, again, frames) = (
+        dir.join("cloud.png"),
+        dir.join("cloud.csv"),
+        dir.join("again.png"),
+        dir.join("frames"),
+    );
+    let mut args = vec![
+        "clouds",
+        "--generate",
+        "cumulus",
+        "-o",
+        png.to_str().unwrap(),
+    ];
+    args.extend(["--save-particles", saved.to_str().unwrap()]);
+    args.extend(SMALL_CLOUD);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (160, 90));
+    assert!(img.pixels().any(|p| p.0[2] > 60), "the cloud shows");
+    // The same particles from the file: the same picture.
+    let mut args = vec![
+        "clouds",
+        "--particles-file",
+        saved.to_str().unwrap(),
+        "-o",
+        again.to_str().unwrap(),
+    ];
+    args.extend(&SMALL_CLOUD[2..]);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(image::open(&again).unwrap().to_rgb8(), img);
+    let mut args = vec![
+        "clouds",
+        "--generate",
+        "cumulus",
+        "--animate",
+        "sun",
+        "--frames",
+        "3",
+        "-o",
+        frames.to_str().unwrap(),
+    ];
+    args.extend(SMALL_CLOUD);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for name in ["frame-0000.png", "frame-0002.png", "animation.png"] {
+        assert!(frames.join(name).exists(), "{name}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_cloud_input_exits_2_and_writes_nothing() {
+    let dir = scratch("clouds-bad");
+    let out = dir.join("out.png");
+    let bad_file = dir.join("bad.csv");
+    std::fs::write(
+        &bad_file,
+        "x,y,z,radius,density\n0,0,0,10,0.1\n0,0,0,-3,0.1\n",
+    )
+    .unwrap();
+    let empty = dir.join("empty.csv");
+    std::fs::write(&empty, "x,y,z,radius,density\n").unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["--particles-file", bad_file.to_str().unwrap()],
+            "bad.csv:3: radius",
+        ),
+        (
+            vec!["--particles-file", empty.to_str().unwrap()],
+            "no particles",
+        ),
+        (
+            vec!["--generate", "cumulus", "--sun-elevation", "-5"],
+            "sun-elevation",
+        ),
+        (
+            vec!["--generate", "cumulus", "--resolution", "1024"],
+            "budget",
+        ),
+        (vec!["--generate", "cumulus", "--forward", "2"], "forward"),
+    ];
+    for (extra, wanted) in cases {
+        let mut args = vec![
+            "clouds",
+            "-o",
+            out.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "18",
+        ];
+        args.extend(extra);
+        let o = atmo(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(wanted), "{args:?}: {stderr}");
+        assert!(!out.exists());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn clouds_in_front_of_the_sky() {
+    let dir = scratch("clouds-sky");
+    let out = dir.join("sky.png");
+    let mut args = vec![
+        "clouds",
+        "--generate",
+        "cumulus",
+        "--sky",
+        "--view-height",
+        "300",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend(SMALL_CLOUD);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&out).unwrap().to_rgb8();
+    // The sky behind: the top corner is blue, not black.
+    let corner = img.get_pixel(2, 2).0;
+    assert!(corner[2] > 80 && corner[2] > corner[0], "{corner:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

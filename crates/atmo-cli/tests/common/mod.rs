@@ -1,0 +1,108 @@
+//! What every CLI test uses: the binary, scratch folders, the example scenes, small
+//! sizes. Each test file runs the `atmo` binary as a user does.
+
+#![allow(dead_code)] // each test binary uses its own part
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs `atmo` with `args`.
+pub fn atmo(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_atmo"))
+        .args(args)
+        .output()
+        .expect("atmo runs")
+}
+
+/// A fresh folder for one test.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("atmo-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Entries in `dir`.
+pub fn files_in(dir: &Path) -> usize {
+    std::fs::read_dir(dir).unwrap().count()
+}
+
+/// A small picture.
+pub const SMALL: [&str; 4] = ["--width", "48", "--height", "32"];
+
+/// A tiny table (8 x 8 directions, 6 suns, 3 altitudes) in `dir`, made with the CLI.
+pub fn tiny_table(dir: &Path) -> PathBuf {
+    let table = dir.join("tiny.atmo-sky");
+    let o = atmo(&[
+        "precompute",
+        "sky",
+        "-o",
+        table.to_str().unwrap(),
+        "--directions",
+        "8",
+        "--sun-steps",
+        "6",
+        "--altitude-steps",
+        "3",
+        "--shells",
+        "12",
+        "--scattering-directions",
+        "16",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    table
+}
+
+/// The path of an example scene.
+pub fn scene(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// A small cloud.
+pub const SMALL_CLOUD: [&str; 10] = [
+    "--particles",
+    "2000",
+    "--width",
+    "160",
+    "--height",
+    "90",
+    "--resolution",
+    "48",
+    "--distance",
+    "1.6",
+];
+
+/// Whether this machine has a GPU adapter (in CI, where the driver is installed, it
+/// must: a missing one fails here rather than skipping the GPU checks).
+pub fn has_gpu() -> bool {
+    let dir = scratch("probe-gpu");
+    let out = dir.join("x.png");
+    let o = atmo(&[
+        "clouds",
+        "--generate",
+        "cumulus",
+        "--particles",
+        "10",
+        "--resolution",
+        "4",
+        "--backend",
+        "gpu",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    std::fs::remove_dir_all(&dir).unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let found = !stderr.contains("no GPU adapter found");
+    assert!(
+        found || std::env::var("CI").as_deref() != Ok("true"),
+        "{stderr}"
+    );
+    found
+}

@@ -1,0 +1,139 @@
+//! `atmo shafts` and `atmo compare`: a scene rendered and measured; bad input refused.
+
+mod common;
+
+use common::{atmo, scene, scratch};
+
+#[test]
+fn shafts_render_a_scene_and_compare_measures_two_renders() {
+    let dir = scratch("shafts");
+    let (png, fast, slow, diff) = (
+        dir.join("stage.png"),
+        dir.join("fast.exr"),
+        dir.join("slow.exr"),
+        dir.join("diff.png"),
+    );
+    let o = atmo(&["shafts", &scene("stage.toml"), "-o", png.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (720, 480));
+    assert!(img.pixels().any(|p| p.0[0] > 100), "the beams show");
+
+    let fig6 = scene("spotlight-sphere.toml");
+    let small = ["--planes", "10", "--sub-planes", "2"];
+    let o = atmo(&[&["shafts", &fig6, "-o", fast.to_str().unwrap()][..], &small].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = atmo(&[
+        "shafts",
+        &fig6,
+        "-o",
+        slow.to_str().unwrap(),
+        "--reference",
+        "--samples",
+        "256",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = atmo(&[
+        "compare",
+        fast.to_str().unwrap(),
+        slow.to_str().unwrap(),
+        "-o",
+        diff.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let rms: f64 = text
+        .split("rms ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(rms > 0.0 && rms < 10.0, "{text}");
+    assert!(image::open(&diff).is_ok());
+    // A picture against itself: zero.
+    let o = atmo(&[
+        "compare",
+        fast.to_str().unwrap(),
+        fast.to_str().unwrap(),
+        "-o",
+        diff.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("rms 0.000"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_shafts_input_exits_2_and_writes_nothing() {
+    let dir = scratch("shafts-bad");
+    let good = std::fs::read_to_string(scene("spotlight-sphere.toml")).unwrap();
+    let bad = [
+        (
+            "syntax.toml",
+            good.replacen("width = 720", "width = = 720", 1),
+            "line",
+        ),
+        (
+            "unknown.toml",
+            good.replacen("albedo = 0.9", "albedo = 0.9\nfog = 1", 1),
+            "fog",
+        ),
+        (
+            "beam.toml",
+            good.replacen("field_deg = 34.0", "field_deg = 10.0", 1),
+            "beam_deg",
+        ),
+        (
+            "gobo.toml",
+            good.replacen("kelvin = 3200", "kelvin = 3200\ngobo = \"nope.png\"", 1),
+            "nope.png",
+        ),
+        (
+            "fov.toml",
+            good.replacen("fov_deg = 50.0", "fov_deg = 0.0", 1),
+            "fov_deg",
+        ),
+    ];
+    let out = dir.join("out.png");
+    for (name, text, wanted) in bad {
+        assert_ne!(text, good, "{name}");
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let o = atmo(&[
+            "shafts",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {stderr}");
+        assert!(stderr.contains(wanted), "{name}: {stderr}");
+        assert!(!out.exists(), "{name}");
+    }
+    // compare: pictures of different sizes, and PNG input.
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    atmo::image::Frame::new(4, 3)
+        .write(&a, 1.0, atmo::image::ToneMap::Clamp)
+        .unwrap();
+    atmo::image::Frame::new(3, 3)
+        .write(&b, 1.0, atmo::image::ToneMap::Clamp)
+        .unwrap();
+    let o = atmo(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("differ in size"));
+    let o = atmo(&[
+        "compare",
+        a.to_str().unwrap(),
+        out.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,192 @@
+//! `atmo sky` as a user runs it: pictures of the requested size, numbers for probes,
+//! and every bad input refused with exit code 2, a message naming the field, and no
+//! output file.
+
+mod common;
+
+use common::{atmo, files_in, scratch, SMALL};
+
+#[test]
+fn renders_png_and_exr_of_the_requested_size() {
+    let dir = scratch("ok");
+    for name in ["sky.png", "sky.exr"] {
+        let out = dir.join(name);
+        let mut args = vec![
+            "sky",
+            "--sun-elevation",
+            "10",
+            "--altitude",
+            "7000",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(SMALL);
+        let o = atmo(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let img = image::open(&out).unwrap();
+        assert_eq!((img.width(), img.height()), (48, 32));
+    }
+    // A sunlit sky is not black: the top row of the PNG has blue in it.
+    let png = image::open(dir.join("sky.png")).unwrap().to_rgb8();
+    assert!(png.get_pixel(24, 0).0[2] > 50, "{:?}", png.get_pixel(24, 0));
+    let fisheye = dir.join("dome.png");
+    let o = atmo(&[
+        "sky",
+        "--fisheye",
+        "--width",
+        "40",
+        "--height",
+        "40",
+        "-o",
+        fisheye.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let dome = image::open(&fisheye).unwrap().to_rgb8();
+    assert_eq!(
+        dome.get_pixel(0, 0).0,
+        [0, 0, 0],
+        "outside the dome is black"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn probe_prints_radiance_per_wavelength() {
+    let dir = scratch("probe");
+    let dirs = dir.join("dirs.csv");
+    std::fs::write(&dirs, "azimuth_deg,elevation_deg\n0,90\n180,5\n-180,5\n").unwrap();
+    let o = atmo(&[
+        "sky",
+        "--sun-elevation",
+        "30",
+        "--probe",
+        dirs.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("azimuth_deg,elevation_deg,radiance_420nm"));
+    assert_eq!(lines.len(), 4);
+    let values = |l: &str| {
+        l.split(',')
+            .skip(2)
+            .map(|v| v.parse::<f64>().unwrap())
+            .collect::<Vec<_>>()
+    };
+    // Symmetric about the sun's vertical plane; positive; blue zenith.
+    assert_eq!(values(lines[2]), values(lines[3]));
+    let zenith = values(lines[1]);
+    assert!(zenith.iter().all(|&v| v > 0.0) && zenith[0] > zenith[5]);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Runs `atmo sky` with `extra` arguments and expects exit code 2, a message containing
+/// `needle`, and no file in the output folder.
+fn refused(name: &str, extra: &[&str], needle: &str) {
+    let dir = scratch(name);
+    let out = dir.join("out.png");
+    let mut args = vec!["sky", "-o", out.to_str().unwrap()];
+    if !extra.contains(&"--width") {
+        args.extend(SMALL);
+    }
+    args.extend(extra);
+    let o = atmo(&args);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{name}: {stderr}");
+    assert!(
+        stderr.contains(needle),
+        "{name}: `{needle}` not in {stderr}"
+    );
+    assert_eq!(files_in(&dir), 0, "{name}: something was written");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn bad_input_exits_2_with_a_message_and_no_file() {
+    refused(
+        "sun",
+        &["--sun-elevation", "95"],
+        "--sun-elevation: sun.elevation_deg = 95",
+    );
+    refused(
+        "sun-nan",
+        &["--sun-elevation", "NaN"],
+        "--sun-elevation: sun.elevation_deg",
+    );
+    refused("below", &["--altitude", "-5"], "altitude");
+    refused("above", &["--altitude", "70000"], "altitude");
+    refused("width", &["--width", "0"], "width");
+    refused(
+        "budget",
+        &["--width", "16384", "--height", "16384"],
+        "budget",
+    );
+    refused("order", &["--order", "4"], "order");
+    refused("shells", &["--shells", "1"], "shells");
+    refused("fov", &["--fov", "0"], "fov");
+    refused("exposure", &["--exposure", "-1"], "exposure");
+    refused("preset", &["--preset", "mars"], "preset");
+    refused(
+        "missing",
+        &["--atmosphere", "/nonexistent/atmosphere.toml"],
+        "nonexistent",
+    );
+    let dir = scratch("toml");
+    let earth = include_str!("../../atmo/presets/earth.toml");
+    for (name, text, needle) in [
+        (
+            "unknown",
+            earth.replacen("ground_albedo", "ground_albdo", 1),
+            "ground_albdo",
+        ),
+        (
+            "nan",
+            earth.replacen(
+                "single_scattering_albedo = 0.9",
+                "single_scattering_albedo = nan",
+                1,
+            ),
+            "mie.single_scattering_albedo",
+        ),
+        (
+            "negative",
+            earth.replacen("scale_height_m = 8000.0", "scale_height_m = -8000.0", 1),
+            "rayleigh.scale_height_m",
+        ),
+        ("syntax", earth.replacen("name = ", "name == ", 1), "line"),
+    ] {
+        let file = dir.join(format!("{name}.toml"));
+        std::fs::write(&file, text).unwrap();
+        refused(
+            &format!("toml-{name}"),
+            &["--atmosphere", file.to_str().unwrap()],
+            needle,
+        );
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn bad_output_names_and_probe_files_are_refused() {
+    let dir = scratch("ext");
+    let o = atmo(&["sky", "-o", dir.join("sky.jpg").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains(".png or .exr"));
+    let probe = dir.join("dirs.csv");
+    std::fs::write(&probe, "azimuth_deg,elevation_deg\n10,95\n").unwrap();
+    let o = atmo(&["sky", "--probe", probe.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("dirs.csv:2") && stderr.contains("elevation_deg"),
+        "{stderr}"
+    );
+    std::fs::write(&probe, "az,el\n10,5\n").unwrap();
+    assert_eq!(
+        atmo(&["sky", "--probe", probe.to_str().unwrap()])
+            .status
+            .code(),
+        Some(2)
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

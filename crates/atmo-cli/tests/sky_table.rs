@@ -1,0 +1,194 @@
+//! `atmo precompute sky`, `atmo sky --table` and `atmo inspect`: a table made, drawn,
+//! animated and inspected; bad tables refused.
+
+mod common;
+
+use std::process::Command;
+
+use common::{atmo, files_in, scratch, tiny_table, SMALL};
+
+#[test]
+fn a_table_is_precomputed_drawn_animated_and_inspected() {
+    let dir = scratch("table");
+    let table = tiny_table(&dir);
+    let t = table.to_str().unwrap();
+    // Drawn anywhere inside its ranges, not only at grid points.
+    let out = dir.join("sky.png");
+    let mut args = vec![
+        "sky",
+        "--table",
+        t,
+        "--sun-elevation",
+        "12.5",
+        "--altitude",
+        "3100",
+    ];
+    args.extend(["-o", out.to_str().unwrap()]);
+    args.extend(SMALL);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let png = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(png.dimensions(), (48, 32));
+    assert!(png.get_pixel(24, 0).0[2] > 50, "{:?}", png.get_pixel(24, 0));
+    // A sunset in three frames, and its animated PNG.
+    let frames = dir.join("frames");
+    let mut args = vec!["sky", "--table", t, "--animate", "sun", "--frames", "3"];
+    args.extend(["-o", frames.to_str().unwrap()]);
+    args.extend(SMALL);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for name in ["frame-0000.png", "frame-0002.png", "animation.png"] {
+        let img = image::open(frames.join(name)).unwrap();
+        assert_eq!((img.width(), img.height()), (48, 32), "{name}");
+    }
+    let first = image::open(frames.join("frame-0000.png"))
+        .unwrap()
+        .to_rgb8();
+    let last = image::open(frames.join("frame-0002.png"))
+        .unwrap()
+        .to_rgb8();
+    let brightness = |img: &image::RgbImage| img.pixels().map(|p| p.0[2] as u32).sum::<u32>();
+    assert!(
+        brightness(&last) < brightness(&first) / 2,
+        "the sun has set"
+    );
+    // inspect prints the parameters and writes its pictures.
+    let plots = dir.join("plots");
+    let o = atmo(&["inspect", t, "--plots", plots.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for needle in [
+        "8 x 8 directions",
+        "6 sun elevations",
+        "3 altitudes",
+        "epsilon",
+        "terms",
+    ] {
+        assert!(stdout.contains(needle), "`{needle}` not in {stdout}");
+    }
+    for (name, size) in [
+        ("singular-values.png", (640, 360)),
+        ("terms.png", (64, 64)),
+        ("direct.png", (64, 64)),
+        ("table.png", (64, 64)),
+        ("error.png", (64, 64)),
+    ] {
+        let img = image::open(plots.join(name)).unwrap();
+        assert_eq!((img.width(), img.height()), size, "{name}");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn bad_tables_and_ranges_exit_2_and_write_nothing() {
+    let dir = scratch("table-bad");
+    let table = tiny_table(&dir);
+    let t = table.to_str().unwrap();
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let expect_2 = |args: &[&str], needle: &str| {
+        let o = atmo(args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "`{needle}` not in {stderr}");
+        assert_eq!(files_in(&out), 0, "{args:?} wrote something");
+    };
+    let png = out.join("sky.png");
+    let png = png.to_str().unwrap();
+    expect_2(
+        &["sky", "--table", t, "--sun-elevation", "-12", "-o", png],
+        "--sun-elevation: sun.elevation_deg",
+    );
+    expect_2(
+        &["sky", "--table", t, "--altitude", "14000", "-o", png],
+        "altitude",
+    );
+    let frames = out.join("frames");
+    let frames = frames.to_str().unwrap();
+    expect_2(
+        &[
+            "sky",
+            "--table",
+            t,
+            "--animate",
+            "altitude",
+            "--altitude",
+            "-5",
+            "-o",
+            frames,
+        ],
+        "altitude",
+    );
+    let sky = out.join("x.atmo-sky");
+    let sky = sky.to_str().unwrap();
+    expect_2(
+        &["precompute", "sky", "-o", sky, "--epsilon", "0"],
+        "epsilon",
+    );
+    expect_2(
+        &["precompute", "sky", "-o", sky, "--epsilon=-1/255"],
+        "epsilon",
+    );
+    expect_2(
+        &["precompute", "sky", "-o", sky, "--sun-steps", "1"],
+        "sun_steps",
+    );
+    expect_2(
+        &["precompute", "sky", "-o", sky, "--max-altitude", "90000"],
+        "max_altitude",
+    );
+    expect_2(
+        &[
+            "precompute",
+            "sky",
+            "-o",
+            sky,
+            "--directions",
+            "1024",
+            "--sun-steps",
+            "1024",
+        ],
+        "budget",
+    );
+    // A damaged and a foreign file.
+    let mut bytes = std::fs::read(&table).unwrap();
+    let middle = bytes.len() / 2;
+    bytes[middle] ^= 0x10;
+    let damaged = dir.join("damaged.atmo-sky");
+    std::fs::write(&damaged, &bytes).unwrap();
+    expect_2(&["inspect", damaged.to_str().unwrap()], "checksum");
+    expect_2(
+        &["sky", "--table", damaged.to_str().unwrap(), "-o", png],
+        "checksum",
+    );
+    let foreign = dir.join("foreign.atmo-sky");
+    std::fs::write(&foreign, b"\x89PNG\r\n\x1a\nnot a table").unwrap();
+    expect_2(
+        &["inspect", foreign.to_str().unwrap()],
+        "not an atmo sky table",
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn an_interrupted_precompute_leaves_no_table() {
+    let dir = scratch("interrupted");
+    let table = dir.join("big.atmo-sky");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_atmo"))
+        .args(["precompute", "sky", "-o", table.to_str().unwrap()])
+        .args(["--sun-steps", "64", "--altitude-steps", "16"])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let finished = child.try_wait().unwrap().is_some();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!finished, "the precompute should take longer than 1.5 s");
+    assert!(
+        !table.exists(),
+        "a killed precompute left {}",
+        table.display()
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -1,0 +1,81 @@
+//! The sky's light on things in the air: the sun's irradiance after the atmosphere down
+//! to a point, and the sky's radiance there. This is how the sky lights the other
+//! methods (a cloud is lit by [`Daylight::sunlight`] and [`Daylight::skylight`]) without
+//! any of them knowing the sky: they take the two colours.
+
+use glam::{DVec3, Vec3};
+
+use super::{SkyModel, SkyPicture, SkySettings};
+use crate::atmosphere::spectrum::SpectrumToRgb;
+use crate::atmosphere::Atmosphere;
+use crate::error::Result;
+use crate::view::Sun;
+
+/// Sunlight and skylight at one altitude of an atmosphere.
+pub struct Daylight {
+    model: SkyModel,
+    colour: SpectrumToRgb,
+}
+
+impl Daylight {
+    /// The light at `altitude_m` above the ground (inside the atmosphere), computed by
+    /// the shell method with `settings`.
+    pub fn new(atmosphere: &Atmosphere, settings: &SkySettings, altitude_m: f64) -> Result<Self> {
+        Ok(Daylight {
+            model: SkyModel::new(atmosphere, settings, altitude_m)?,
+            colour: SpectrumToRgb::new(&atmosphere.wavelengths_nm),
+        })
+    }
+
+    /// The sun's irradiance on a surface facing it, linear sRGB in the atmosphere's
+    /// irradiance units: its disc's radiance through the atmosphere times the disc's
+    /// solid angle.
+    pub fn sunlight(&self, sun: Sun) -> Vec3 {
+        let atmosphere = self.model.atmosphere();
+        let mut spectrum = vec![0.0f32; atmosphere.wavelengths_nm.len()];
+        self.model.sun_radiance(sun.elevation(), &mut spectrum);
+        let disc = std::f64::consts::PI * atmosphere.sun_angular_radius.powi(2);
+        spectrum.iter_mut().for_each(|v| *v *= disc as f32);
+        Vec3::from(self.colour.rgb(&spectrum))
+    }
+
+    /// The zenith sky's radiance, linear sRGB: the light a cloud's droplets scatter from
+    /// the sky (one value for the whole dome, the simplest ambient term).
+    pub fn skylight(&self, sun: Sun) -> Vec3 {
+        SkyPicture::new(&self.model, sun).radiance(DVec3::Y, false)
+    }
+
+    /// The model behind the two.
+    pub fn model(&self) -> &SkyModel {
+        &self.model
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sunlight_reddens_and_dims_toward_the_horizon_and_the_sky_is_blue() {
+        let settings = SkySettings {
+            shells: 12,
+            directions: 16,
+            scattering_directions: 32,
+            sun_bins: 16,
+            ..SkySettings::default()
+        };
+        let light = Daylight::new(&Atmosphere::earth(), &settings, 1500.0).unwrap();
+        let high = light.sunlight(Sun::from_degrees(60.0, 0.0).unwrap());
+        let low = light.sunlight(Sun::from_degrees(3.0, 0.0).unwrap());
+        assert!(high.min_element() > 0.0 && low.min_element() > 0.0);
+        assert!(low.x < high.x && low.z < high.z, "{low} {high}");
+        assert!(
+            low.z / low.x < high.z / high.x,
+            "redder at sunset: {low} {high}"
+        );
+        let sky = light.skylight(Sun::from_degrees(60.0, 0.0).unwrap());
+        assert!(sky.z > sky.x && sky.x > 0.0, "blue: {sky}");
+        // The sky's light is a small part of the sun's.
+        assert!(sky.z < 0.1 * high.z, "{sky} {high}");
+    }
+}

@@ -1,0 +1,397 @@
+//! The shell method, sky section 3: the atmosphere cut by sampling shells (3.2), the
+//! light scattered toward the viewer as the sum over the shells of four maps (light,
+//! phase, density, attenuation, sky (3)-(9)), and the second order from the light map of
+//! first-order scattered light, sky (10)-(11).
+//!
+//! [`SkyModel`] holds everything that does not depend on the sun for one viewpoint
+//! altitude: the [sampling shells](sampling_shells), the density x attenuation maps of
+//! the view rays ([`maps`]), and the [light maps](light_map); [`SkyModel::skylight_map`]
+//! then gives the skylight map for any sun elevation with lookups only. See docs/sky.md
+//! for the derivation and the choices made beyond the paper. [`export`] lays the
+//! sun-independent arrays out flat for the GPU.
+
+pub mod export;
+pub(crate) mod light_map;
+pub(crate) mod maps;
+pub(crate) mod sampling_shells;
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use serde::Deserialize;
+
+use super::{DirectionGrid, MEMORY_BUDGET_BYTES};
+use crate::atmosphere::geometry::horizon_dip;
+use crate::atmosphere::spectrum::SpectrumToRgb;
+use crate::atmosphere::{Atmosphere, TransmittanceTable};
+use crate::error::{check_budget, check_range, Error, Result};
+use light_map::{LightMap, ScatteredLightMap};
+use maps::{Orders, ScatteringMaps, Sources, SunGeometry};
+use sampling_shells::SamplingShells;
+
+/// Cosine of the angle between the view direction at `azimuth` from the sun and
+/// `elevation`, and the sun at `sun_elevation` (all rad).
+fn cos_to_sun(azimuth: f64, elevation: f64, sun_elevation: f64) -> f64 {
+    elevation.cos() * azimuth.cos() * sun_elevation.cos() + elevation.sin() * sun_elevation.sin()
+}
+
+/// How far below the horizon's dip the ground map starts, rad (0.006 deg).
+const GROUND_EDGE_RAD: f64 = 1e-4;
+
+/// Quality settings of the shell method, with the paper's values as defaults.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SkySettings {
+    /// Sampling shells `K` from the ground to the top (sky 3.2; paper: 40).
+    pub shells: usize,
+    /// View directions per axis `L` of the skylight map (sky (11)-(12); paper: 64).
+    pub directions: usize,
+    /// Directions `N_omega` of the second-order quadrature (sky (11); paper: 15),
+    /// rounded to the nearest double-Gauss layout. With Rayleigh's five moments they
+    /// cost nothing per sun; 128 holds the second order within 2 % of the reference,
+    /// the paper's 15 is up to 7.6 % off at sunset (docs/sky.md).
+    pub scattering_directions: usize,
+    /// Sun zenith bins of the scattered light maps.
+    pub sun_bins: usize,
+    /// Highest scattering order, 1 to 3 (paper: 2).
+    pub order: u32,
+    /// Whether aerosols scatter the orders above the first (paper: no, Rayleigh only).
+    pub multiple_mie: bool,
+    /// Longest interval between samples along a ray, m: longer ones (near-horizontal
+    /// rays near their lowest point cross successive shells up to 135 km apart) are
+    /// split by sub-samples between the shells. Not in the paper.
+    pub max_interval_m: f64,
+}
+
+impl Default for SkySettings {
+    fn default() -> Self {
+        SkySettings {
+            shells: 40,
+            directions: 64,
+            scattering_directions: 128,
+            sun_bins: 64,
+            order: 2,
+            multiple_mie: false,
+            max_interval_m: 10_000.0,
+        }
+    }
+}
+
+impl SkySettings {
+    /// Checks every field, and that the maps fit [`MEMORY_BUDGET_BYTES`].
+    pub fn validate(&self, channels: usize) -> Result<()> {
+        check_range("shells", self.shells as f64, 2.0, 2000.0)?;
+        check_range("directions", self.directions as f64, 2.0, 4096.0)?;
+        check_range(
+            "scattering_directions",
+            self.scattering_directions as f64,
+            1.0,
+            4096.0,
+        )?;
+        check_range("sun_bins", self.sun_bins as f64, 4.0, 4096.0)?;
+        check_range("order", self.order as f64, 1.0, 3.0)?;
+        check_range("max_interval_m", self.max_interval_m, 100.0, 1e7)?;
+        check_budget(
+            "the sky maps",
+            self.memory_bytes(channels),
+            MEMORY_BUDGET_BYTES,
+            "directions, shells, scattering_directions or sun_bins",
+        )
+    }
+
+    /// An upper bound of the bytes the maps of one model take.
+    pub fn memory_bytes(&self, channels: usize) -> u64 {
+        let (k, l, nd, b, n) = (
+            self.shells as u64 + 1,
+            self.directions as u64,
+            self.scattering_directions as u64,
+            self.sun_bins as u64,
+            channels as u64,
+        );
+        // A ray crosses each shell at most twice; a sample holds 2 maps per channel + 18 B.
+        let sample = 8 * n + 18;
+        let view_rays = 2 * l;
+        let light_rays = k * nd;
+        let samples = (view_rays + light_rays) * 2 * k * sample;
+        let light_maps = (self.order as u64 - 1) * k * b * (nd + 5) * n * 4;
+        let skylight = 2 * l * l * n * 4;
+        samples + light_maps + skylight + k * 512 * n * 4
+    }
+}
+
+/// A skylight map: radiance per wavelength over a [`DirectionGrid`], sky (3.2).
+#[derive(Debug, Clone)]
+pub struct SkylightMap {
+    /// The directions the map is sampled at.
+    pub grid: DirectionGrid,
+    /// Wavelengths per entry.
+    pub channels: usize,
+    /// `[elevation][azimuth][channel]`, radiance.
+    pub radiance: Vec<f32>,
+}
+
+impl SkylightMap {
+    /// Radiance per channel at grid point (azimuth index `i`, elevation index `j`).
+    pub fn at(&self, i: usize, j: usize) -> &[f32] {
+        let at = (j * self.grid.azimuths + i) * self.channels;
+        &self.radiance[at..at + self.channels]
+    }
+
+    /// The map converted to linear sRGB, `[elevation][azimuth]`.
+    pub fn to_rgb(&self, colour: &SpectrumToRgb) -> Vec<[f32; 3]> {
+        self.radiance
+            .chunks(self.channels)
+            .map(|l| colour.rgb(l))
+            .collect()
+    }
+}
+
+/// Everything about the sky at one viewpoint altitude that does not depend on the sun.
+pub struct SkyModel {
+    atmosphere: Atmosphere,
+    settings: SkySettings,
+    altitude_m: f64,
+    transmittance: Arc<TransmittanceTable>,
+    shells: SamplingShells,
+    sunlight: LightMap,
+    /// `scattered[n - 1]`: light of order `n` arriving at the shells, n < order.
+    scattered: Vec<ScatteredLightMap>,
+    /// The sky grid (elevation from the horizon's dip to the zenith) and its view rays,
+    /// one per elevation: the maps do not depend on the azimuth.
+    sky_grid: DirectionGrid,
+    sky_rays: ScatteringMaps,
+    /// Rays below the horizon, which end on the ground, for pictures.
+    ground_grid: DirectionGrid,
+    ground_rays: ScatteringMaps,
+}
+
+impl SkyModel {
+    /// The model at `altitude_m` above the ground, with the paper's skylight grid
+    /// (elevations from minus the horizon's dip to the zenith, sky (12), (15)).
+    pub fn new(atmosphere: &Atmosphere, settings: &SkySettings, altitude_m: f64) -> Result<Self> {
+        let table = Arc::new(TransmittanceTable::new(atmosphere));
+        let dip = horizon_dip(atmosphere.bottom_radius_m, altitude_m.max(0.0));
+        Self::with_grid(atmosphere, table, settings, altitude_m, -dip)
+    }
+
+    /// The model with a given transmittance table (shared between altitudes) and a
+    /// skylight grid starting at `min_elevation` rad (a fixed `-phi(h0)` for tables
+    /// over many altitudes, sky (12)).
+    pub fn with_grid(
+        atmosphere: &Atmosphere,
+        transmittance: Arc<TransmittanceTable>,
+        settings: &SkySettings,
+        altitude_m: f64,
+        min_elevation: f64,
+    ) -> Result<Self> {
+        settings.validate(atmosphere.channels())?;
+        let top = atmosphere.thickness_m();
+        if !(altitude_m.is_finite() && (0.0..top).contains(&altitude_m)) {
+            return Err(Error::out_of_range(
+                "altitude_m",
+                altitude_m,
+                &format!("[0, {top})"),
+            ));
+        }
+        let shells = SamplingShells::new(atmosphere, settings.shells, altitude_m);
+        let sunlight = LightMap::new(atmosphere, transmittance.clone(), &shells);
+        let mut scattered: Vec<ScatteredLightMap> = Vec::new();
+        if settings.order >= 2 {
+            let (rules, rays) = ScatteredLightMap::rays(
+                atmosphere,
+                &shells,
+                settings.scattering_directions,
+                settings.max_interval_m,
+            );
+            for order in 1..settings.order {
+                let sources = Sources {
+                    atmosphere,
+                    shells: &shells,
+                    sunlight: &sunlight,
+                    scattered: &scattered,
+                    multiple_mie: settings.multiple_mie,
+                };
+                let map = ScatteredLightMap::new(order, &rules, &rays, &sources, settings.sun_bins);
+                scattered.push(map);
+            }
+        }
+        let l = settings.directions;
+        let dip = horizon_dip(atmosphere.bottom_radius_m, altitude_m);
+        let sky_grid = DirectionGrid::new(l, l, min_elevation, std::f64::consts::FRAC_PI_2);
+        // The ground grid's top row is the horizon approached from below: rays that hit
+        // the ground, not the grazing ray that escapes to the sky.
+        let ground_top = -dip - GROUND_EDGE_RAD;
+        let ground_grid =
+            DirectionGrid::new(l, l.div_ceil(2), -std::f64::consts::FRAC_PI_2, ground_top);
+        let view = shells.viewpoint();
+        let rays_of = |grid: &DirectionGrid| -> Vec<(usize, f64)> {
+            (0..grid.elevations)
+                .map(|j| (view, grid.elevation(j).sin()))
+                .collect()
+        };
+        let max = settings.max_interval_m;
+        let sky_rays = ScatteringMaps::new(atmosphere, &shells, &rays_of(&sky_grid), max);
+        let ground_rays = ScatteringMaps::new(atmosphere, &shells, &rays_of(&ground_grid), max);
+        Ok(SkyModel {
+            atmosphere: atmosphere.clone(),
+            settings: settings.clone(),
+            altitude_m,
+            transmittance,
+            shells,
+            sunlight,
+            scattered,
+            sky_grid,
+            sky_rays,
+            ground_grid,
+            ground_rays,
+        })
+    }
+
+    /// The viewpoint altitude, m.
+    pub fn altitude_m(&self) -> f64 {
+        self.altitude_m
+    }
+
+    /// The atmosphere the model was built for.
+    pub fn atmosphere(&self) -> &Atmosphere {
+        &self.atmosphere
+    }
+
+    /// The settings the model was built with.
+    pub fn settings(&self) -> &SkySettings {
+        &self.settings
+    }
+
+    /// Samples (shell crossings and sub-samples) along the sky grid's view rays, one
+    /// ray per elevation; a map evaluates each for every azimuth.
+    pub fn view_samples(&self) -> usize {
+        self.sky_rays.samples()
+    }
+
+    /// The skylight map for a sun at `sun_elevation` rad, orders 1 to the model's order:
+    /// the sum over the shells of sky (3), plus sky (11) for the higher orders.
+    pub fn skylight_map(&self, sun_elevation: f64) -> SkylightMap {
+        self.map(
+            &self.sky_grid,
+            &self.sky_rays,
+            sun_elevation,
+            self.all_orders(),
+        )
+    }
+
+    /// The skylight map of the orders `first..=last` only.
+    pub fn skylight_map_orders(&self, sun_elevation: f64, first: u32, last: u32) -> SkylightMap {
+        let last = last.min(self.settings.order);
+        self.map(
+            &self.sky_grid,
+            &self.sky_rays,
+            sun_elevation,
+            Orders { first, last },
+        )
+    }
+
+    /// The map of the directions below the horizon, which end on the ground.
+    pub fn ground_map(&self, sun_elevation: f64) -> SkylightMap {
+        self.map(
+            &self.ground_grid,
+            &self.ground_rays,
+            sun_elevation,
+            self.all_orders(),
+        )
+    }
+
+    fn all_orders(&self) -> Orders {
+        Orders {
+            first: 1,
+            last: self.settings.order,
+        }
+    }
+
+    fn map(
+        &self,
+        grid: &DirectionGrid,
+        rays: &ScatteringMaps,
+        sun_elevation: f64,
+        orders: Orders,
+    ) -> SkylightMap {
+        let n = self.atmosphere.channels();
+        let sources = self.sources();
+        let sin_s = sun_elevation.sin();
+        let mut radiance = vec![0.0f32; grid.azimuths * grid.elevations * n];
+        radiance
+            .par_chunks_mut(grid.azimuths * n)
+            .enumerate()
+            .for_each(|(j, row)| {
+                let elevation = grid.elevation(j);
+                for (i, out) in row.chunks_mut(n).enumerate() {
+                    let nu = cos_to_sun(grid.azimuth(i), elevation, sun_elevation);
+                    rays.radiance(j, SunGeometry { mu_s: sin_s, nu }, &sources, orders, out);
+                }
+            });
+        SkylightMap {
+            grid: grid.clone(),
+            channels: n,
+            radiance,
+        }
+    }
+
+    /// Radiance per wavelength along arbitrary directions, given as (azimuth from the
+    /// sun, elevation) in rad, by the same shell sums as the map but without
+    /// interpolation between grid directions. Directions below the horizon end on the
+    /// ground. Returns one spectrum per direction.
+    pub fn radiance_along(&self, sun_elevation: f64, directions: &[(f64, f64)]) -> Vec<Vec<f32>> {
+        let view = self.shells.viewpoint();
+        let rays: Vec<(usize, f64)> = directions.iter().map(|&(_, e)| (view, e.sin())).collect();
+        let maps = ScatteringMaps::new(
+            &self.atmosphere,
+            &self.shells,
+            &rays,
+            self.settings.max_interval_m,
+        );
+        let sources = self.sources();
+        let sin_s = sun_elevation.sin();
+        directions
+            .par_iter()
+            .enumerate()
+            .map(|(k, &(azimuth, elevation))| {
+                let nu = cos_to_sun(azimuth, elevation, sun_elevation);
+                let mut out = vec![0.0f32; self.atmosphere.channels()];
+                maps.radiance(
+                    k,
+                    SunGeometry { mu_s: sin_s, nu },
+                    &sources,
+                    self.all_orders(),
+                    &mut out,
+                );
+                out
+            })
+            .collect()
+    }
+
+    fn sources(&self) -> Sources<'_> {
+        Sources {
+            atmosphere: &self.atmosphere,
+            shells: &self.shells,
+            sunlight: &self.sunlight,
+            scattered: &self.scattered,
+            multiple_mie: self.settings.multiple_mie,
+        }
+    }
+
+    /// Radiance per wavelength of the sun's disc seen from the viewpoint (no limb
+    /// darkening): irradiance / (pi alpha^2), through the atmosphere.
+    pub fn sun_radiance(&self, sun_elevation: f64, out: &mut [f32]) {
+        let r = self.atmosphere.bottom_radius_m + self.altitude_m;
+        self.transmittance.to_sun(r, sun_elevation.sin(), out);
+        sun_disc_radiance(&self.atmosphere, out);
+    }
+}
+
+/// Turns the transmittance to the sun `out` into the radiance of the sun's disc:
+/// irradiance / (pi alpha^2) x transmittance (no limb darkening).
+pub(crate) fn sun_disc_radiance(atmosphere: &Atmosphere, out: &mut [f32]) {
+    let solid_angle = std::f64::consts::PI * atmosphere.sun_angular_radius.powi(2);
+    for (o, e) in out.iter_mut().zip(&atmosphere.solar_irradiance) {
+        *o *= (*e / solid_angle) as f32;
+    }
+}
