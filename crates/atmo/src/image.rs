@@ -7,6 +7,8 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
+use image::ImageResult;
+#[cfg(any(feature = "png", feature = "exr"))]
 use image::{ExtendedColorType, ImageEncoder};
 
 use crate::error::{check_budget, check_range, Error, Result};
@@ -112,8 +114,12 @@ impl ImageKind {
             .map(str::to_ascii_lowercase)
             .as_deref()
         {
-            Some("png") => Ok(ImageKind::Png),
-            Some("exr") => Ok(ImageKind::Exr),
+            Some("png") if cfg!(feature = "png") => Ok(ImageKind::Png),
+            Some("exr") if cfg!(feature = "exr") => Ok(ImageKind::Exr),
+            Some(e @ ("png" | "exr")) => Err(Error::Invalid(format!(
+                "{}: .{e} files need atmo's `{e}` feature, which this build leaves out",
+                path.display()
+            ))),
             _ => Err(Error::out_of_range(
                 "output file extension",
                 path.display(),
@@ -174,26 +180,42 @@ impl Frame {
             message: e.to_string(),
         };
         write_atomically(path, |w| match kind {
-            ImageKind::Png => image::codecs::png::PngEncoder::new(w)
-                .write_image(
-                    &self.to_srgb8(exposure, tone),
-                    self.width,
-                    self.height,
-                    ExtendedColorType::Rgb8,
-                )
-                .map_err(encode_error),
-            ImageKind::Exr => {
-                let floats: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
-                image::codecs::openexr::OpenExrEncoder::new(w)
-                    .write_image(
-                        bytemuck::cast_slice(&floats),
-                        self.width,
-                        self.height,
-                        ExtendedColorType::Rgb32F,
-                    )
-                    .map_err(encode_error)
-            }
+            ImageKind::Png => self.encode_png(w, exposure, tone).map_err(encode_error),
+            ImageKind::Exr => self.encode_exr(w).map_err(encode_error),
         })
+    }
+
+    #[cfg(feature = "png")]
+    fn encode_png(&self, w: impl Write, exposure: f32, tone: ToneMap) -> ImageResult<()> {
+        image::codecs::png::PngEncoder::new(w).write_image(
+            &self.to_srgb8(exposure, tone),
+            self.width,
+            self.height,
+            ExtendedColorType::Rgb8,
+        )
+    }
+
+    #[cfg(feature = "exr")]
+    fn encode_exr(&self, w: impl Write + std::io::Seek) -> ImageResult<()> {
+        let floats: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
+        image::codecs::openexr::OpenExrEncoder::new(w).write_image(
+            bytemuck::cast_slice(&floats),
+            self.width,
+            self.height,
+            ExtendedColorType::Rgb32F,
+        )
+    }
+
+    /// Without the feature, [`ImageKind::of`] has refused the file before this.
+    #[cfg(not(feature = "png"))]
+    fn encode_png(&self, _: impl Write, _: f32, _: ToneMap) -> ImageResult<()> {
+        unreachable!("ImageKind::of refuses .png without the png feature")
+    }
+
+    /// Without the feature, [`ImageKind::of`] has refused the file before this.
+    #[cfg(not(feature = "exr"))]
+    fn encode_exr(&self, _: impl Write + std::io::Seek) -> ImageResult<()> {
+        unreachable!("ImageKind::of refuses .exr without the exr feature")
     }
 }
 

@@ -4,7 +4,7 @@
 //! every part of it is kept in a 3-D intensity buffer oriented to the sun ([`buffer`]),
 //! filled in any particle order by the multiplicative form (7).
 //!
-//! [`harris`] is the baseline light pass the buffer is measured against; [`render`]
+//! [`harris`] is the baseline light pass the buffer is measured against; [`render`](mod@render)
 //! draws the billboards; [`files`] reads and writes particles.
 
 pub mod buffer;
@@ -13,3 +13,8 @@ pub mod generator;
 pub mod harris;
 pub mod particles;
 pub mod render;
+
+pub use buffer::{IntensityBuffer, Splat};
+pub use generator::Cumulus;
+pub use particles::Particle;
+pub use render::{render, Lighting};

@@ -180,7 +180,7 @@ impl<'a> SamplePlanes<'a> {
 
     /// The picture: surfaces lit through shadow maps plus the scattered light. Rows in
     /// parallel; within a row, [`LANES`] neighbouring pixels go through the sub-samples
-    /// together (see [`SamplePlanes::scattered`]).
+    /// together (see `SamplePlanes::scattered`).
     pub fn render(&self) -> Frame {
         let camera = &self.scene.camera;
         let width = camera.width as usize;

@@ -644,6 +644,7 @@ impl ObjectSpec {
 /// materials ignored), each vertex mapped by `place`. Degenerate triangles are dropped;
 /// a file without any triangle, with indices out of range or with non-finite
 /// coordinates is an error, never a panic.
+#[cfg(feature = "obj")]
 pub fn load_obj(path: &Path, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
     let fail = |why: String| Error::Invalid(format!("OBJ file {}: {why}", path.display()));
     let file = std::fs::File::open(path).map_err(|source| Error::Io {
@@ -684,4 +685,13 @@ pub fn load_obj(path: &Path, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
         return Err(fail("no triangles".into()));
     }
     Ok(Mesh::new(triangles))
+}
+
+/// Without atmo's `obj` feature, OBJ meshes are refused with a message saying so.
+#[cfg(not(feature = "obj"))]
+pub fn load_obj(path: &Path, _place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
+    Err(Error::Invalid(format!(
+        "OBJ file {}: meshes need atmo's `obj` feature, which this build leaves out",
+        path.display()
+    )))
 }

@@ -9,12 +9,14 @@ use glam::{DVec3, Vec2, Vec3, Vec3A};
 use rayon::prelude::*;
 
 use super::shells::sun_disc_radiance;
+#[cfg(feature = "table")]
 use super::table::SkylightTable;
 use super::{DirectionGrid, SkyModel, SkylightMap};
 use crate::atmosphere::geometry::horizon_dip;
 use crate::atmosphere::optical_depth::transmittance_to_sun;
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::Atmosphere;
+#[cfg(feature = "table")]
 use crate::error::Result;
 use crate::image::Frame;
 use crate::view::{Camera, Sun};
@@ -170,12 +172,14 @@ impl SkyPicture {
     /// Draws the skylight map of `sun` seen from `altitude_m` from `table` (sky 4.2);
     /// an error outside the table's ranges. The table holds the sky above the horizon;
     /// below it, where an application draws its terrain, the picture is black.
+    #[cfg(feature = "table")]
     pub fn from_table(table: &SkylightTable, sun: Sun, altitude_m: f64) -> Result<Self> {
         let map = table.map(sun.elevation(), altitude_m)?;
         Ok(Self::from_table_map(table, sun, altitude_m, map))
     }
 
     /// A picture of `map`, a skylight map of `table` for `sun` at `altitude_m`.
+    #[cfg(feature = "table")]
     pub fn from_table_map(
         table: &SkylightTable,
         sun: Sun,

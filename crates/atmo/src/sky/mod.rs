@@ -4,7 +4,7 @@
 //! - [`shells`], section 3: the shell method. [`SkyModel`] holds everything about one
 //!   viewpoint altitude that does not depend on the sun, then gives the skylight map of
 //!   any sun with lookups only.
-//! - [`table`], section 4: [`SkylightTable`], the maps of every sun elevation and
+//! - `table` (feature `table`, on by default), section 4: `SkylightTable`, the maps of every sun elevation and
 //!   altitude compressed by SVD, drawn in well under a millisecond (docs/sky-table.md).
 //!
 //! [`SkyPicture`] turns either into pictures through a [`crate::view::Camera`], with the
@@ -32,12 +32,14 @@ pub mod daylight;
 pub mod frame;
 pub mod grid;
 pub mod shells;
+#[cfg(feature = "table")]
 pub mod table;
 
 pub use daylight::Daylight;
 pub use frame::{SkyPicture, View};
 pub use grid::DirectionGrid;
 pub use shells::{SkyModel, SkySettings, SkylightMap};
+#[cfg(feature = "table")]
 pub use table::{SkylightTable, TableSettings};
 
 /// Memory the sky may use for its maps, bytes; larger settings are refused up front.

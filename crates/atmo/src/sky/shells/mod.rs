@@ -4,8 +4,8 @@
 //! first-order scattered light, sky (10)-(11).
 //!
 //! [`SkyModel`] holds everything that does not depend on the sun for one viewpoint
-//! altitude: the [sampling shells](sampling_shells), the density x attenuation maps of
-//! the view rays ([`maps`]), and the [light maps](light_map); [`SkyModel::skylight_map`]
+//! altitude: the sampling shells (`sampling_shells`), the density x attenuation maps of
+//! the view rays (`maps`), and the light maps (`light_map`); [`SkyModel::skylight_map`]
 //! then gives the skylight map for any sun elevation with lookups only. See docs/sky.md
 //! for the derivation and the choices made beyond the paper. [`export`] lays the
 //! sun-independent arrays out flat for the GPU.

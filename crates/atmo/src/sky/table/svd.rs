@@ -9,7 +9,7 @@
 //! differently with the number of threads, and the table must not depend on the machine;
 //! sequential, the SVD of the default table takes under 7 s). With power iterations the leading terms match the exact SVD to
 //! working precision for a matrix whose singular values fall as fast as the sky's; the
-//! term counts of [`super::table`] are measured on the factors actually stored, so the
+//! term counts of [`super`] (the table) are measured on the factors actually stored, so the
 //! error bound never rests on that claim.
 
 use faer::Mat;
