@@ -12,9 +12,9 @@ struct DrawParams {
     // Unit right; w: tan of half the vertical field.
     right: vec4<f32>,
     up: vec4<f32>,
-    // Unit vector to the sun; w: phase function (0 Henyey-Greenstein, 1 cloud Mie).
+    // Unit vector to the sun; w: the phase function's PHASE_* code.
     to_sun: vec4<f32>,
-    // Sunlight at the cloud, RGB; w: Henyey-Greenstein g.
+    // Sunlight at the cloud, RGB; w: the phase function's parameter.
     sun: vec4<f32>,
     // Sky light scattered by the droplets, RGB radiance.
     ambient: vec4<f32>,
@@ -43,17 +43,8 @@ struct Billboard {
     @location(3) @interpolate(flat) blob: vec2<f32>,
 }
 
-const PI: f32 = 3.14159265;
-
-fn hg(g: f32, c: f32) -> f32 {
-    return (1.0 - g * g) / (4.0 * PI * pow(1.0 + g * g - 2.0 * g * c, 1.5));
-}
-
 fn phase(c: f32) -> f32 {
-    if params.to_sun.w != 0.0 {
-        return 0.75 * hg(0.8, c) + 0.25 * hg(-0.3, c);
-    }
-    return hg(params.sun.w, c);
+    return phase_function(u32(params.to_sun.w), params.sun.w, c);
 }
 
 @vertex

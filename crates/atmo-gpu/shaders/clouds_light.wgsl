@@ -17,17 +17,6 @@ const FOOTPRINT: f32 = 3.5;
 const CACHED: u32 = 1024u;
 var<workgroup> shares: array<f32, 1024>;
 
-// erf within 1.2e-7 (Numerical Recipes' erfcc), as atmo::clouds::particles::erf.
-fn erf(x: f32) -> f32 {
-    let z = abs(x);
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let poly = -z * z - 1.26551223 + t * (1.00002368 + t * (0.37409196 + t * (0.09678418
-        + t * (-0.18628806 + t * (0.27886807 + t * (-1.13520398 + t * (1.48851587
-        + t * (-0.82215223 + t * 0.17087277))))))));
-    let erfc = t * exp(poly);
-    return select(erfc - 1.0, 1.0 - erfc, x >= 0.0);
-}
-
 fn centre(axis: u32, i: u32) -> f32 {
     return frame.min[axis] + (f32(i) + 0.5) * frame.voxel[axis];
 }

@@ -71,25 +71,14 @@ struct GpuLight {
 // F over sin(alpha/2) (one row), and each light's profile over q (one row a light).
 @group(0) @binding(3) var phase_table: texture_2d<f32>;
 @group(0) @binding(4) var light_maps: texture_2d<f32>;
-// Light-space depth of the nearest surface per shadow-map texel, [light][row][column].
-@group(0) @binding(5) var<storage, read_write> depth: array<f32>;
-// Per light, 10 order-preserving u32 encodings: camera depth min and max of the ray
-// ends, their largest squared distance to the lamp and to the eye, their box min, max.
-@group(0) @binding(6) var<storage, read_write> extents: array<atomic<u32>>;
-// Per light 12 floats (eye in light space, lamp in haze, box min, z_near, box max,
-// z_far), then the attenuation table's scales (s_scale, t_scale, ds, dt).
-@group(0) @binding(7) var<storage, read_write> derived: array<f32>;
-// Where each sub-pixel ray ends (m from the eye), [sub-pixel][pixel].
-@group(0) @binding(8) var<storage, read_write> ends: array<f32>;
-// The picture, linear RGB.
-@group(0) @binding(9) var<storage, read_write> out: array<vec4<f32>>;
+// Bindings 5 to 9 (depth, extents, derived, ends, out) are declared by
+// shafts_writable.wgsl for the compute passes and shafts_readable.wgsl for the planes.
 // s^2 h(s, t) of shafts (6) over (s, t), made each frame by shafts_attenuation.wgsl.
 @group(0) @binding(10) var attenuation_table: texture_2d<f32>;
 
 const RAY_EPSILON: f32 = 1e-4;
 const NO_HIT: f32 = 3.4e38;
 const FRAC_1_PI: f32 = 0.31830988;
-const HALF_PI: f32 = 1.5707963;
 
 // --- rays against the objects (atmo::shafts::objects) ---
 
@@ -145,18 +134,18 @@ fn intersect(k: u32, origin: vec3<f32>, dir: vec3<f32>, best: ptr<function, Hit>
     let t_max = (*best).t;
     var t = NO_HIT;
     var normal = vec3<f32>(0.0);
-    if kind == 0u {
+    if kind == OBJECT_PLANE {
         // Plane: a point, b normal.
         t = dot(a.xyz - origin, b.xyz) / dot(b.xyz, dir);
         normal = b.xyz;
-    } else if kind == 1u {
+    } else if kind == OBJECT_RECT {
         // Rectangle: a corner, b and c edges.
         let h = parallelogram(origin, dir, a.xyz, b.xyz, c.xyz);
         if h.y >= 0.0 && h.y <= 1.0 && h.z >= 0.0 && h.z <= 1.0 {
             t = h.x;
             normal = normalize(cross(b.xyz, c.xyz));
         }
-    } else if kind == 2u {
+    } else if kind == OBJECT_SPHERE {
         // Sphere: a centre and radius.
         let oc = origin - a.xyz;
         let bb = dot(oc, dir);
@@ -167,7 +156,7 @@ fn intersect(k: u32, origin: vec3<f32>, dir: vec3<f32>, best: ptr<function, Hit>
             t = select(-bb + root, -bb - root, valid(-bb - root, t_max));
             normal = (origin + t * dir - a.xyz) / a.w;
         }
-    } else if kind == 3u {
+    } else if kind == OBJECT_BOX {
         // Box: a min, b max.
         let span = clip_box(a.xyz, b.xyz, origin, safe_recip(dir), -NO_HIT, t_max);
         if span.x <= span.y {
@@ -269,14 +258,6 @@ fn world_direction(l: GpuLight, u: f32, v: f32) -> vec3<f32> {
     return l.x_axis.xyz * (u * tf) + l.y_axis.xyz * (v * tf) + l.z_axis.xyz;
 }
 
-fn fast_atan(x: f32) -> f32 {
-    let flip = x > 1.0;
-    let y = select(x, 1.0 / x, flip);
-    let y2 = y * y;
-    let p = y * (0.999866 + y2 * (-0.3302995 + y2 * (0.180141 + y2 * (-0.085133 + y2 * 0.0208351))));
-    return select(p, HALF_PI - p, flip);
-}
-
 // The beam profile at (u, v), exactly (Spotlight::profile_at).
 fn profile_at(l: GpuLight, u: f32, v: f32) -> f32 {
     let q = u * u + v * v;
@@ -291,7 +272,7 @@ fn profile_at(l: GpuLight, u: f32, v: f32) -> f32 {
     }
     let beam_half = l.intensity.w;
     let x = clamp((l.field_half - fast_atan(sqrt(r2))) / (l.field_half - beam_half), 0.0, 1.0);
-    return select(x, x * x * (3.0 - 2.0 * x), l.falloff == 1u);
+    return select(x, x * x * (3.0 - 2.0 * x), l.falloff == FALLOFF_SMOOTH);
 }
 
 fn gobo_texel(l: GpuLight, i: i32, j: i32) -> vec3<f32> {
@@ -304,7 +285,7 @@ fn gobo_texel(l: GpuLight, i: i32, j: i32) -> vec3<f32> {
 fn gobo_sample(l: GpuLight, u: f32, v: f32) -> vec3<f32> {
     let x = 0.5 * (u + 1.0) * f32(l.gobo_width);
     let y = 0.5 * (1.0 - v) * f32(l.gobo_height);
-    if l.gobo == 1u {
+    if l.gobo == GOBO_NEAREST {
         return gobo_texel(l, i32(floor(x)), i32(floor(y)));
     }
     let c = bilinear(vec2<f32>(x, y));
@@ -321,7 +302,7 @@ fn intensity_toward(l: GpuLight, local: vec3<f32>) -> vec3<f32> {
     let u = local.x * scale;
     let v = local.y * scale;
     let profile = profile_at(l, u, v);
-    if l.gobo != 0u && profile > 0.0 {
+    if l.gobo != GOBO_NONE && profile > 0.0 {
         return l.intensity.xyz * profile * gobo_sample(l, u, v);
     }
     return l.intensity.xyz * profile;
@@ -441,12 +422,6 @@ fn subpixel(q: u32) -> vec2<f32> {
     return vec2<f32>((f32(q % k) + 0.5) / f32(k), (f32(q / k) + 0.5) / f32(k));
 }
 
-// Interleaved gradient noise in [0, 1): the sub-plane shift of pixel (x, y).
-fn interleaved_offset(x: u32, y: u32) -> f32 {
-    let f = fract(0.06711056 * f32(x) + 0.00583715 * f32(y));
-    return fract(52.982918 * f);
-}
-
 // --- the sample planes (atmo::shafts::planes, shafts (5)-(9)) ---
 
 // J_i g_i dz |r| / m I_l (without the sub-pixel weight) of plane `plane` of light `k`
@@ -497,7 +472,7 @@ fn plane_term(k: u32, plane: u32, q: u32, x: u32, y: u32) -> vec3<f32> {
         let u = (origin.x + d * step.x) * scale;
         let v = (origin.y + d * step.y) * scale;
         let weight = f32(lit_at(k, u, v, lz)) * light_map(k, l, u * u + v * v);
-        if l.gobo == 0u {
+        if l.gobo == GOBO_NONE {
             j_sum.x += weight;
         } else if weight > 0.0 {
             j_sum += weight * gobo_sample(l, u, v);
@@ -506,7 +481,7 @@ fn plane_term(k: u32, plane: u32, q: u32, x: u32, y: u32) -> vec3<f32> {
     if all(j_sum == vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
     }
-    if l.gobo == 0u {
+    if l.gobo == GOBO_NONE {
         j_sum = vec3<f32>(j_sum.x);
     }
     // g of shafts (6) at the plane.

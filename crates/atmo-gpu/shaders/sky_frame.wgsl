@@ -45,16 +45,6 @@ struct SkyFrameParams {
 // The ground map, [elevation][azimuth][channel] (unused without one).
 @group(0) @binding(3) var<storage, read> ground: array<f32>;
 
-const HALF_PI: f32 = 1.5707963;
-
-// acos within 7e-5 rad (Abramowitz and Stegun 4.4.45), the CPU's fast_acos: the same
-// function on both sides puts the horizon's edge on the same pixels.
-fn fast_acos(x: f32) -> f32 {
-    let a = min(abs(x), 1.0);
-    let r = sqrt(1.0 - a) * (1.5707288 + a * (-0.2121144 + a * (0.074261 - 0.0187293 * a)));
-    return select(r, 3.14159265 - r, x < 0.0);
-}
-
 fn texel(is_ground: bool, at: u32) -> vec3<f32> {
     if is_ground {
         return vec3<f32>(ground[3u * at], ground[3u * at + 1u], ground[3u * at + 2u]);

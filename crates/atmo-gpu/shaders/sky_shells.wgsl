@@ -52,25 +52,9 @@ struct ShellParams {
 // Out: linear sRGB, [elevation][azimuth][rgb].
 @group(0) @binding(2) var<storage, read_write> map: array<f32>;
 
-const PI: f32 = 3.14159265;
 // The moments a Rayleigh in-scattering needs (atmo::sky::light_map's MOMENTS).
 const MOMENTS: u32 = 5u;
 const MAX_LANES: u32 = 16u;
-
-fn phase(kind: u32, g: f32, c: f32) -> f32 {
-    if kind == 0u {
-        return 3.0 / (16.0 * PI) * (1.0 + c * c);
-    }
-    if kind == 1u {
-        let half = 0.5 * (1.0 + c);
-        return (1.0 + 50.0 * half * half * half) / (54.0 * PI);
-    }
-    let denom = 1.0 + g * g - 2.0 * g * c;
-    if kind == 2u {
-        return (1.0 - g * g) / (4.0 * PI * denom * sqrt(denom));
-    }
-    return 3.0 / (8.0 * PI) * (1.0 - g * g) * (1.0 + c * c) / ((2.0 + g * g) * denom * sqrt(denom));
-}
 
 // The light map of sunlight at shell `shell`, lane `l` (LightMap::sample).
 fn light_map(shell: u32, mu_s: f32, l: u32) -> vec4<f32> {
@@ -175,8 +159,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let nu = cos(elevation) * cos(azimuth) * params.sun.y + sin(elevation) * sin_s;
     let ray = data[params.rays_at + j];
     let r0_mu_s = ray.z * sin_s;
-    let phase_r = phase(params.rayleigh_kind, params.rayleigh_g, nu);
-    let phase_m = phase(params.mie_kind, params.mie_g, nu);
+    let phase_r = phase_function(params.rayleigh_kind, params.rayleigh_g, nu);
+    let phase_m = phase_function(params.mie_kind, params.mie_g, nu);
     let n = params.lanes;
     var total: array<vec4<f32>, MAX_LANES>;
     for (var s = bitcast<u32>(ray.x); s < bitcast<u32>(ray.y); s++) {

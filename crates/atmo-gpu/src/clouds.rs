@@ -6,7 +6,6 @@
 //! between the light pass and the draw, so a moving sun costs one light pass and a
 //! moving camera none.
 
-use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::Lighting;
@@ -14,6 +13,7 @@ use atmo::image::Frame;
 use atmo::view::Camera;
 use glam::Vec3;
 
+use crate::wgsl;
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
 gpu_struct! {
@@ -117,20 +117,10 @@ impl GpuClouds {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let common = include_str!("../shaders/clouds_common.wgsl");
-        let module = |name: &str, source: &str| gpu.shader(name, &format!("{common}\n{source}"));
-        let light = module(
-            "clouds_light.wgsl",
-            include_str!("../shaders/clouds_light.wgsl"),
-        )?;
-        let prefix = module(
-            "clouds_prefix.wgsl",
-            include_str!("../shaders/clouds_prefix.wgsl"),
-        )?;
-        let draw = module(
-            "clouds_draw.wgsl",
-            include_str!("../shaders/clouds_draw.wgsl"),
-        )?;
+        let module = |pass: &str| wgsl::module(gpu, &format!("clouds_common.wgsl {pass}"));
+        let light = module("clouds_light.wgsl")?;
+        let prefix = module("clouds_prefix.wgsl")?;
+        let draw = module("clouds_draw.wgsl")?;
         Ok(GpuClouds {
             particles: particles.to_vec(),
             particle_buffer,
@@ -284,24 +274,15 @@ impl GpuClouds {
         let (tan_half_width, tan_half_height) = camera.pinhole("the clouds' billboards")?;
         let focal = 0.5 * h as f32 / tan_half_height;
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
-        let (kind, g) = match light.phase {
-            PhaseFunction::HenyeyGreenstein { g } => (0.0, g as f32),
-            PhaseFunction::CloudMie => (1.0, 0.0),
-            other => {
-                return Err(atmo::Error::Invalid(format!(
-                    "the clouds on the GPU draw the henyey-greenstein and cloud-mie phases, not {}",
-                    other.to_toml()
-                ))
-                .into())
-            }
-        };
+        // The phase function's code and parameter (functions.wgsl's phase_function).
+        let (kind, g) = light.phase.code();
         let params = DrawParams {
             position: v4(camera.position, focal),
             forward: v4(camera.forward, tan_half_width),
             right: v4(camera.right, tan_half_height),
             up: v4(camera.up, 0.0),
-            to_sun: v4(light.to_sun, kind),
-            sun: v4(light.sun, g),
+            to_sun: v4(light.to_sun, kind as f32),
+            sun: v4(light.sun, g as f32),
             ambient: v4(light.ambient, 0.0),
             width: w,
             height: h,

@@ -4,15 +4,18 @@
 //! which stays the reference: the tests hold every pipeline's pictures to the CPU's
 //! within half a level of 255 RMS.
 //!
-//! Shaders are WGSL under `shaders/`, one per pass. Parameter structs are declared
-//! once with [`gpu_struct!`], `#[repr(C)]` and `Pod`, and mirrored in WGSL; a test
-//! checks each against naga's layout of the shader's struct.
+//! Shaders are WGSL under `shaders/`, one per pass, composed by [`wgsl::source`] after
+//! a prelude of constants generated from the Rust and the WGSL twins of the library's
+//! shared functions (each tested against its Rust original). Parameter structs are
+//! declared once with [`gpu_struct!`], `#[repr(C)]` and `Pod`, and mirrored in WGSL; a
+//! test checks each against naga's layout of the shader's struct.
 
 pub mod clouds;
 pub mod device;
 pub mod layout;
 pub mod shafts;
 pub mod sky;
+pub mod wgsl;
 
 pub use device::Gpu;
 

@@ -12,11 +12,15 @@ use atmo::shafts::tables::{AttenuationTable, LightMap, PhaseTable};
 use atmo::shafts::Scene;
 use glam::Vec3;
 
+use crate::wgsl::{
+    self, FALLOFF_LINEAR, FALLOFF_SMOOTH, GOBO_BILINEAR, GOBO_NEAREST, GOBO_NONE, OBJECT_BOX,
+    OBJECT_MESH, OBJECT_PLANE, OBJECT_RECT, OBJECT_SPHERE,
+};
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
 gpu_struct! {
     /// The scene's camera, haze and sizes (see shafts_common.wgsl).
-    pub struct ShaftsParams in "shafts_common.wgsl" {
+    pub struct ShaftsParams in "shafts_writable.wgsl shafts_common.wgsl" {
         position: [f32; 4],
         forward: [f32; 4],
         right: [f32; 4],
@@ -44,7 +48,7 @@ gpu_struct! {
 
 gpu_struct! {
     /// One spotlight (see shafts_common.wgsl).
-    pub struct GpuLight in "shafts_common.wgsl" {
+    pub struct GpuLight in "shafts_writable.wgsl shafts_common.wgsl" {
         position: [f32; 4],
         x_axis: [f32; 4],
         y_axis: [f32; 4],
@@ -250,45 +254,27 @@ impl GpuShafts {
                     });
                 (layout, group)
             });
-        let common = include_str!("../shaders/shafts_common.wgsl");
-        let module = |name: &str, source: &str| gpu.shader(name, &format!("{common}\n{source}"));
-        let shadow = module(
-            "shafts_shadow.wgsl",
-            include_str!("../shaders/shafts_shadow.wgsl"),
+        // Compute passes see the working buffers writable, the planes' render pass
+        // read-only: the same declarations in two files (see shafts_common.wgsl).
+        let module = |pass: &str| {
+            wgsl::module(
+                gpu,
+                &format!("shafts_writable.wgsl shafts_common.wgsl {pass}"),
+            )
+        };
+        let shadow = module("shafts_shadow.wgsl")?;
+        let prepare = module("shafts_prepare.wgsl")?;
+        let surface = module("shafts_surface.wgsl")?;
+        let compute = module("shafts_compute.wgsl")?;
+        let planes = wgsl::module(
+            gpu,
+            "shafts_readable.wgsl shafts_common.wgsl shafts_planes.wgsl",
         )?;
-        let prepare = module(
-            "shafts_prepare.wgsl",
-            include_str!("../shaders/shafts_prepare.wgsl"),
-        )?;
-        let surface = module(
-            "shafts_surface.wgsl",
-            include_str!("../shaders/shafts_surface.wgsl"),
-        )?;
-        let compute = module(
-            "shafts_compute.wgsl",
-            include_str!("../shaders/shafts_compute.wgsl"),
-        )?;
-        let read_only_common = common
-            .replace("var<storage, read_write>", "var<storage, read>")
-            .replace("array<atomic<u32>>", "array<u32>");
-        let planes = gpu.shader(
-            "shafts_planes.wgsl",
-            &format!(
-                "{read_only_common}\n{}",
-                include_str!("../shaders/shafts_planes.wgsl")
-            ),
-        )?;
-        let composite = gpu.shader(
-            "shafts_composite.wgsl",
-            include_str!("../shaders/shafts_composite.wgsl"),
-        )?;
+        let composite = wgsl::module(gpu, "shafts_composite.wgsl")?;
         let with = Some(&compute_layout);
         // The table's own pass, with its own bindings: the texture is written there and
         // read (as a texture) by every pass after it.
-        let table = module(
-            "shafts_attenuation.wgsl",
-            include_str!("../shaders/shafts_attenuation.wgsl"),
-        )?;
+        let table = module("shafts_attenuation.wgsl")?;
         let attenuation = gpu.compute_pipeline(&table, "main", None)?;
         let attenuation_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("the attenuation table"),
@@ -528,14 +514,23 @@ impl Geometry {
         let mut values: Vec<[f32; 4]> = Vec::with_capacity(4 * list.len());
         for object in list {
             let (kind, a, b, c) = match &object.shape {
-                Shape::Plane { point, normal } => (0, v4(*point, 0.0), v4(*normal, 0.0), [0.0; 4]),
+                Shape::Plane { point, normal } => {
+                    (OBJECT_PLANE, v4(*point, 0.0), v4(*normal, 0.0), [0.0; 4])
+                }
                 Shape::Rect {
                     corner,
                     edge_a,
                     edge_b,
-                } => (1, v4(*corner, 0.0), v4(*edge_a, 0.0), v4(*edge_b, 0.0)),
-                Shape::Sphere { center, radius } => (2, v4(*center, *radius), [0.0; 4], [0.0; 4]),
-                Shape::Box(aabb) => (3, v4(aabb.min, 0.0), v4(aabb.max, 0.0), [0.0; 4]),
+                } => (
+                    OBJECT_RECT,
+                    v4(*corner, 0.0),
+                    v4(*edge_a, 0.0),
+                    v4(*edge_b, 0.0),
+                ),
+                Shape::Sphere { center, radius } => {
+                    (OBJECT_SPHERE, v4(*center, *radius), [0.0; 4], [0.0; 4])
+                }
+                Shape::Box(aabb) => (OBJECT_BOX, v4(aabb.min, 0.0), v4(aabb.max, 0.0), [0.0; 4]),
                 Shape::Mesh(mesh) => {
                     let root = (nodes.len() / 2) as u32;
                     let first = (triangles.len() / 3) as u32;
@@ -546,7 +541,12 @@ impl Geometry {
                     for t in mesh.triangles() {
                         triangles.extend(t.iter().map(|v| v4(*v, 0.0)));
                     }
-                    (4, [bits(root), bits(first), 0.0, 0.0], [0.0; 4], [0.0; 4])
+                    (
+                        OBJECT_MESH,
+                        [bits(root), bits(first), 0.0, 0.0],
+                        [0.0; 4],
+                        [0.0; 4],
+                    )
                 }
             };
             values.extend([a, b, c, v4(object.albedo, bits(kind))]);
@@ -566,13 +566,13 @@ impl Geometry {
                         .map(|c| std::array::from_fn(|i| bits(c.get(i).copied().unwrap_or(0)))),
                 );
                 let (gobo, gobo_at, gobo_width, gobo_height) = match &light.gobo {
-                    None => (0, 0, 0, 0),
+                    None => (GOBO_NONE, 0, 0, 0),
                     Some(g) => {
                         let at = values.len() as u32;
                         values.extend(g.texels.iter().map(|t| v4(*t, 0.0)));
                         let sampling = match g.sampling {
-                            Sampling::Nearest => 1,
-                            Sampling::Bilinear => 2,
+                            Sampling::Nearest => GOBO_NEAREST,
+                            Sampling::Bilinear => GOBO_BILINEAR,
                         };
                         (sampling, at, g.width as u32, g.height as u32)
                     }
@@ -586,7 +586,10 @@ impl Geometry {
                     z_axis: v4(m.row(2), light.tan_beam()),
                     intensity: v4(light.intensity, light.beam_half),
                     field_half: light.field_half,
-                    falloff: (light.falloff == Falloff::Smooth) as u32,
+                    falloff: match light.falloff {
+                        Falloff::Linear => FALLOFF_LINEAR,
+                        Falloff::Smooth => FALLOFF_SMOOTH,
+                    },
                     gobo,
                     gobo_at,
                     gobo_width,

@@ -17,6 +17,7 @@ use atmo::sky::{DirectionGrid, SkyModel};
 use atmo::view::{PixelBasis, Sun};
 use glam::Vec3;
 
+use crate::wgsl;
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
 gpu_struct! {
@@ -116,7 +117,7 @@ struct FrameInputs<'m> {
 
 impl FramePass {
     fn new(gpu: &Gpu) -> Result<Self, GpuError> {
-        let module = gpu.shader("sky_frame.wgsl", include_str!("../shaders/sky_frame.wgsl"))?;
+        let module = wgsl::module(gpu, "sky_frame.wgsl")?;
         Ok(FramePass {
             pipeline: gpu.compute_pipeline(&module, "main", None)?,
             no_ground: gpu.storage("no ground map", &[0; 16], "")?,
@@ -244,7 +245,7 @@ impl<'a> GpuSkyTable<'a> {
         )?;
         let map_bytes = (f.directions * 3 * 4) as u64;
         let map = gpu.output("the skylight map", map_bytes, setting)?;
-        let map_module = gpu.shader("sky_map.wgsl", include_str!("../shaders/sky_map.wgsl"))?;
+        let map_module = wgsl::module(gpu, "sky_map.wgsl")?;
         Ok(GpuSkyTable {
             table,
             params: SkyMapParams {
@@ -472,10 +473,7 @@ impl<'a> GpuSkyModel<'a> {
                 "--directions",
             )
         };
-        let module = gpu.shader(
-            "sky_shells.wgsl",
-            include_str!("../shaders/sky_shells.wgsl"),
-        )?;
+        let module = wgsl::module(gpu, "sky_shells.wgsl")?;
         Ok(GpuSkyModel {
             model,
             data: buffer,

@@ -5,13 +5,7 @@
 use atmo_gpu::layout::GpuStruct;
 
 fn check<T: GpuStruct>() {
-    let source: String = T::SHADER
-        .split_whitespace()
-        .map(|file| {
-            let path = format!("{}/shaders/{file}", env!("CARGO_MANIFEST_DIR"));
-            std::fs::read_to_string(&path).unwrap()
-        })
-        .collect();
+    let source = atmo_gpu::wgsl::source(T::SHADER);
     let module = naga::front::wgsl::parse_str(&source)
         .unwrap_or_else(|e| panic!("{}: {}", T::SHADER, e.emit_to_string(&source)));
     let mut layouter = naga::proc::Layouter::default();

@@ -72,6 +72,7 @@
 pub mod atmosphere;
 pub mod clouds;
 pub mod error;
+pub mod fast;
 pub mod geometry;
 pub mod image;
 pub mod quadrature;

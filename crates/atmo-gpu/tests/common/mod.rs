@@ -1,5 +1,7 @@
 //! What every GPU test shares: the device, and the comparison with the CPU path.
 
+#![allow(dead_code)] // each test binary uses its own part
+
 use atmo::image::{Display, Frame, LevelErrors, ToneMap};
 use atmo_gpu::{Gpu, GpuError};
 

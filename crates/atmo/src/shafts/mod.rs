@@ -40,6 +40,7 @@ pub use planes::SamplePlanes;
 pub use scene::Scene;
 
 use crate::error::{check_range, Result};
+use crate::fast::interleaved_offset;
 use crate::image::Frame;
 use crate::view::Camera;
 
@@ -98,14 +99,4 @@ pub fn render_rays(camera: &Camera, shade: impl Fn(Vec3, f32) -> Vec3 + Sync) ->
             }
         });
     frame
-}
-
-/// A per-pixel offset in [0, 1) that neighbouring pixels spread evenly: Jimenez's
-/// interleaved gradient noise (2014). The plane method shifts its sub-sample planes by
-/// it (interleaved sampling, Keller and Heidrich 2001), so that a gobo's thin beams,
-/// sampled too sparsely along the ray, give fine grain instead of bands.
-#[inline]
-pub fn interleaved_offset(x: u32, y: u32) -> f32 {
-    let f = (0.067_110_56 * x as f32 + 0.005_837_15 * y as f32).fract();
-    (52.982_918 * f).fract()
 }

@@ -26,12 +26,12 @@ use std::borrow::Cow;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::interleaved_offset;
 use super::shadow_map::ShadowMap;
 use super::spotlight::Spotlight;
 use super::surface::{first_hit, surface_radiance, SurfacePoint};
 use super::tables::{AttenuationTable, LightMap, PhaseTable};
 use super::Scene;
+use crate::fast::interleaved_offset;
 use crate::geometry::Aabb;
 use crate::image::Frame;
 

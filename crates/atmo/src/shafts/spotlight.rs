@@ -12,6 +12,8 @@
 
 use glam::{DVec3, Mat3, Vec3};
 
+use crate::fast::fast_atan;
+
 /// How the intensity falls from full at the beam edge to zero at the field edge.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Falloff {
@@ -244,24 +246,6 @@ impl Spotlight {
     }
 }
 
-/// `atan(x)` for `x >= 0` within 2e-5 rad (0.001 degree): the off-axis angle in the beam's soft edge,
-/// where `f32::atan` was a tenth of the frame time. Range-reduced to [0, 1] by
-/// `atan x = pi/2 - atan(1/x)`, then a degree-9 odd minimax polynomial (Abramowitz and
-/// Stegun 4.4.49).
-#[inline]
-fn fast_atan(x: f32) -> f32 {
-    let (y, flip) = if x > 1.0 { (1.0 / x, true) } else { (x, false) };
-    let y2 = y * y;
-    let p = y
-        * (0.999_866
-            + y2 * (-0.330_299_5 + y2 * (0.180_141 + y2 * (-0.085_133_0 + y2 * 0.020_835_1))));
-    if flip {
-        std::f32::consts::FRAC_PI_2 - p
-    } else {
-        p
-    }
-}
-
 /// The rows of the world-to-light rotation for a beam along `axis` with `up` as the
 /// light's `y` (made perpendicular); `None` when they are parallel.
 pub fn light_frame(axis: Vec3, up: Vec3) -> Option<Mat3> {
@@ -307,15 +291,6 @@ mod tests {
         let outer = Vec3::new(0.3, 0.0, 1.0);
         let (linear, smooth) = (light(Falloff::Linear), light(Falloff::Smooth));
         assert!(smooth.intensity_toward(outer).x < linear.intensity_toward(outer).x - 5.0);
-    }
-
-    #[test]
-    fn fast_atan_is_within_its_stated_error() {
-        let worst = (0..=100_000)
-            .map(|k| k as f32 * 1e-4)
-            .map(|x| (fast_atan(x) - x.atan()).abs())
-            .fold(0.0, f32::max);
-        assert!(worst < 2e-5, "{worst}");
     }
 
     #[test]

@@ -18,25 +18,9 @@ use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::Atmosphere;
 #[cfg(feature = "table")]
 use crate::error::Result;
+use crate::fast::fast_acos;
 use crate::image::Frame;
 use crate::view::{Camera, Sun};
-
-/// `acos(x)` within 7e-5 rad for x in [-1, 1] (Abramowitz and Stegun 4.4.45), with no
-/// library call, so loops over it vectorise; grid cells are 0.05 rad wide, so pictures
-/// cannot tell it from the exact function.
-#[inline]
-fn fast_acos(x: f32) -> f32 {
-    // Not `min`, which would turn NaN into 1: NaN in, NaN out.
-    let a = x.abs();
-    let a = if a > 1.0 { 1.0 } else { a };
-    let r =
-        (1.0 - a).sqrt() * (1.570_728_8 + a * (-0.212_114_4 + a * (0.074_261 - 0.018_729_3 * a)));
-    if x < 0.0 {
-        std::f32::consts::PI - r
-    } else {
-        r
-    }
-}
 
 /// The sky's own frame (x east, y north, z up, centred on the planet's axis through
 /// the viewpoint) from the world frame (x east, y up, z south; [`crate::view`]): a
@@ -452,15 +436,5 @@ mod tests {
             .map(|k| at(radius - pixel + 0.0002 * k as f32))
             .collect();
         assert!(steps.windows(2).all(|w| w[1] <= w[0]), "{steps:?}");
-    }
-
-    #[test]
-    fn fast_acos_is_within_its_stated_error() {
-        let worst = (0..=20_000)
-            .map(|k| -1.0 + k as f32 / 10_000.0)
-            .map(|x| (fast_acos(x) - x.acos()).abs())
-            .fold(0.0, f32::max);
-        assert!(worst < 7e-5, "{worst}");
-        assert!(fast_acos(f32::NAN).is_nan());
     }
 }
