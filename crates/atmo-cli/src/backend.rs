@@ -58,15 +58,25 @@ impl BackendArgs {
     }
 }
 
-/// A GPU error as the CLI reports it: what the user can act on (no adapter, a missing
-/// feature, a limit, bad input) exits with 2, like any other bad input.
+/// A GPU error as the CLI reports it, with the flag that is the way out: what the user
+/// can act on (no adapter, a missing feature, a limit, bad input) exits with 2, like
+/// any other bad input.
 pub fn gpu_error(e: GpuError) -> anyhow::Error {
+    // The library's own errors about the input stand as they are.
+    let e = match e {
+        GpuError::Atmo(e) => return e.into(),
+        e => e,
+    };
+    let flag = match e {
+        GpuError::NoMatch { .. } => "--adapter names one of those, or --backend cpu",
+        _ => "--backend cpu renders on the CPU",
+    };
+    let message = format!("{e} ({flag})");
     match e {
-        GpuError::Atmo(e) => e.into(),
         GpuError::NoAdapter
         | GpuError::NoMatch { .. }
         | GpuError::MissingFeature { .. }
-        | GpuError::OverLimit { .. } => atmo::Error::Invalid(e.to_string()).into(),
-        other => other.into(),
+        | GpuError::OverLimit { .. } => atmo::Error::Invalid(message).into(),
+        _ => anyhow::anyhow!(message),
     }
 }

@@ -10,8 +10,8 @@
 // Fixed-point ln Gamma increments, [x][z][y].
 @group(0) @binding(2) var<storage, read_write> cells: array<atomic<i32>>;
 
-// How far across the light a footprint reaches, in standard deviations (FOOTPRINT).
-const FOOTPRINT: f32 = 3.5;
+// FOOTPRINT, how far across the light a footprint reaches in standard deviations,
+// comes from the prelude (atmo::clouds::buffer::FOOTPRINT).
 
 // Cells along y whose shares are kept in workgroup memory; longer runs recompute.
 const CACHED: u32 = 1024u;

@@ -52,9 +52,8 @@ struct ShellParams {
 // Out: linear sRGB, [elevation][azimuth][rgb].
 @group(0) @binding(2) var<storage, read_write> map: array<f32>;
 
-// The moments a Rayleigh in-scattering needs (atmo::sky::light_map's MOMENTS).
-const MOMENTS: u32 = 5u;
-const MAX_LANES: u32 = 16u;
+// MOMENTS (the moments a Rayleigh in-scattering needs) and MAX_LANES come from the
+// prelude (atmo::sky::shells::export).
 
 // The light map of sunlight at shell `shell`, lane `l` (LightMap::sample).
 fn light_map(shell: u32, mu_s: f32, l: u32) -> vec4<f32> {

@@ -101,7 +101,7 @@ impl GpuClouds {
                 bytes,
                 limit,
                 name,
-                "the buffer resolution (--resolution)",
+                "buffer.resolution",
             )?;
         }
         let particle_buffer = gpu.storage(

@@ -28,11 +28,13 @@ pub struct Rendered {
 /// What can go wrong on the GPU, with what to do about it.
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
-    #[error("no GPU adapter found; install mesa-vulkan-drivers for a software one, or use --backend cpu")]
+    #[error("no GPU adapter found; install mesa-vulkan-drivers for a software one, or render on the CPU")]
     NoAdapter,
-    #[error("no GPU adapter matches --adapter {wanted:?}; found: {found}")]
+    #[error("no GPU adapter matches {wanted:?}; found: {found}")]
     NoMatch { wanted: String, found: String },
-    #[error("the GPU adapter {adapter} lacks {missing}; use another adapter (--adapter) or --backend cpu")]
+    #[error(
+        "the GPU adapter {adapter} lacks {missing}; choose another adapter or render on the CPU"
+    )]
     MissingFeature { adapter: String, missing: String },
     #[error("could not open the GPU device: {0}")]
     Device(String),
@@ -44,9 +46,9 @@ pub enum GpuError {
         max: u64,
         setting: String,
     },
-    #[error("the GPU ran out of memory in {0}; lower the resolution or use --backend cpu")]
+    #[error("the GPU ran out of memory in {0}; lower the resolution or render on the CPU")]
     OutOfMemory(String),
-    #[error("the GPU device was lost in {what} ({reason}); try again or use --backend cpu")]
+    #[error("the GPU device was lost in {what} ({reason}); try again or render on the CPU")]
     DeviceLost { what: String, reason: String },
     #[error("GPU error in {what}: {message}")]
     Internal { what: String, message: String },

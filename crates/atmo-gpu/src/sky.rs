@@ -368,8 +368,8 @@ impl<'a> GpuSkyModel<'a> {
     pub fn new(gpu: &Gpu, model: &'a SkyModel) -> Result<Self, GpuError> {
         let arrays = model.arrays().ok_or_else(|| {
             atmo::Error::Invalid(
-                "aerosols in the higher orders (--multiple-mie) run on the CPU only; \
-                 use --backend cpu"
+                "aerosols in the higher orders (multiple_mie) are drawn on the CPU only; \
+                 render this model on the CPU"
                     .into(),
             )
         })?;
@@ -465,12 +465,12 @@ impl<'a> GpuSkyModel<'a> {
         let sky_params = of(&arrays.sky);
         let ground_params = of(&arrays.ground_rays);
         let bytes = bytemuck::cast_slice(&data);
-        let buffer = gpu.storage("the sky model's maps", bytes, "--shells or --directions")?;
+        let buffer = gpu.storage("the sky model's maps", bytes, "shells or directions")?;
         let map = |grid: &DirectionGrid, what: &str| {
             gpu.output(
                 what,
                 (grid.azimuths * grid.elevations * 12) as u64,
-                "--directions",
+                "directions",
             )
         };
         let module = wgsl::module(gpu, "sky_shells.wgsl")?;

@@ -122,6 +122,7 @@ fn the_prelude_carries_every_phase_code() {
             "{name} missing from {prelude}"
         );
     }
+    assert!(prelude.contains("const FOOTPRINT: f32 = 3.5;"), "{prelude}");
     assert!(prelude.contains(&format!(
         "const OBJECT_MESH: u32 = {}u;",
         atmo_gpu::wgsl::OBJECT_MESH

@@ -11,6 +11,13 @@ use super::{DirectionGrid, SkyModel};
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::PhaseFunction;
 
+/// Moments of the scattered light a Rayleigh in-scattering needs, per shell and sun bin
+/// (`sky::shells::light_map`); the GPU's shaders read it as `MOMENTS`.
+pub const MOMENTS: usize = super::light_map::MOMENTS;
+
+/// The most lanes of four spectral channels a model has; the shaders' `MAX_LANES`.
+pub const MAX_LANES: usize = super::maps::MAX_CHANNELS / 4;
+
 /// The samples of a bundle of view rays, one ray per grid elevation.
 #[derive(Debug, Clone)]
 pub struct RayArrays {
