@@ -137,3 +137,36 @@ fn bad_shafts_input_exits_2_and_writes_nothing() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn compare_refuses_pictures_with_nan_or_infinity() {
+    let dir = scratch("compare-nan");
+    let exr = |name: &str, value: f32| {
+        let path = dir.join(name);
+        image::Rgb32FImage::from_pixel(4, 3, image::Rgb([value; 3]))
+            .save(&path)
+            .unwrap();
+        path.to_string_lossy().into_owned()
+    };
+    let (black, nan, inf) = (
+        exr("black.exr", 0.0),
+        exr("nan.exr", f32::NAN),
+        exr("inf.exr", f32::NEG_INFINITY),
+    );
+    let diff = dir.join("difference.png");
+    for (a, b, which) in [(&nan, &black, "first"), (&black, &inf, "second")] {
+        let o = atmo(&["compare", a, b, "-o", diff.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{stderr}");
+        assert!(
+            stderr.contains(&format!(
+                "the {which} picture has 36 of 36 values that are not finite"
+            )),
+            "{stderr}"
+        );
+        assert!(!diff.exists());
+    }
+    let o = atmo(&["compare", &black, &black, "-o", diff.to_str().unwrap()]);
+    assert!(o.status.success() && diff.exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -219,6 +219,16 @@ impl Frame {
     }
 }
 
+impl Frame {
+    /// How many channel values are NaN or infinite.
+    pub fn non_finite(&self) -> usize {
+        self.pixels
+            .iter()
+            .map(|p| p.to_array().iter().filter(|v| !v.is_finite()).count())
+            .sum()
+    }
+}
+
 /// How far two pictures are apart as a display shows them, in 8-bit levels (0-255,
 /// not rounded): after the same exposure, tone map and sRGB curve.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -256,6 +266,18 @@ impl Frame {
                 "the pictures differ in size: {} x {} and {} x {}",
                 self.width, self.height, other.width, other.height
             )));
+        }
+        // A NaN or infinite value has no level: a picture with one is refused, never
+        // measured (NaN would compare as 0 and call it identical).
+        for (which, frame) in [("first", self), ("second", other)] {
+            let bad = frame.non_finite();
+            if bad > 0 {
+                return Err(Error::Invalid(format!(
+                    "the {which} picture has {bad} of {} values that are not finite (NaN or \
+                     infinite); it cannot be compared",
+                    3 * frame.pixels.len()
+                )));
+            }
         }
         let (mut sum, mut max) = (0.0f64, 0.0f64);
         for (a, b) in self.pixels.iter().zip(&other.pixels) {
@@ -390,5 +412,30 @@ mod tests {
             .to_string()
             .contains("budget"));
         assert!(Frame::check_size(1920, 1080).is_ok());
+    }
+
+    #[test]
+    fn pictures_with_nan_or_infinity_are_refused_not_called_identical() {
+        let display = Display {
+            exposure: 1.0,
+            tone: ToneMap::Exponential,
+        };
+        let black = Frame::new(4, 3);
+        let mut nan = Frame::new(4, 3);
+        nan.pixels.iter_mut().for_each(|p| *p = Vec3::NAN);
+        let mut one_inf = Frame::new(4, 3);
+        one_inf.pixels[5].y = f32::NEG_INFINITY;
+        assert_eq!(
+            (nan.non_finite(), one_inf.non_finite(), black.non_finite()),
+            (36, 1, 0)
+        );
+        let e = nan.level_errors(&black, display).unwrap_err().to_string();
+        assert!(e.contains("first picture has 36 of 36"), "{e}");
+        let e = black
+            .level_errors(&one_inf, display)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("second picture has 1 of 36"), "{e}");
+        assert_eq!(black.level_errors(&black, display).unwrap().rms, 0.0);
     }
 }
