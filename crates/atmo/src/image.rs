@@ -328,14 +328,17 @@ pub fn write_atomically(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
 ) -> Result<()> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| Error::Invalid(format!("{}: not a file name", path.display())))?;
-    let tmp: PathBuf = path.with_file_name(format!(
-        ".{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    if path.file_name().is_none() {
+        return Err(Error::Invalid(format!(
+            "{}: not a file name",
+            path.display()
+        )));
+    }
+    // A short name of its own, so that any file name the system allows can be written
+    // (a name built from the target's passed the 255-byte limit for long ones).
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp: PathBuf = path.with_file_name(format!(".atmo-{}-{n}.tmp", std::process::id()));
     let result = (|| {
         let file = File::create(&tmp).map_err(io(&tmp))?;
         let mut w = BufWriter::new(file);
@@ -437,5 +440,21 @@ mod tests {
             .to_string();
         assert!(e.contains("second picture has 1 of 36"), "{e}");
         assert_eq!(black.level_errors(&black, display).unwrap().rms, 0.0);
+    }
+
+    #[test]
+    fn the_longest_file_names_can_be_written() {
+        let dir = std::env::temp_dir().join(format!("atmo-long-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 251 characters and ".exr": the most most file systems allow.
+        let path = dir.join(format!("{}.exr", "a".repeat(251)));
+        Frame::new(2, 2).write(&path, 1.0, ToneMap::Clamp).unwrap();
+        assert!(path.exists());
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            1,
+            "a temporary was left"
+        );
+        std::fs::remove_dir_all(dir).unwrap();
     }
 }
