@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{atmo, scratch, SMALL_CLOUD};
+use common::{atmo, files_in, scratch, SMALL_CLOUD};
 
 #[test]
 fn clouds_render_from_the_generator_or_a_file_and_animate() {
@@ -133,4 +133,29 @@ fn clouds_in_front_of_the_sky() {
     let corner = img.get_pixel(2, 2).0;
     assert!(corner[2] > 80 && corner[2] > corner[0], "{corner:?}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn saved_particles_are_written_only_once_everything_is_valid() {
+    let dir = scratch("clouds-save");
+    let (saved, out) = (dir.join("cloud.csv"), dir.join("cloud.png"));
+    for bad in [["--fov", "0"], ["--forward", "2"], ["--resolution", "1"]] {
+        let mut args = vec!["clouds", "--generate", "cumulus", "--particles", "50"];
+        args.extend([
+            "--save-particles",
+            saved.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        args.extend(bad);
+        let o = atmo(&args);
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{bad:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(files_in(&dir), 0, "{bad:?} left a file");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
 }

@@ -267,7 +267,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         }
     };
     if let Some(path) = &args.save_particles {
-        files::write(path, &particles)?;
+        check_folder(path)?;
     }
     let camera = camera_for(&particles, &args)?;
     let splat = match args.splat {
@@ -326,6 +326,10 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     let start = Instant::now();
     renderer.light(&particles, to_sun, args.forward, splat)?;
     let light_ms = start.elapsed().as_secs_f64() * 1e3;
+    // Everything is validated now (the light pass checked the buffer's settings).
+    if let Some(path) = &args.save_particles {
+        files::write(path, &particles)?;
+    }
     match args.animate {
         None => {
             let start = Instant::now();
