@@ -372,3 +372,55 @@ fn the_picture_does_not_depend_on_the_thread_count() {
     assert_eq!(one.0, three.0);
     assert_eq!(one.1, two.1);
 }
+
+/// The bytes of a PNG file that claims `width` x `height` RGB pixels and holds none.
+fn png_header_only(width: u32, height: u32) -> Vec<u8> {
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut c = !0u32;
+        for &b in bytes {
+            c ^= b as u32;
+            for _ in 0..8 {
+                c = if c & 1 != 0 {
+                    0xEDB8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
+            }
+        }
+        !c
+    }
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(width.to_be_bytes());
+    ihdr.extend(height.to_be_bytes());
+    ihdr.extend([8, 2, 0, 0, 0]);
+    let mut png = vec![137, 80, 78, 71, 13, 10, 26, 10];
+    png.extend(13u32.to_be_bytes());
+    png.extend(&ihdr);
+    png.extend(crc32(&ihdr).to_be_bytes());
+    // An empty data chunk: a decoder reads the header up to the first one.
+    png.extend(0u32.to_be_bytes());
+    png.extend(b"IDAT");
+    png.extend(crc32(b"IDAT").to_be_bytes());
+    png.extend(0u32.to_be_bytes());
+    png.extend(b"IEND");
+    png.extend(crc32(b"IEND").to_be_bytes());
+    png
+}
+
+#[test]
+fn a_gobo_claiming_a_huge_image_is_refused_before_decoding() {
+    let dir = std::env::temp_dir().join(format!("atmo-gobo-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // 20000^2 pixels would take 4.8 GB as linear texels; the file has 69 bytes.
+    std::fs::write(dir.join("huge.png"), png_header_only(20_000, 20_000)).unwrap();
+    let scene =
+        small_scene(SPHERE).replacen("kelvin = 3200", "kelvin = 3200\ngobo = \"huge.png\"", 1);
+    let message = Scene::from_toml_str(&scene, "test.toml", &dir)
+        .expect_err("a 20000^2 gobo is over the limit")
+        .to_string();
+    assert!(
+        message.contains("20000 x 20000") && message.contains("4096"),
+        "{message}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -537,11 +537,36 @@ impl SpotlightSpec {
     }
 }
 
-/// A gobo from an image file: its sRGB values decoded to linear transmittance.
+/// The largest gobo image, pixels a side: four times a projector's finest gobo, and
+/// 200 MB as linear texels.
+pub const GOBO_MAX_SIDE: u32 = 4096;
+
+/// A gobo from an image file: its sRGB values decoded to linear transmittance. The size
+/// is read from the file's header and checked before anything is decoded: a small file
+/// can claim a huge image.
 fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
-    let image = image::open(path)
-        .map_err(|e| Error::Invalid(format!("gobo {}: {e}", path.display())))?
-        .to_rgb32f();
+    let bad = |e: image::ImageError| Error::Invalid(format!("gobo {}: {e}", path.display()));
+    let reader = || {
+        image::ImageReader::open(path)
+            .map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?
+            .with_guessed_format()
+            .map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })
+    };
+    let (width, height) = reader()?.into_dimensions().map_err(bad)?;
+    if width.max(height) > GOBO_MAX_SIDE {
+        return Err(Error::Invalid(format!(
+            "gobo {}: {width} x {height} pixels is above the limit of {GOBO_MAX_SIDE} a side; \
+             scale the image down",
+            path.display()
+        )));
+    }
+    let image = reader()?.decode().map_err(bad)?.to_rgb32f();
     let texels = image
         .pixels()
         .map(|p| Vec3::from(p.0.map(crate::image::srgb_decode)))
