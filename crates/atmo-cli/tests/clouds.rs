@@ -90,6 +90,10 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
             "budget",
         ),
         (vec!["--generate", "cumulus", "--forward", "2"], "forward"),
+        (
+            vec!["--generate", "cumulus", "--view-azimuth", "NaN"],
+            "--view-azimuth = NaN is out of range: allowed [-360, 360]",
+        ),
     ];
     for (extra, wanted) in cases {
         let mut args = vec![

@@ -220,6 +220,8 @@ fn toward_sun(elevation_deg: f32, azimuth_deg: f32) -> atmo::Result<Vec3> {
 fn camera_for(particles: &[Particle], args: &CloudsArgs) -> atmo::Result<Camera> {
     check_range("--fov", args.fov as f64, 1.0, 170.0)?;
     check_range("--distance", args.distance as f64, 0.1, 1000.0)?;
+    check_range("--view-azimuth", args.view_azimuth as f64, -360.0, 360.0)?;
+    check_range("--view-height", args.view_height as f64, -1e5, 1e5)?;
     Frame::check_size(args.width, args.height)?;
     let (lo, hi) = particles.iter().fold(
         (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
