@@ -84,6 +84,8 @@ impl Camera {
         fov: Fov,
         (width, height): (u32, u32),
     ) -> Result<Camera> {
+        finite("camera.position", position)?;
+        finite("camera.look_at", target)?;
         let forward = (target - position).try_normalize().ok_or_else(|| {
             Error::Invalid(format!(
                 "camera.look_at = {target:?} equals camera.position: the camera has no view direction"
@@ -118,6 +120,7 @@ impl Camera {
     /// The whole dome from `position`: a fisheye looking straight up, north at the top of
     /// the picture and east to the left (as seen from below).
     pub fn dome(position: Vec3, (width, height): (u32, u32)) -> Result<Camera> {
+        finite("camera.position", position)?;
         Frame::check_size(width, height)?;
         Ok(Camera {
             position,
@@ -139,11 +142,7 @@ impl Camera {
         fov: Fov,
         (width, height): (u32, u32),
     ) -> Result<Camera> {
-        if !position.is_finite() {
-            return Err(Error::Invalid(format!(
-                "camera.position = {position:?} is not finite"
-            )));
-        }
+        finite("camera.position", position)?;
         Frame::check_size(width, height)?;
         let (tan_half_width, tan_half_height) = fov.tan_halves(width, height)?;
         Ok(Camera {
@@ -255,6 +254,15 @@ impl Camera {
                 up: self.up,
             },
         }
+    }
+}
+
+/// Refuses a point with a NaN or infinite coordinate, naming `field`.
+fn finite(field: &str, p: Vec3) -> Result<()> {
+    if p.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::Invalid(format!("{field} = {p:?} is not finite")))
     }
 }
 
@@ -415,6 +423,9 @@ mod tests {
         let e = |r: Result<Camera>| r.unwrap_err().to_string();
         let at = |t, up, fov| Camera::look_at(Vec3::ZERO, t, up, fov, (10, 10));
         assert!(e(at(Vec3::ZERO, Vec3::Y, Fov::Vertical(40.0))).contains("camera.look_at"));
+        let nan = Vec3::new(f32::NAN, 0.0, 0.0);
+        assert!(e(at(nan, Vec3::Y, Fov::Vertical(40.0))).contains("camera.look_at = Vec3(NaN"));
+        assert!(e(Camera::dome(nan, (10, 10))).contains("camera.position"));
         assert!(e(at(Vec3::Y, Vec3::Y, Fov::Vertical(40.0))).contains("camera.up"));
         assert!(e(at(Vec3::X, Vec3::Y, Fov::Vertical(180.0))).contains("camera.fov_deg"));
         let yaw = Camera::yaw_pitch(Vec3::ZERO, 0.0, 95.0, Fov::Vertical(40.0), (10, 10));
