@@ -48,6 +48,9 @@ fn clouds_render_from_the_generator_or_a_file_and_animate() {
         "sun",
         "--frames",
         "3",
+        // The sun goes round from 300 deg: past 360 on the way.
+        "--sun-azimuth",
+        "300",
         "-o",
         frames.to_str().unwrap(),
     ];

@@ -210,11 +210,6 @@ enum Animate {
     Wind,
 }
 
-/// Unit vector toward the sun at `elevation_deg` and `azimuth_deg` (world frame).
-fn toward_sun(elevation_deg: f32, azimuth_deg: f32) -> atmo::Result<Vec3> {
-    Ok(Sun::from_degrees(elevation_deg as f64, azimuth_deg as f64)?.toward())
-}
-
 /// The camera looking at `particles`' centre from `azimuth_deg`, `distance` widths
 /// away, at `height` m.
 fn camera_for(particles: &[Particle], args: &CloudsArgs) -> atmo::Result<Camera> {
@@ -292,12 +287,15 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     } else {
         None
     };
-    // Sunlight and sky light at the cloud, and what is behind it, for a sun's azimuth.
-    let lighting = |to_sun: Vec3, azimuth: f32| -> atmo::Result<(Lighting, Option<Frame>)> {
-        Ok(match &sky {
+    // The sun at --sun-elevation and `azimuth_deg`.
+    let sun_at =
+        |azimuth_deg: f32| Sun::from_degrees(args.sun_elevation as f64, azimuth_deg as f64);
+    // Sunlight and sky light at the cloud, and what is behind it.
+    let lighting = |sun: Sun| -> (Lighting, Option<Frame>) {
+        match &sky {
             None => (
                 Lighting {
-                    to_sun,
+                    to_sun: sun.toward(),
                     sun: Vec3::ONE,
                     ambient: Vec3::new(0.03, 0.04, 0.06),
                     phase,
@@ -305,19 +303,18 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                 None,
             ),
             Some(sky) => {
-                let sun = Sun::from_degrees(args.sun_elevation as f64, azimuth as f64)?;
-                let (sun, ambient, background) = sky.at(sun, &camera);
+                let (sunlight, ambient, background) = sky.at(sun, &camera);
                 let light = Lighting {
-                    to_sun,
-                    sun,
+                    to_sun: sun.toward(),
+                    sun: sunlight,
                     ambient,
                     phase,
                 };
                 (light, Some(background))
             }
-        })
+        }
     };
-    let to_sun = toward_sun(args.sun_elevation, args.sun_azimuth)?;
+    let sun = sun_at(args.sun_azimuth)?;
     let mut renderer = match args.device.open()? {
         Some(gpu) => {
             let clouds = GpuClouds::new(&gpu, &particles, args.resolution).map_err(gpu_error)?;
@@ -326,7 +323,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         None => Renderer::Cpu(None, args.resolution),
     };
     let start = Instant::now();
-    renderer.light(&particles, to_sun, args.forward, splat)?;
+    renderer.light(&particles, sun.toward(), args.forward, splat)?;
     let light_ms = start.elapsed().as_secs_f64() * 1e3;
     // Everything is validated now (the light pass checked the buffer's settings).
     if let Some(path) = &args.save_particles {
@@ -335,7 +332,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     match args.animate {
         None => {
             let start = Instant::now();
-            let (light, background) = lighting(to_sun, args.sun_azimuth)?;
+            let (light, background) = lighting(sun);
             let frame = renderer.draw(&particles, &camera, &light, background.as_ref())?;
             let draw_ms = start.elapsed().as_secs_f64() * 1e3;
             frame.write(&args.output, display.exposure, display.tone)?;
@@ -356,12 +353,12 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                 (args.width, args.height),
                 display,
                 |k, frame| {
-                    let azimuth = match animate {
-                        Animate::Sun => args.sun_azimuth + 360.0 * k as f32 / args.frames as f32,
-                        Animate::Wind => args.sun_azimuth,
-                    };
-                    let to_sun = match animate {
-                        Animate::Sun => toward_sun(args.sun_elevation, azimuth)?,
+                    let sun = match animate {
+                        // Once round, the azimuth kept in [0, 360).
+                        Animate::Sun => sun_at(
+                            (args.sun_azimuth + 360.0 * k as f32 / args.frames as f32)
+                                .rem_euclid(360.0),
+                        )?,
                         Animate::Wind => {
                             // A sheared breeze: 6 m/s at the base, faster aloft, 4 s a frame.
                             if k > 0 {
@@ -374,11 +371,11 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                                     p.position += Vec3::new(speed, 0.0, 0.3 * speed) * 4.0;
                                 }
                             }
-                            to_sun
+                            sun
                         }
                     };
-                    renderer.light(&particles, to_sun, args.forward, splat)?;
-                    let (light, background) = lighting(to_sun, azimuth)?;
+                    renderer.light(&particles, sun.toward(), args.forward, splat)?;
+                    let (light, background) = lighting(sun);
                     *frame = renderer.draw(&particles, &camera, &light, background.as_ref())?;
                     Ok(())
                 },
