@@ -545,20 +545,19 @@ pub const GOBO_MAX_SIDE: u32 = 4096;
 /// is read from the file's header and checked before anything is decoded: a small file
 /// can claim a huge image.
 fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
+    use image::ImageDecoder as _;
     let bad = |e: image::ImageError| Error::Invalid(format!("gobo {}: {e}", path.display()));
-    let reader = || {
-        image::ImageReader::open(path)
-            .map_err(|source| Error::Io {
-                path: path.to_path_buf(),
-                source,
-            })?
-            .with_guessed_format()
-            .map_err(|source| Error::Io {
-                path: path.to_path_buf(),
-                source,
-            })
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
     };
-    let (width, height) = reader()?.into_dimensions().map_err(bad)?;
+    let decoder = image::ImageReader::open(path)
+        .map_err(io)?
+        .with_guessed_format()
+        .map_err(io)?
+        .into_decoder()
+        .map_err(bad)?;
+    let (width, height) = decoder.dimensions();
     if width.max(height) > GOBO_MAX_SIDE {
         return Err(Error::Invalid(format!(
             "gobo {}: {width} x {height} pixels is above the limit of {GOBO_MAX_SIDE} a side; \
@@ -566,7 +565,9 @@ fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
             path.display()
         )));
     }
-    let image = reader()?.decode().map_err(bad)?.to_rgb32f();
+    let image = image::DynamicImage::from_decoder(decoder)
+        .map_err(bad)?
+        .to_rgb32f();
     let texels = image
         .pixels()
         .map(|p| Vec3::from(p.0.map(crate::image::srgb_decode)))
