@@ -19,7 +19,7 @@ use crate::backend::gpu_error;
 
 /// Median time of `runs` renders by the plane method after one warm-up, and the last
 /// frame.
-pub(crate) fn time_planes(scene: &Scene, runs: usize) -> (f64, Frame) {
+fn time_planes(scene: &Scene, runs: usize) -> (f64, Frame) {
     let mut frame = SamplePlanes::new(scene).render();
     let ms = median(
         (0..runs)
