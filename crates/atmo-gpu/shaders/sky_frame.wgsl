@@ -2,6 +2,10 @@
 // map (sky 4.2), below the horizon in the ground map (a model's) or black (a table's),
 // plus the sun's disc; both edges anti-aliased over one pixel. Follows
 // atmo::sky::frame (SkyPicture::render) operation for operation.
+//
+// Drawn as one full-screen triangle at the far plane into the caller's colour target,
+// so that a depth test (less-equal, or greater-equal for reversed z) leaves the sky only
+// where the caller's depth buffer is still at the far plane.
 
 // Mirrors atmo_gpu::sky::SkyFrameParams.
 struct SkyFrameParams {
@@ -35,15 +39,19 @@ struct SkyFrameParams {
     ground_y_last: f32,
     ground_azimuths: u32,
     ground_lookup: vec4<f32>,
+    // The target's pixel that is the picture's (0, 0) (a viewport's corner).
+    corner: vec2<f32>,
+    // Multiplies the radiance written.
+    exposure: f32,
+    // The far plane's depth: 1, or 0 for reversed z.
+    depth: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: SkyFrameParams;
 // The skylight map, [elevation][azimuth][channel].
 @group(0) @binding(1) var<storage, read> map: array<f32>;
-// Out: linear sRGB radiance per pixel, rows top to bottom.
-@group(0) @binding(2) var<storage, read_write> frame: array<vec4<f32>>;
 // The ground map, [elevation][azimuth][channel] (unused without one).
-@group(0) @binding(3) var<storage, read> ground: array<f32>;
+@group(0) @binding(2) var<storage, read> ground: array<f32>;
 
 fn texel(is_ground: bool, at: u32) -> vec3<f32> {
     if is_ground {
@@ -76,12 +84,17 @@ fn sample(is_ground: bool, azimuth: f32, elevation: f32) -> vec3<f32> {
     return mix(lo, hi, fy);
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= params.width || id.y >= params.height {
-        return;
-    }
-    let p = vec2<f32>(f32(id.x) + 0.5, f32(id.y) + 0.5);
+// A triangle covering the target, at the far plane.
+@vertex
+fn vertex(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, params.depth, 1.0);
+}
+
+// Linear sRGB radiance times the exposure at the pixel centre `position`.
+@fragment
+fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let p = position.xy - params.corner;
     var d: vec3<f32>;
     var rgb = vec3<f32>(0.0);
     if params.fisheye != 0u {
@@ -89,8 +102,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let q = vec2<f32>(p.x - centre.x, centre.y - p.y) / params.radius;
         let rho = length(q);
         if rho > 1.0 {
-            frame[id.y * params.width + id.x] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-            return;
+            // Outside the dome: the target keeps what it has (black when cleared so).
+            discard;
         }
         let zenith = rho * HALF_PI;
         var across = vec2<f32>(0.0, 1.0);
@@ -125,5 +138,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let angle = asin(min(length(cross(d, sun)) / len, 1.0));
         rgb += params.sun_rgb.xyz * clamp((params.sun_radius - angle) / params.pixel + 0.5, 0.0, 1.0);
     }
-    frame[id.y * params.width + id.x] = vec4<f32>(rgb, 1.0);
+    return vec4<f32>(params.exposure * rgb, 1.0);
 }

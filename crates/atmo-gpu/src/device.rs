@@ -35,54 +35,19 @@ impl Gpu {
     pub fn new(choice: Option<&str>) -> Result<Gpu, GpuError> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
-        if adapters.is_empty() {
-            return Err(GpuError::NoAdapter);
-        }
-        let wanted = choice
-            .map(str::to_owned)
-            .or_else(|| std::env::var("WGPU_ADAPTER_NAME").ok())
-            .map(|s| s.to_lowercase());
-        let matches = |a: &wgpu::Adapter| {
-            let info = a.get_info();
-            wanted.as_ref().is_none_or(|w| {
-                info.name.to_lowercase().contains(w.as_str())
-                    || info.backend.to_str().eq_ignore_ascii_case(w)
-            })
-        };
-        let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
-            wgpu::DeviceType::DiscreteGpu => 0,
-            wgpu::DeviceType::IntegratedGpu => 1,
-            wgpu::DeviceType::VirtualGpu => 2,
-            wgpu::DeviceType::Cpu => 3,
-            wgpu::DeviceType::Other => 4,
-        };
-        let names: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
-        let adapter = adapters
-            .into_iter()
-            .filter(matches)
-            .min_by_key(rank)
-            .ok_or_else(|| GpuError::NoMatch {
-                wanted: wanted.clone().unwrap_or_default(),
-                found: names.join("; "),
-            })?;
+        let adapter = choose_adapter(&instance, choice, None)?;
+        Gpu::open(&adapter)
+    }
+
+    /// Opens a device on `adapter` with the features atmo needs (refused by name where
+    /// the adapter lacks one), timestamps where it has them, and the adapter's own limits.
+    pub fn open(adapter: &wgpu::Adapter) -> Result<Gpu, GpuError> {
         let info = adapter.get_info();
         let features = adapter.features();
-        for (feature, why) in REQUIRED_FEATURES {
-            if !features.contains(*feature) {
-                return Err(GpuError::MissingFeature {
-                    adapter: describe(&info),
-                    missing: why.to_string(),
-                });
-            }
-        }
-        // Timestamps between the passes of one encoder, where the adapter has them.
-        let timing =
-            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
-        let timestamps = features.contains(timing);
+        missing_feature(features, &info)?;
         let mut required = wgpu::Features::FLOAT32_BLENDABLE;
-        if timestamps {
-            required |= timing;
+        if features.contains(TIMING) {
+            required |= TIMING;
         }
         // The adapter's own limits: the largest buffers and 3-D textures it has, which
         // `check_limit` compares requests against before anything is allocated.
@@ -93,19 +58,35 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
-        let lost = Arc::new(Mutex::new(None));
-        let on_lost = lost.clone();
-        device.set_device_lost_callback(move |reason, message| {
+        let gpu = Gpu::from_device(device, queue, info)?;
+        let on_lost = gpu.lost.clone();
+        gpu.device.set_device_lost_callback(move |reason, message| {
             *on_lost.lock().unwrap() = Some(format!("{reason:?}: {message}"));
         });
         // Errors outside a `run` scope (none are expected) are reported, not panicked on.
-        device.on_uncaptured_error(Arc::new(|e| eprintln!("atmo-gpu: {e}")));
+        gpu.device
+            .on_uncaptured_error(Arc::new(|e| eprintln!("atmo-gpu: {e}")));
+        Ok(gpu)
+    }
+
+    /// atmo on a device the caller made (its own renderer's): the device must have
+    /// `FLOAT32_BLENDABLE` (refused by name otherwise); passes are timed where it has
+    /// `TIMESTAMP_QUERY` and `TIMESTAMP_QUERY_INSIDE_ENCODERS`. The caller's device-lost
+    /// and uncaptured-error callbacks are left as they are. `Device` and `Queue` are
+    /// handles: pass clones of the caller's.
+    pub fn from_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        info: wgpu::AdapterInfo,
+    ) -> Result<Gpu, GpuError> {
+        let features = device.features();
+        missing_feature(features, &info)?;
         Ok(Gpu {
             device,
             queue,
             info,
-            timestamps,
-            lost,
+            timestamps: features.contains(TIMING),
+            lost: Arc::new(Mutex::new(None)),
         })
     }
 
@@ -501,6 +482,68 @@ impl Gpu {
             .copied()
             .collect())
     }
+}
+
+/// Timestamps between the passes of one encoder.
+const TIMING: wgpu::Features =
+    wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
+
+/// The first of [`REQUIRED_FEATURES`] that `features` lacks, as an error.
+fn missing_feature(features: wgpu::Features, info: &wgpu::AdapterInfo) -> Result<(), GpuError> {
+    match REQUIRED_FEATURES
+        .iter()
+        .find(|(f, _)| !features.contains(*f))
+    {
+        Some((_, why)) => Err(GpuError::MissingFeature {
+            adapter: describe(info),
+            missing: why.to_string(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The adapter of `instance` that `choice` names (see [`Gpu::new`]), among those that
+/// can present to `surface` where one is given (a window's).
+pub fn choose_adapter(
+    instance: &wgpu::Instance,
+    choice: Option<&str>,
+    surface: Option<&wgpu::Surface>,
+) -> Result<wgpu::Adapter, GpuError> {
+    let adapters: Vec<wgpu::Adapter> =
+        pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
+            .into_iter()
+            .filter(|a| surface.is_none_or(|s| a.is_surface_supported(s)))
+            .collect();
+    if adapters.is_empty() {
+        return Err(GpuError::NoAdapter);
+    }
+    let wanted = choice
+        .map(str::to_owned)
+        .or_else(|| std::env::var("WGPU_ADAPTER_NAME").ok())
+        .map(|s| s.to_lowercase());
+    let matches = |a: &wgpu::Adapter| {
+        let info = a.get_info();
+        wanted.as_ref().is_none_or(|w| {
+            info.name.to_lowercase().contains(w.as_str())
+                || info.backend.to_str().eq_ignore_ascii_case(w)
+        })
+    };
+    let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    };
+    let names: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
+    adapters
+        .into_iter()
+        .filter(matches)
+        .min_by_key(rank)
+        .ok_or_else(|| GpuError::NoMatch {
+            wanted: wanted.unwrap_or_default(),
+            found: names.join("; "),
+        })
 }
 
 fn describe(info: &wgpu::AdapterInfo) -> String {

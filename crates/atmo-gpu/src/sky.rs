@@ -1,6 +1,6 @@
-//! The sky on the GPU, two ways, each ending in the same picture pass
+//! The sky on the GPU, two ways, each ending in the same picture pass, a [`SkyPass`]
 //! (`sky_frame.wgsl`, perspective or fisheye, as `atmo::sky::frame::SkyPicture` on the
-//! CPU):
+//! CPU) that draws into any colour target, the caller's own included:
 //!
 //! - [`GpuSkyTable`], from the skylight table (sky 4.2): the table's factors live in
 //!   storage buffers; per frame the CPU interpolates the few hundred `t_k` (sky (17))
@@ -56,6 +56,9 @@ gpu_struct! {
         ground_y_last: f32,
         ground_azimuths: u32,
         ground_lookup: [f32; 4],
+        corner: [f32; 2],
+        exposure: f32,
+        depth: f32,
     }
 }
 
@@ -96,11 +99,137 @@ gpu_struct! {
     }
 }
 
-/// The picture pass, shared by the table and the model.
-struct FramePass {
-    pipeline: wgpu::ComputePipeline,
+/// The colour target a [`SkyPass`] draws into, and the depth buffer it tests against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SkyTarget {
+    /// The colour attachment's format. Linear radiance (W m^-2 sr^-1 as linear sRGB)
+    /// times [`SkyPass::exposure`] is written; an `*Srgb` format encodes it on store.
+    pub format: wgpu::TextureFormat,
+    /// The depth attachment, if the pass has one: the sky is drawn only where it is
+    /// still at the far plane (no depth is written).
+    pub depth: Option<DepthTarget>,
+}
+
+/// A depth attachment's format and convention.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DepthTarget {
+    pub format: wgpu::TextureFormat,
+    /// Reversed z: the far plane at depth 0 (else at 1).
+    pub reversed_z: bool,
+}
+
+impl SkyTarget {
+    /// What the headless renders draw into and read back: RGBA f32, no depth.
+    pub const HEADLESS: SkyTarget = SkyTarget {
+        format: wgpu::TextureFormat::Rgba32Float,
+        depth: None,
+    };
+}
+
+/// The picture pass, shared by the table and the model, made for one [`SkyTarget`]:
+/// a full-screen triangle that a caller records into its own render pass with
+/// [`SkyPass::draw`], after a sky's `prepare` has recorded the maps it reads.
+///
+/// One pass holds one view: to draw two views in one submission, make two passes.
+pub struct SkyPass {
+    pipeline: wgpu::RenderPipeline,
+    params: wgpu::Buffer,
     /// Bound as the ground map when there is none.
     no_ground: wgpu::Buffer,
+    /// What the next draw reads, set by a sky's `prepare`.
+    group: Option<wgpu::BindGroup>,
+    /// The far plane's depth: 1, or 0 for reversed z.
+    far: f32,
+    /// Multiplies the radiance written (1 for the headless renders).
+    pub exposure: f32,
+    /// The target's pixel where the view's pixel (0, 0) is, for a viewport that does not
+    /// start at the target's corner.
+    pub corner: [u32; 2],
+}
+
+impl SkyPass {
+    /// The pipeline for `target`: refused by name where the device cannot render to its
+    /// format.
+    pub fn new(gpu: &Gpu, target: SkyTarget) -> Result<Self, GpuError> {
+        let module = wgsl::module(gpu, "sky_frame.wgsl")?;
+        let depth_stencil = target.depth.map(|d| wgpu::DepthStencilState {
+            format: d.format,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(if d.reversed_z {
+                wgpu::CompareFunction::GreaterEqual
+            } else {
+                wgpu::CompareFunction::LessEqual
+            }),
+            stencil: Default::default(),
+            bias: Default::default(),
+        });
+        let pipeline = gpu.scoped("the sky's picture pass", || {
+            gpu.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("the sky's picture pass"),
+                    layout: None,
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vertex"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fragment"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(target.format.into())],
+                    }),
+                    primitive: Default::default(),
+                    depth_stencil,
+                    multisample: Default::default(),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })?;
+        Ok(SkyPass {
+            pipeline,
+            params: gpu.uniform("sky frame", &<SkyFrameParams as bytemuck::Zeroable>::zeroed()),
+            no_ground: gpu.storage("no ground map", &[0; 16], "")?,
+            group: None,
+            far: if target.depth.is_some_and(|d| d.reversed_z) {
+                0.0
+            } else {
+                1.0
+            },
+            exposure: 1.0,
+            corner: [0, 0],
+        })
+    }
+
+    /// Sets what the next draw shows: `inputs` seen in `view` with `sun`.
+    fn set(&mut self, gpu: &Gpu, inputs: &FrameInputs, sun: Sun, view: &View) {
+        let mut params = frame_params(inputs, sun, view);
+        params.corner = self.corner.map(|c| c as f32);
+        params.exposure = self.exposure;
+        params.depth = self.far;
+        gpu.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let ground = inputs.ground.as_ref().map_or(&self.no_ground, |(g, _)| *g);
+        self.group = Some(gpu.bind_group(
+            &self.pipeline.get_bind_group_layout(0),
+            &[
+                self.params.as_entire_binding(),
+                inputs.sky.as_entire_binding(),
+                ground.as_entire_binding(),
+            ],
+        ));
+    }
+
+    /// Records the sky into `pass`, whose colour (and depth) attachments are the
+    /// [`SkyTarget`]'s; nothing before a sky's `prepare`.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        if let Some(group) = &self.group {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+    }
 }
 
 /// What the picture pass reads: the maps, their grids, and the sun's disc.
@@ -113,47 +242,6 @@ struct FrameInputs<'m> {
     /// Linear sRGB radiance of the sun's disc, and its angular radius (rad).
     sun_rgb: [f32; 3],
     sun_radius: f64,
-}
-
-impl FramePass {
-    fn new(gpu: &Gpu) -> Result<Self, GpuError> {
-        let module = wgsl::module(gpu, "sky_frame.wgsl")?;
-        Ok(FramePass {
-            pipeline: gpu.compute_pipeline(&module, "main", None)?,
-            no_ground: gpu.storage("no ground map", &[0; 16], "")?,
-        })
-    }
-
-    /// Records the picture of `view` for `sun` into `out` (RGBA f32 per pixel).
-    fn record(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        inputs: &FrameInputs,
-        sun: Sun,
-        view: &View,
-        out: &wgpu::Buffer,
-    ) {
-        let params = gpu.uniform("sky frame", &frame_params(inputs, sun, view));
-        let ground = inputs.ground.as_ref().map_or(&self.no_ground, |(g, _)| *g);
-        let group = gpu.bind_group(
-            &self.pipeline.get_bind_group_layout(0),
-            &[
-                params.as_entire_binding(),
-                inputs.sky.as_entire_binding(),
-                out.as_entire_binding(),
-                ground.as_entire_binding(),
-            ],
-        );
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(
-            view.camera.width.div_ceil(8),
-            view.camera.height.div_ceil(8),
-            1,
-        );
-    }
 }
 
 /// The picture pass's parameters (the CPU's `SkyPicture` and `PixelBasis`).
@@ -192,6 +280,9 @@ fn frame_params(inputs: &FrameInputs, sun: Sun, view: &View) -> SkyFrameParams {
         ground_y_last: ground.map_or(1.0, |g| g.y_last),
         ground_azimuths: ground.map_or(2, |g| g.azimuths as u32),
         ground_lookup: ground.map_or([0.0; 4], |g| [g.x_scale, g.y_min, g.y_scale, g.x_last]),
+        corner: [0.0; 2],
+        exposure: 1.0,
+        depth: 1.0,
     };
     match basis {
         PixelBasis::Perspective { origin, right, up } => {
@@ -214,17 +305,20 @@ fn frame_params(inputs: &FrameInputs, sun: Sun, view: &View) -> SkyFrameParams {
     p
 }
 
-/// A skylight table uploaded, with its two pipelines.
+/// A skylight table uploaded, with its map pass.
 pub struct GpuSkyTable<'a> {
     table: &'a SkylightTable,
-    params: SkyMapParams,
     s: wgpu::Buffer,
     order: wgpu::Buffer,
     used: wgpu::Buffer,
-    /// The skylight map, written by the map pass, read by the frame pass.
+    /// `t_k`, written per frame.
+    coefficients: wgpu::Buffer,
+    /// The map pass's sizes.
+    params: wgpu::Buffer,
+    /// The skylight map, written by the map pass, read by the picture pass.
     map: wgpu::Buffer,
+    rows: u32,
     map_pass: wgpu::ComputePipeline,
-    frame_pass: FramePass,
 }
 
 impl<'a> GpuSkyTable<'a> {
@@ -243,63 +337,61 @@ impl<'a> GpuSkyTable<'a> {
             bytemuck::cast_slice(f.used),
             setting,
         )?;
+        let coefficients = gpu.storage(
+            "t_k",
+            bytemuck::cast_slice(&vec![0f32; f.used.len()]),
+            setting,
+        )?;
         let map_bytes = (f.directions * 3 * 4) as u64;
         let map = gpu.output("the skylight map", map_bytes, setting)?;
         let map_module = wgsl::module(gpu, "sky_map.wgsl")?;
+        let params = SkyMapParams {
+            rows: f.order.len() as u32,
+            terms: f.used.len() as u32,
+            directions: f.directions as u32,
+            pad: 0,
+        };
         Ok(GpuSkyTable {
             table,
-            params: SkyMapParams {
-                rows: f.order.len() as u32,
-                terms: f.used.len() as u32,
-                directions: f.directions as u32,
-                pad: 0,
-            },
             s,
             order,
             used,
+            coefficients,
+            params: gpu.uniform("sky map", &params),
             map,
+            rows: params.rows,
             map_pass: gpu.compute_pipeline(&map_module, "main", None)?,
-            frame_pass: FramePass::new(gpu)?,
         })
     }
 
-    /// Records the map pass for a sun at `sun_elevation` rad seen from `altitude_m`.
+    /// Writes `t_k` for a sun at `sun_elevation` rad seen from `altitude_m` (refused
+    /// outside the table's ranges) and records the map pass.
     fn record_map(
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        coefficients: &wgpu::Buffer,
-        params: &wgpu::Buffer,
-    ) {
+        sun_elevation: f64,
+        altitude_m: f64,
+    ) -> Result<(), GpuError> {
+        let coefficients = self.table.coefficients(sun_elevation, altitude_m)?;
+        gpu.queue
+            .write_buffer(&self.coefficients, 0, bytemuck::cast_slice(&coefficients));
         let group = gpu.bind_group(
             &self.map_pass.get_bind_group_layout(0),
             &[
-                params.as_entire_binding(),
+                self.params.as_entire_binding(),
                 self.s.as_entire_binding(),
                 self.order.as_entire_binding(),
                 self.used.as_entire_binding(),
-                coefficients.as_entire_binding(),
+                self.coefficients.as_entire_binding(),
                 self.map.as_entire_binding(),
             ],
         );
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&self.map_pass);
         pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(self.params.rows.div_ceil(64), 1, 1);
-    }
-
-    /// The per-frame inputs of the map pass: `t_k` and the sizes.
-    fn map_inputs(
-        &self,
-        gpu: &Gpu,
-        sun_elevation: f64,
-        altitude_m: f64,
-    ) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
-        let coefficients = self.table.coefficients(sun_elevation, altitude_m)?;
-        Ok((
-            gpu.storage("t_k", bytemuck::cast_slice(&coefficients), "epsilon")?,
-            gpu.uniform("sky map", &self.params),
-        ))
+        pass.dispatch_workgroups(self.rows.div_ceil(64), 1, 1);
+        Ok(())
     }
 
     /// The skylight map (linear sRGB, `[elevation][azimuth]` over the table's grid), as
@@ -311,25 +403,30 @@ impl<'a> GpuSkyTable<'a> {
         sun_elevation: f64,
         altitude_m: f64,
     ) -> Result<(Vec<Vec3>, Option<f64>), GpuError> {
-        let (coefficients, params) = self.map_inputs(gpu, sun_elevation, altitude_m)?;
+        let mut recorded = Ok(());
         let gpu_ms = gpu.run("the skylight map", |encoder| {
-            self.record_map(gpu, encoder, &coefficients, &params)
+            recorded = self.record_map(gpu, encoder, sun_elevation, altitude_m);
         })?;
+        recorded?;
         let bytes = gpu.read("the skylight map", &self.map, 0, self.map.size())?;
         let values: &[f32] = bytemuck::cast_slice(&bytes);
         Ok((values.chunks(3).map(Vec3::from_slice).collect(), gpu_ms))
     }
 
-    /// The picture of `view` for `sun` seen from `altitude_m`: map pass and frame pass
-    /// in one submission, as `SkyPicture::from_table(..).render(view)` on the CPU.
-    pub fn render(
+    /// Records this frame's skylight map for `sun` seen from `altitude_m` into
+    /// `encoder` and sets `pass` to draw it in `view`: what a renderer does each frame,
+    /// before recording [`SkyPass::draw`] in a render pass of the same encoder (or a
+    /// later one). Nothing is read back.
+    pub fn prepare(
         &self,
         gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: &mut SkyPass,
         sun: Sun,
         altitude_m: f64,
         view: &View,
-    ) -> Result<Rendered, GpuError> {
-        let (coefficients, map_params) = self.map_inputs(gpu, sun.elevation(), altitude_m)?;
+    ) -> Result<(), GpuError> {
+        self.record_map(gpu, encoder, sun.elevation(), altitude_m)?;
         let atmosphere = self.table.atmosphere();
         let grid = self.table.grid(altitude_m);
         let inputs = FrameInputs {
@@ -340,8 +437,23 @@ impl<'a> GpuSkyTable<'a> {
             sun_rgb: sun_disc_rgb(atmosphere, altitude_m, sun.elevation()),
             sun_radius: atmosphere.sun_angular_radius,
         };
-        picture(gpu, &self.frame_pass, &inputs, sun, view, |encoder| {
-            self.record_map(gpu, encoder, &coefficients, &map_params)
+        pass.set(gpu, &inputs, sun, view);
+        Ok(())
+    }
+
+    /// The picture of `view` for `sun` seen from `altitude_m`, read back: map pass and
+    /// picture pass in one submission, as `SkyPicture::from_table(..).render(view)` on
+    /// the CPU.
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        pass: &mut SkyPass,
+        sun: Sun,
+        altitude_m: f64,
+        view: &View,
+    ) -> Result<Rendered, GpuError> {
+        picture(gpu, pass, view, |encoder, pass| {
+            self.prepare(gpu, encoder, pass, sun, altitude_m, view)
         })
     }
 }
@@ -359,7 +471,8 @@ pub struct GpuSkyModel<'a> {
     sky_map: wgpu::Buffer,
     ground_map: wgpu::Buffer,
     shells: wgpu::ComputePipeline,
-    frame_pass: FramePass,
+    /// The shell pass's parameters of the sky's and the ground's grids, written per sun.
+    uniforms: [wgpu::Buffer; 2],
 }
 
 impl<'a> GpuSkyModel<'a> {
@@ -484,22 +597,36 @@ impl<'a> GpuSkyModel<'a> {
             sky_grid: arrays.sky.grid,
             ground_grid: arrays.ground_rays.grid,
             shells: gpu.compute_pipeline(&module, "main", None)?,
-            frame_pass: FramePass::new(gpu)?,
+            uniforms: [
+                gpu.uniform("the shell pass (sky)", &sky_params),
+                gpu.uniform("the shell pass (ground)", &ground_params),
+            ],
         })
     }
 
     /// Records the shell pass of both grids for a sun at `sun_elevation` rad.
     fn record_maps(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder, sun_elevation: f64) {
         let (sin_s, cos_s) = sun_elevation.sin_cos();
-        for (params, map, grid) in [
-            (&self.sky_params, &self.sky_map, &self.sky_grid),
-            (&self.ground_params, &self.ground_map, &self.ground_grid),
+        for (params, map, grid, uniform) in [
+            (
+                &self.sky_params,
+                &self.sky_map,
+                &self.sky_grid,
+                &self.uniforms[0],
+            ),
+            (
+                &self.ground_params,
+                &self.ground_map,
+                &self.ground_grid,
+                &self.uniforms[1],
+            ),
         ] {
             let params = ShellParams {
                 sun: [sin_s as f32, cos_s as f32, 0.0, 0.0],
                 ..*params
             };
-            let uniform = gpu.uniform("the shell pass", &params);
+            gpu.queue
+                .write_buffer(uniform, 0, bytemuck::bytes_of(&params));
             let group = gpu.bind_group(
                 &self.shells.get_bind_group_layout(0),
                 &[
@@ -540,8 +667,19 @@ impl<'a> GpuSkyModel<'a> {
         Ok([read(&self.sky_map)?, read(&self.ground_map)?])
     }
 
-    /// The picture of `view` for `sun`, as `SkyPicture::new(model, sun).render(view)`.
-    pub fn render(&self, gpu: &Gpu, sun: Sun, view: &View) -> Result<Rendered, GpuError> {
+    /// Records this frame's skylight and ground maps for `sun` into `encoder` and sets
+    /// `pass` to draw them in `view` (seen from the model's altitude, whatever the
+    /// camera's height): what a renderer does each frame, before recording
+    /// [`SkyPass::draw`]. Nothing is read back.
+    pub fn prepare(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: &mut SkyPass,
+        sun: Sun,
+        view: &View,
+    ) -> Result<(), GpuError> {
+        self.record_maps(gpu, encoder, sun.elevation());
         let atmosphere = self.model.atmosphere();
         let mut spectrum = vec![0.0f32; atmosphere.channels()];
         self.model.sun_radiance(sun.elevation(), &mut spectrum);
@@ -556,31 +694,74 @@ impl<'a> GpuSkyModel<'a> {
             sun_rgb: SpectrumToRgb::new(&atmosphere.wavelengths_nm).rgb(&spectrum),
             sun_radius: atmosphere.sun_angular_radius,
         };
-        picture(gpu, &self.frame_pass, &inputs, sun, view, |encoder| {
-            self.record_maps(gpu, encoder, sun.elevation())
+        pass.set(gpu, &inputs, sun, view);
+        Ok(())
+    }
+
+    /// The picture of `view` for `sun`, read back, as
+    /// `SkyPicture::new(model, sun).render(view)` on the CPU.
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        pass: &mut SkyPass,
+        sun: Sun,
+        view: &View,
+    ) -> Result<Rendered, GpuError> {
+        picture(gpu, pass, view, |encoder, pass| {
+            self.prepare(gpu, encoder, pass, sun, view)
         })
     }
 }
 
-/// Records `maps` (the passes that fill the maps) and the picture pass in one
-/// submission, and reads the picture back.
+/// Records `prepare` (the passes that fill the maps and set `pass`) and the picture pass
+/// into a texture of the view's size in one submission, and reads the picture back.
 fn picture(
     gpu: &Gpu,
-    pass: &FramePass,
-    inputs: &FrameInputs,
-    sun: Sun,
+    pass: &mut SkyPass,
     view: &View,
-    maps: impl FnOnce(&mut wgpu::CommandEncoder),
+    prepare: impl FnOnce(&mut wgpu::CommandEncoder, &mut SkyPass) -> Result<(), GpuError>,
 ) -> Result<Rendered, GpuError> {
-    let pixels = view.camera.width as u64 * view.camera.height as u64;
-    let out = gpu.output("the sky frame", pixels * 16, "the image size")?;
+    let (width, height) = (view.camera.width, view.camera.height);
+    for side in [width, height] {
+        gpu.check_texture_side("the sky frame", side, "the image size")?;
+    }
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("the sky frame"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: SkyTarget::HEADLESS.format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let target = texture.create_view(&Default::default());
+    let mut prepared = Ok(());
     let gpu_ms = gpu.run("the sky frame", |encoder| {
-        maps(encoder);
-        pass.record(gpu, encoder, inputs, sun, view, &out);
+        prepared = prepare(encoder, pass);
+        let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("the sky frame"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.draw(&mut render);
     })?;
-    let bytes = gpu.read("the sky frame", &out, 0, pixels * 16)?;
+    prepared?;
+    let bytes = gpu.read_texture("the sky frame", &texture, width, height)?;
     Ok(Rendered {
-        frame: crate::frame_of(view.camera.width, view.camera.height, &bytes),
+        frame: crate::frame_of(width, height, &bytes),
         gpu_ms,
     })
 }

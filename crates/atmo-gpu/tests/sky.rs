@@ -10,7 +10,7 @@ use atmo::sky::{SkyModel, SkySettings};
 use atmo::sky::{SkyPicture, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
-use atmo_gpu::sky::{GpuSkyModel, GpuSkyTable};
+use atmo_gpu::sky::{DepthTarget, GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget};
 use common::{assert_close, gpu, mean_level};
 use glam::Vec3;
 
@@ -59,6 +59,7 @@ fn perspective_and_fisheye_frames_match_the_cpu_picture() {
     let Some(gpu) = gpu() else { return };
     let table = table();
     let sky = GpuSkyTable::new(&gpu, table).unwrap();
+    let mut pass = SkyPass::new(&gpu, SkyTarget::HEADLESS).unwrap();
     let sun = Sun::from_degrees(8.0, 120.0).unwrap();
     for camera in [
         Camera::yaw_pitch(Vec3::ZERO, 100.0, 10.0, Fov::Vertical(70.0), (96, 64)).unwrap(),
@@ -73,7 +74,10 @@ fn perspective_and_fisheye_frames_match_the_cpu_picture() {
         let cpu = SkyPicture::from_table(table, sun, altitude)
             .unwrap()
             .render(&view);
-        let out = sky.render(&gpu, sun, altitude, &view).unwrap().frame;
+        let out = sky
+            .render(&gpu, &mut pass, sun, altitude, &view)
+            .unwrap()
+            .frame;
         assert!(mean_level(&out, 10.0) > 20.0, "{name}: the sky is dark");
         assert_close(&out, &cpu, 10.0, &name);
     }
@@ -88,6 +92,133 @@ fn a_sun_outside_the_table_is_refused_before_any_gpu_work() {
         err.to_string().contains("altitude") || err.to_string().contains("sun"),
         "{err}"
     );
+}
+
+/// The table's sky recorded into a caller's encoder and render pass: a target larger
+/// than the view with the view in a viewport at (8, 4), a depth buffer cleared to
+/// `depth`, exposure 0.5. Returns the view's pixels, and the colour of one pixel outside.
+fn draw_embedded(
+    gpu: &atmo_gpu::Gpu,
+    reversed_z: bool,
+    depth: f32,
+    view: &View,
+) -> (Vec<Vec3>, Vec3) {
+    let sky = GpuSkyTable::new(gpu, table()).unwrap();
+    let target = SkyTarget {
+        format: wgpu::TextureFormat::Rgba32Float,
+        depth: Some(DepthTarget {
+            format: wgpu::TextureFormat::Depth32Float,
+            reversed_z,
+        }),
+    };
+    let mut pass = SkyPass::new(gpu, target).unwrap();
+    pass.exposure = 0.5;
+    pass.corner = [8, 4];
+    let (w, h) = (view.camera.width + 16, view.camera.height + 8);
+    let texture = |format, usage| {
+        gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+    let colour = texture(target.format, attachment | wgpu::TextureUsages::COPY_SRC);
+    let depth_texture = texture(wgpu::TextureFormat::Depth32Float, attachment);
+    let (colour_view, depth_view) = (
+        colour.create_view(&Default::default()),
+        depth_texture.create_view(&Default::default()),
+    );
+    let sun = Sun::from_degrees(8.0, 120.0).unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    sky.prepare(gpu, &mut encoder, &mut pass, sun, 3000.0, view)
+        .unwrap();
+    {
+        let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: None,
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &colour_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: 0.25,
+                        g: 0.0,
+                        b: 0.0,
+                        a: 1.0,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(depth),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        let (cw, ch) = (view.camera.width as f32, view.camera.height as f32);
+        render.set_viewport(8.0, 4.0, cw, ch, 0.0, 1.0);
+        pass.draw(&mut render);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = gpu.read_texture("embedded sky", &colour, w, h).unwrap();
+    let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+    let at = |x: u32, y: u32| Vec3::from_slice(&texels[(y * w + x) as usize][..3]);
+    let inside = (0..view.camera.height)
+        .flat_map(|y| (0..view.camera.width).map(move |x| (x + 8, y + 4)))
+        .map(|(x, y)| at(x, y))
+        .collect();
+    (inside, at(2, 1))
+}
+
+#[test]
+fn the_sky_draws_into_a_callers_target_only_where_the_depth_is_at_the_far_plane() {
+    let Some(gpu) = gpu() else { return };
+    let camera = Camera::yaw_pitch(Vec3::ZERO, 100.0, 10.0, Fov::Vertical(70.0), (48, 32)).unwrap();
+    let view = View {
+        camera,
+        sun_disc: true,
+    };
+    let sun = Sun::from_degrees(8.0, 120.0).unwrap();
+    let cpu = SkyPicture::from_table(table(), sun, 3000.0)
+        .unwrap()
+        .render(&view);
+    let cleared = Vec3::new(0.25, 0.0, 0.0);
+    for reversed_z in [false, true] {
+        let far = if reversed_z { 0.0 } else { 1.0 };
+        let (sky, outside) = draw_embedded(&gpu, reversed_z, far, &view);
+        // Outside the viewport the caller's clear colour stays.
+        assert_eq!(outside, cleared, "reversed z {reversed_z}");
+        let mut frame = atmo::image::Frame::new(48, 32);
+        for (p, s) in frame.pixels.iter_mut().zip(&sky) {
+            *p = *s * 2.0;
+        }
+        assert_close(
+            &frame,
+            &cpu,
+            10.0,
+            &format!("embedded, reversed z {reversed_z}"),
+        );
+        // Where the caller drew something nearer than the far plane, no sky.
+        let (covered, _) = draw_embedded(&gpu, reversed_z, 0.5, &view);
+        assert!(
+            covered.iter().all(|&p| p == cleared),
+            "reversed z {reversed_z}: sky drawn over geometry"
+        );
+    }
 }
 
 /// A model with coarse settings (a fraction of a second to build).
@@ -153,6 +284,7 @@ fn the_shell_method_picture_matches_the_cpu_picture() {
     let earth = Atmosphere::earth();
     let model = model(&earth, 2, 3000.0);
     let sky = GpuSkyModel::new(&gpu, &model).unwrap();
+    let mut pass = SkyPass::new(&gpu, SkyTarget::HEADLESS).unwrap();
     let sun = Sun::from_degrees(6.0, 200.0).unwrap();
     for camera in [
         // Looking down past the horizon: the ground map, the horizon's edge, the sun.
@@ -165,7 +297,7 @@ fn the_shell_method_picture_matches_the_cpu_picture() {
             sun_disc: true,
         };
         let cpu = SkyPicture::new(&model, sun).render(&view);
-        let out = sky.render(&gpu, sun, &view).unwrap().frame;
+        let out = sky.render(&gpu, &mut pass, sun, &view).unwrap().frame;
         assert!(mean_level(&out, 0.15) > 20.0, "{name}: dark");
         assert_close(&out, &cpu, 0.15, &format!("shells {name}"));
     }

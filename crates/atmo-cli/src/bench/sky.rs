@@ -9,7 +9,7 @@ use atmo::reference::sky::{ReferenceSettings, ReferenceSky};
 use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
-use atmo_gpu::sky::GpuSkyModel;
+use atmo_gpu::sky::{GpuSkyModel, SkyPass, SkyTarget};
 use atmo_gpu::{Gpu, GpuError, Rendered};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -166,6 +166,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
     let settings = SkySettings::default();
     let model = SkyModel::new(&atmosphere, &settings, 7000.0)?;
     let sky = GpuSkyModel::new(gpu, &model).map_err(gpu_error)?;
+    let mut pass = SkyPass::new(gpu, SkyTarget::HEADLESS).map_err(gpu_error)?;
     let runs = if quick { 5 } else { 21 };
     let sun = Sun::from_degrees(30.0, 0.0)?;
     let (wall, gpu_ms, ()) = time_gpu(runs, || Ok(((), sky.maps_timed(gpu, sun.elevation())?)))?;
@@ -200,7 +201,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         json,
         ("sky.frame.gpu", json!({"model": params})),
         runs.min(7),
-        |view| sky.render(gpu, sun, view),
+        |view| sky.render(gpu, &mut pass, sun, view),
         |view, frame| SkyPicture::new(&model, sun).render_into(view, frame),
     )
 }

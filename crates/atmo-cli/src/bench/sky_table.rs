@@ -8,7 +8,7 @@ use atmo::image::Frame;
 use atmo::sky::{SkyModel, SkyPicture, SkylightTable, TableSettings};
 use atmo::view::Sun;
 use atmo::Atmosphere;
-use atmo_gpu::sky::GpuSkyTable;
+use atmo_gpu::sky::{GpuSkyTable, SkyPass, SkyTarget};
 use atmo_gpu::Gpu;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -240,6 +240,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
     eprintln!("atmo: precomputing the table on the CPU (a minute at the defaults)");
     let table = SkylightTable::precompute(&Atmosphere::earth(), &settings, &|_, _| {})?;
     let sky = GpuSkyTable::new(gpu, &table).map_err(gpu_error)?;
+    let mut pass = SkyPass::new(gpu, SkyTarget::HEADLESS).map_err(gpu_error)?;
     let runs = if quick { 5 } else { 21 };
     let (sun, altitude) = (Sun::from_degrees(30.0, 0.0)?, 7000.0);
     let (wall, gpu_ms, map) = time_gpu(runs, || sky.map(gpu, sun.elevation(), altitude))?;
@@ -272,7 +273,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         json,
         ("sky-table.frame.gpu", json!({"table": params})),
         runs.min(7),
-        |view| sky.render(gpu, sun, altitude, view),
+        |view| sky.render(gpu, &mut pass, sun, altitude, view),
         |view, frame| {
             SkyPicture::from_table(&table, sun, altitude)
                 .expect("inside the table")

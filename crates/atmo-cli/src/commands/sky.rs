@@ -8,7 +8,7 @@ use atmo::image::{Display, ImageKind};
 use atmo::sky::{SkyModel, SkyPicture, SkylightTable, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::{Atmosphere, Error};
-use atmo_gpu::sky::GpuSkyModel;
+use atmo_gpu::sky::{GpuSkyModel, SkyPass, SkyTarget};
 use clap::Args;
 use glam::Vec3;
 use indicatif::ProgressBar;
@@ -167,7 +167,10 @@ pub fn run(args: SkyArgs) -> Result<()> {
     let frame = match args.device.open()? {
         Some(gpu) => {
             let sky = GpuSkyModel::new(&gpu, &model).map_err(gpu_error)?;
-            sky.render(&gpu, sun, &view).map_err(gpu_error)?.frame
+            let mut pass = SkyPass::new(&gpu, SkyTarget::HEADLESS).map_err(gpu_error)?;
+            sky.render(&gpu, &mut pass, sun, &view)
+                .map_err(gpu_error)?
+                .frame
         }
         None => SkyPicture::new(&model, sun).render(&view),
     };

@@ -9,9 +9,10 @@ use atmo::image::{Display, Frame};
 use atmo::sky::{SkyPicture, SkylightTable, View};
 use atmo::view::Sun;
 use atmo::Error;
-use atmo_gpu::sky::GpuSkyTable;
+use atmo_gpu::sky::{GpuSkyTable, SkyPass, SkyTarget};
 use atmo_gpu::Gpu;
 use clap::ValueEnum;
+use std::cell::RefCell;
 
 use crate::backend::gpu_error;
 use crate::output::write_animation;
@@ -28,14 +29,19 @@ pub enum Animate {
 /// Draws pictures from a table, on the CPU or on the GPU.
 pub enum TableDrawer<'a> {
     Cpu(&'a SkylightTable),
-    Gpu(&'a Gpu, GpuSkyTable<'a>),
+    /// The pass is the headless one, reused frame to frame.
+    Gpu(&'a Gpu, GpuSkyTable<'a>, RefCell<SkyPass>),
 }
 
 impl<'a> TableDrawer<'a> {
     /// On `gpu` when given (the table uploaded), else on the CPU.
     pub fn new(table: &'a SkylightTable, gpu: Option<&'a Gpu>) -> Result<Self> {
         Ok(match gpu {
-            Some(gpu) => TableDrawer::Gpu(gpu, GpuSkyTable::new(gpu, table).map_err(gpu_error)?),
+            Some(gpu) => TableDrawer::Gpu(
+                gpu,
+                GpuSkyTable::new(gpu, table).map_err(gpu_error)?,
+                RefCell::new(SkyPass::new(gpu, SkyTarget::HEADLESS).map_err(gpu_error)?),
+            ),
             None => TableDrawer::Cpu(table),
         })
     }
@@ -44,8 +50,8 @@ impl<'a> TableDrawer<'a> {
     fn frame(&self, sun: Sun, altitude_m: f64, view: &View) -> Result<Frame> {
         Ok(match self {
             TableDrawer::Cpu(table) => SkyPicture::from_table(table, sun, altitude_m)?.render(view),
-            TableDrawer::Gpu(gpu, sky) => {
-                sky.render(gpu, sun, altitude_m, view)
+            TableDrawer::Gpu(gpu, sky, pass) => {
+                sky.render(gpu, &mut pass.borrow_mut(), sun, altitude_m, view)
                     .map_err(gpu_error)?
                     .frame
             }
