@@ -189,7 +189,10 @@ impl SkyPass {
         })?;
         Ok(SkyPass {
             pipeline,
-            params: gpu.uniform("sky frame", &<SkyFrameParams as bytemuck::Zeroable>::zeroed()),
+            params: gpu.uniform(
+                "sky frame",
+                &<SkyFrameParams as bytemuck::Zeroable>::zeroed(),
+            ),
             no_ground: gpu.storage("no ground map", &[0; 16], "")?,
             group: None,
             far: if target.depth.is_some_and(|d| d.reversed_z) {

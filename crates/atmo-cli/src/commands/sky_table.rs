@@ -30,7 +30,7 @@ pub enum Animate {
 pub enum TableDrawer<'a> {
     Cpu(&'a SkylightTable),
     /// The pass is the headless one, reused frame to frame.
-    Gpu(&'a Gpu, GpuSkyTable<'a>, RefCell<SkyPass>),
+    Gpu(&'a Gpu, Box<(GpuSkyTable<'a>, RefCell<SkyPass>)>),
 }
 
 impl<'a> TableDrawer<'a> {
@@ -39,8 +39,10 @@ impl<'a> TableDrawer<'a> {
         Ok(match gpu {
             Some(gpu) => TableDrawer::Gpu(
                 gpu,
-                GpuSkyTable::new(gpu, table).map_err(gpu_error)?,
-                RefCell::new(SkyPass::new(gpu, SkyTarget::HEADLESS).map_err(gpu_error)?),
+                Box::new((
+                    GpuSkyTable::new(gpu, table).map_err(gpu_error)?,
+                    RefCell::new(SkyPass::new(gpu, SkyTarget::HEADLESS).map_err(gpu_error)?),
+                )),
             ),
             None => TableDrawer::Cpu(table),
         })
@@ -50,7 +52,8 @@ impl<'a> TableDrawer<'a> {
     fn frame(&self, sun: Sun, altitude_m: f64, view: &View) -> Result<Frame> {
         Ok(match self {
             TableDrawer::Cpu(table) => SkyPicture::from_table(table, sun, altitude_m)?.render(view),
-            TableDrawer::Gpu(gpu, sky, pass) => {
+            TableDrawer::Gpu(gpu, drawer) => {
+                let (sky, pass) = drawer.as_ref();
                 sky.render(gpu, &mut pass.borrow_mut(), sun, altitude_m, view)
                     .map_err(gpu_error)?
                     .frame
