@@ -75,3 +75,28 @@ fn phase_function(kind: u32, p: f32, c: f32) -> f32 {
         }
     }
 }
+
+// The tone-mapped value of the exposed linear value x (TONE_* codes):
+// atmo::image::ToneMap::apply.
+fn tone_map(kind: u32, x: f32) -> f32 {
+    let y = max(x, 0.0);
+    switch kind {
+        case TONE_CLAMP: {
+            return min(y, 1.0);
+        }
+        case TONE_ACES: {
+            return clamp((y * (2.51 * y + 0.03)) / (y * (2.43 * y + 0.59) + 0.14), 0.0, 1.0);
+        }
+        default: {
+            return 1.0 - exp(-y);
+        }
+    }
+}
+
+// The sRGB transfer function of a linear value in [0, 1]: atmo::image::srgb_encode.
+fn srgb_encode(v: f32) -> f32 {
+    if v <= 0.0031308 {
+        return 12.92 * v;
+    }
+    return 1.055 * pow(v, 1.0 / 2.4) - 0.055;
+}

@@ -12,6 +12,7 @@
 
 pub mod clouds;
 pub mod device;
+pub mod display;
 pub mod layout;
 pub mod shafts;
 pub mod sky;

@@ -42,11 +42,18 @@ shared_codes! {
     GOBO_NEAREST = 1;
     /// A gobo sampled bilinearly.
     GOBO_BILINEAR = 2;
+    /// atmo::image::ToneMap::Clamp.
+    TONE_CLAMP = 0;
+    /// atmo::image::ToneMap::Exponential.
+    TONE_EXPONENTIAL = 1;
+    /// atmo::image::ToneMap::Aces.
+    TONE_ACES = 2;
 }
 
 /// The shader files, by name, as compiled into the crate.
 const FILES: &[(&str, &str)] = &[
     ("functions.wgsl", include_str!("../shaders/functions.wgsl")),
+    ("display.wgsl", include_str!("../shaders/display.wgsl")),
     ("sky_map.wgsl", include_str!("../shaders/sky_map.wgsl")),
     ("sky_frame.wgsl", include_str!("../shaders/sky_frame.wgsl")),
     (

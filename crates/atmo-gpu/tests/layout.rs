@@ -46,6 +46,11 @@ fn sky_structs_match_their_wgsl() {
 }
 
 #[test]
+fn the_display_struct_matches_its_wgsl() {
+    check::<atmo_gpu::display::DisplayParams>();
+}
+
+#[test]
 fn cloud_structs_match_their_wgsl() {
     check::<atmo_gpu::clouds::GpuParticle>();
     check::<atmo_gpu::clouds::BufferFrame>();

@@ -5,6 +5,8 @@
 mod common;
 
 use atmo::atmosphere::PhaseFunction;
+use atmo::image::ToneMap;
+use atmo_gpu::display::tone_code;
 use atmo_gpu::wgsl::evaluate;
 use common::gpu;
 
@@ -111,6 +113,27 @@ fn every_phase_function_matches_the_rust() {
         let e = worst(&gpu, &expression, &cosines, |v| phase.eval_f32(v[0]), true);
         assert!(e < 1e-5, "{phase:?}: relative {e}");
     }
+}
+
+#[test]
+fn tone_maps_and_the_srgb_encoding_match_the_rust() {
+    let Some(gpu) = gpu() else { return };
+    let exposed = grid(-1.0, 20.0, 2100);
+    for tone in [ToneMap::Clamp, ToneMap::Exponential, ToneMap::Aces] {
+        let expression = format!("tone_map({}u, v.x)", tone_code(tone));
+        let e = worst(&gpu, &expression, &exposed, |v| tone.apply(v[0]), false);
+        // A 255th of a level at most: the display's rounding never flips.
+        assert!(e < 2e-6, "{tone:?}: {e}");
+    }
+    let linear = grid(0.0, 1.0, 2000);
+    let e = worst(
+        &gpu,
+        "srgb_encode(v.x)",
+        &linear,
+        |v| atmo::image::srgb_encode(v[0]),
+        false,
+    );
+    assert!(e < 2e-6, "srgb_encode: {e}");
 }
 
 #[test]

@@ -1,0 +1,202 @@
+//! Showing a linear HDR picture on a display: exposure, tone map and sRGB encoding on
+//! the GPU, as `atmo::image::Display` does for PNG files, drawn into any colour target
+//! (a window's surface texture, the caller's own). The viewer shows every frame through
+//! it; an engine that draws the sky into an HDR target can finish with it too.
+
+use atmo::image::{Display, ToneMap};
+
+use crate::wgsl::{self, TONE_ACES, TONE_CLAMP, TONE_EXPONENTIAL};
+use crate::{gpu_struct, Gpu, GpuError};
+
+gpu_struct! {
+    /// The display pass's parameters (see display.wgsl).
+    pub struct DisplayParams in "display.wgsl" {
+        corner: [f32; 2],
+        exposure: f32,
+        tone: u32,
+        encode: u32,
+        pad0: u32,
+        pad1: u32,
+        pad2: u32,
+    }
+}
+
+/// The WGSL code of a tone map (a `TONE_*` of the prelude).
+pub fn tone_code(tone: ToneMap) -> u32 {
+    match tone {
+        ToneMap::Clamp => TONE_CLAMP,
+        ToneMap::Exponential => TONE_EXPONENTIAL,
+        ToneMap::Aces => TONE_ACES,
+    }
+}
+
+/// Draws an RGBA f32 picture (linear radiance) into a target of one format: a
+/// full-screen triangle that reads the picture texel by texel (no filtering: the
+/// picture's pixels land on the target's one to one, from [`DisplayPass::corner`]).
+pub struct DisplayPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    group: Option<wgpu::BindGroup>,
+    /// Whether the target stores linear values (the pass encodes sRGB itself).
+    encode: bool,
+    /// Exposure and tone map.
+    pub display: Display,
+    /// The target's pixel where the picture's (0, 0) goes.
+    pub corner: [u32; 2],
+}
+
+impl DisplayPass {
+    /// The pass for targets of `format` (an `*Srgb` format encodes on store; any other
+    /// gets sRGB-encoded values).
+    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Result<Self, GpuError> {
+        let module = wgsl::module(gpu, "display.wgsl")?;
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty,
+            count: None,
+        };
+        let layout = gpu
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("display"),
+                entries: &[
+                    entry(
+                        0,
+                        wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Uniform,
+                            has_dynamic_offset: false,
+                            min_binding_size: None,
+                        },
+                    ),
+                    entry(
+                        1,
+                        wgpu::BindingType::Texture {
+                            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                            multisampled: false,
+                        },
+                    ),
+                ],
+            });
+        let pipeline_layout = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("display"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+        let pipeline = gpu.scoped("the display pass", || {
+            gpu.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("the display pass"),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vertex"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fragment"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(format.into())],
+                    }),
+                    primitive: Default::default(),
+                    depth_stencil: None,
+                    multisample: Default::default(),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        })?;
+        Ok(DisplayPass {
+            pipeline,
+            layout,
+            params: gpu.uniform("display", &<DisplayParams as bytemuck::Zeroable>::zeroed()),
+            group: None,
+            encode: !format.is_srgb(),
+            display: Display {
+                exposure: 1.0,
+                tone: ToneMap::default(),
+            },
+            corner: [0, 0],
+        })
+    }
+
+    /// Sets the picture the next draw shows (an RGBA f32 texture's view) and writes
+    /// this pass's exposure, tone map and corner.
+    pub fn prepare(&mut self, gpu: &Gpu, picture: &wgpu::TextureView) {
+        let params = DisplayParams {
+            corner: self.corner.map(|c| c as f32),
+            exposure: self.display.exposure,
+            tone: tone_code(self.display.tone),
+            encode: self.encode as u32,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
+        };
+        gpu.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        self.group = Some(gpu.bind_group(
+            &self.layout,
+            &[
+                self.params.as_entire_binding(),
+                wgpu::BindingResource::TextureView(picture),
+            ],
+        ));
+    }
+
+    /// Records the picture into `pass`, whose colour attachment has this pass's format;
+    /// nothing before [`DisplayPass::prepare`].
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        if let Some(group) = &self.group {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+    }
+}
+
+/// An RGBA f32 picture texture of `width` x `height` (checked against the device's
+/// limit) that a [`crate::sky::SkyPass`] can draw into, a [`DisplayPass`] can show,
+/// [`write_frame`] can fill from the CPU and [`Gpu::read_texture`] can read back.
+pub fn picture_texture(gpu: &Gpu, width: u32, height: u32) -> Result<wgpu::Texture, GpuError> {
+    for side in [width, height] {
+        gpu.check_texture_side("the picture", side, "the picture's size")?;
+    }
+    Ok(gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("the picture"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    }))
+}
+
+/// Writes a CPU `frame` into a [`picture_texture`] of its size (alpha 1): how a
+/// picture drawn on the CPU reaches a window.
+pub fn write_frame(gpu: &Gpu, texture: &wgpu::Texture, frame: &atmo::image::Frame) {
+    let texels: Vec<[f32; 4]> = frame.pixels.iter().map(|p| [p.x, p.y, p.z, 1.0]).collect();
+    gpu.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(&texels),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(frame.width * 16),
+            rows_per_image: None,
+        },
+        texture.size(),
+    );
+}
