@@ -9,6 +9,8 @@
 //!   (`atmo::sky::shells::export`) live in one storage buffer; per sun one compute pass a grid
 //!   sums every view ray's shell crossings into the skylight map and the ground map.
 
+use std::borrow::Borrow;
+
 use atmo::atmosphere::spectrum::SpectrumToRgb;
 use atmo::sky::frame::{sky_from_world, sun_disc_rgb, GridLookup, View};
 use atmo::sky::shells::export::RayArrays;
@@ -308,9 +310,10 @@ fn frame_params(inputs: &FrameInputs, sun: Sun, view: &View) -> SkyFrameParams {
     p
 }
 
-/// A skylight table uploaded, with its map pass.
-pub struct GpuSkyTable<'a> {
-    table: &'a SkylightTable,
+/// A skylight table uploaded, with its map pass; `T` is the table borrowed
+/// (`&SkylightTable`) or owned (`SkylightTable`, `Arc<SkylightTable>`).
+pub struct GpuSkyTable<T: Borrow<SkylightTable>> {
+    table: T,
     s: wgpu::Buffer,
     order: wgpu::Buffer,
     used: wgpu::Buffer,
@@ -324,10 +327,10 @@ pub struct GpuSkyTable<'a> {
     map_pass: wgpu::ComputePipeline,
 }
 
-impl<'a> GpuSkyTable<'a> {
+impl<T: Borrow<SkylightTable>> GpuSkyTable<T> {
     /// Uploads `table`'s factors (refused above the device's buffer limits).
-    pub fn new(gpu: &Gpu, table: &'a SkylightTable) -> Result<Self, GpuError> {
-        let f = table.factors();
+    pub fn new(gpu: &Gpu, table: T) -> Result<Self, GpuError> {
+        let f = table.borrow().factors();
         let setting = "the table's directions or epsilon";
         let s = gpu.storage("the table's s_k", bytemuck::cast_slice(f.s), setting)?;
         let order = gpu.storage(
@@ -367,6 +370,11 @@ impl<'a> GpuSkyTable<'a> {
         })
     }
 
+    /// The table drawn.
+    pub fn table(&self) -> &SkylightTable {
+        self.table.borrow()
+    }
+
     /// Writes `t_k` for a sun at `sun_elevation` rad seen from `altitude_m` (refused
     /// outside the table's ranges) and records the map pass.
     fn record_map(
@@ -376,7 +384,7 @@ impl<'a> GpuSkyTable<'a> {
         sun_elevation: f64,
         altitude_m: f64,
     ) -> Result<(), GpuError> {
-        let coefficients = self.table.coefficients(sun_elevation, altitude_m)?;
+        let coefficients = self.table().coefficients(sun_elevation, altitude_m)?;
         gpu.queue
             .write_buffer(&self.coefficients, 0, bytemuck::cast_slice(&coefficients));
         let group = gpu.bind_group(
@@ -430,8 +438,8 @@ impl<'a> GpuSkyTable<'a> {
         view: &View,
     ) -> Result<(), GpuError> {
         self.record_map(gpu, encoder, sun.elevation(), altitude_m)?;
-        let atmosphere = self.table.atmosphere();
-        let grid = self.table.grid(altitude_m);
+        let atmosphere = self.table().atmosphere();
+        let grid = self.table().grid(altitude_m);
         let inputs = FrameInputs {
             sky: &self.map,
             ground_below: grid.elevation_min,
@@ -462,9 +470,10 @@ impl<'a> GpuSkyTable<'a> {
 }
 
 /// A sky model uploaded: its sun-independent maps in one buffer, the shell pass, and the
-/// skylight and ground maps it fills per sun.
-pub struct GpuSkyModel<'a> {
-    model: &'a SkyModel,
+/// skylight and ground maps it fills per sun; `M` is the model borrowed (`&SkyModel`)
+/// or owned.
+pub struct GpuSkyModel<M: Borrow<SkyModel>> {
+    model: M,
     data: wgpu::Buffer,
     /// The shell pass's parameters without the sun, for the sky's and the ground's rays.
     sky_params: ShellParams,
@@ -478,11 +487,11 @@ pub struct GpuSkyModel<'a> {
     uniforms: [wgpu::Buffer; 2],
 }
 
-impl<'a> GpuSkyModel<'a> {
+impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
     /// Uploads `model`'s maps; an error for a model the GPU cannot evaluate yet
     /// (aerosols in the higher orders) or above the device's limits.
-    pub fn new(gpu: &Gpu, model: &'a SkyModel) -> Result<Self, GpuError> {
-        let arrays = model.arrays().ok_or_else(|| {
+    pub fn new(gpu: &Gpu, model: M) -> Result<Self, GpuError> {
+        let arrays = model.borrow().arrays().ok_or_else(|| {
             atmo::Error::Invalid(
                 "aerosols in the higher orders (multiple_mie) are drawn on the CPU only; \
                  render this model on the CPU"
@@ -607,6 +616,11 @@ impl<'a> GpuSkyModel<'a> {
         })
     }
 
+    /// The model drawn.
+    pub fn model(&self) -> &SkyModel {
+        self.model.borrow()
+    }
+
     /// Records the shell pass of both grids for a sun at `sun_elevation` rad.
     fn record_maps(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder, sun_elevation: f64) {
         let (sin_s, cos_s) = sun_elevation.sin_cos();
@@ -683,16 +697,17 @@ impl<'a> GpuSkyModel<'a> {
         view: &View,
     ) -> Result<(), GpuError> {
         self.record_maps(gpu, encoder, sun.elevation());
-        let atmosphere = self.model.atmosphere();
+        let model = self.model();
+        let atmosphere = model.atmosphere();
         let mut spectrum = vec![0.0f32; atmosphere.channels()];
-        self.model.sun_radiance(sun.elevation(), &mut spectrum);
+        model.sun_radiance(sun.elevation(), &mut spectrum);
         let inputs = FrameInputs {
             sky: &self.sky_map,
             sky_grid: self.sky_grid.clone(),
             ground: Some((&self.ground_map, self.ground_grid.clone())),
             ground_below: -atmo::atmosphere::geometry::horizon_dip(
                 atmosphere.bottom_radius_m,
-                self.model.altitude_m(),
+                model.altitude_m(),
             ),
             sun_rgb: SpectrumToRgb::new(&atmosphere.wavelengths_nm).rgb(&spectrum),
             sun_radius: atmosphere.sun_angular_radius,
