@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use atmo::image::ToneMap;
 use atmo::sky::SkySettings;
 use atmo::Atmosphere;
+use atmo_view::sky::SkyParams;
 use clap::{Args, ValueEnum};
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -20,6 +21,67 @@ impl From<ToneMapArg> for ToneMap {
             ToneMapArg::Exponential => ToneMap::Exponential,
             ToneMapArg::Aces => ToneMap::Aces,
             ToneMapArg::Clamp => ToneMap::Clamp,
+        }
+    }
+}
+
+/// A picture of the sky: the sun, the viewpoint, the camera and the display; the still
+/// `atmo sky` and the window `atmo view sky` take the same flags.
+#[derive(Args)]
+pub struct SkyPictureArgs {
+    /// Sun elevation above the horizontal, degrees, in [-90, 90].
+    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
+    pub sun_elevation: f64,
+    /// Sun azimuth, degrees clockwise from north.
+    #[arg(long, default_value_t = 180.0, allow_negative_numbers = true)]
+    pub sun_azimuth: f64,
+    /// Viewpoint altitude above the ground, metres, below the top of the atmosphere.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub altitude: f64,
+    /// Image width, pixels.
+    #[arg(long, default_value_t = 960)]
+    pub width: u32,
+    /// Image height, pixels.
+    #[arg(long, default_value_t = 540)]
+    pub height: u32,
+    /// Camera azimuth, degrees clockwise from north (default: toward the sun).
+    #[arg(long, allow_negative_numbers = true)]
+    pub yaw: Option<f64>,
+    /// Camera elevation, degrees.
+    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
+    pub pitch: f64,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 70.0)]
+    pub fov: f64,
+    /// The whole dome as a fisheye (zenith at the centre, north up, east left).
+    #[arg(long)]
+    pub fisheye: bool,
+    /// Multiplies radiance before the tone map (PNG only); 0.15 suits a day sky,
+    /// raise it for twilight.
+    #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// Tone map for PNG output.
+    #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]
+    pub tone_map: ToneMapArg,
+    /// Leave out the sun's disc.
+    #[arg(long)]
+    pub no_sun_disc: bool,
+}
+
+impl SkyPictureArgs {
+    /// The parameters (the camera toward the sun unless `--yaw`), not yet validated.
+    pub fn params(&self) -> SkyParams {
+        SkyParams {
+            sun_elevation_deg: self.sun_elevation,
+            sun_azimuth_deg: self.sun_azimuth,
+            altitude_m: self.altitude,
+            yaw_deg: self.yaw.unwrap_or(self.sun_azimuth),
+            pitch_deg: self.pitch,
+            fov_deg: self.fov,
+            fisheye: self.fisheye,
+            sun_disc: !self.no_sun_disc,
+            exposure: self.exposure,
+            tone: self.tone_map.into(),
         }
     }
 }
@@ -59,6 +121,18 @@ pub struct ShellArgs {
 }
 
 impl ShellArgs {
+    /// The flags that give these settings, for a still command.
+    pub fn flags(&self) -> String {
+        let mut out = format!(
+            "--order {} --shells {} --directions {} --scattering-directions {}",
+            self.order, self.shells, self.directions, self.scattering_directions
+        );
+        if self.multiple_mie {
+            out.push_str(" --multiple-mie");
+        }
+        out
+    }
+
     /// The settings, not yet validated.
     pub fn settings(&self) -> SkySettings {
         SkySettings {
@@ -73,6 +147,18 @@ impl ShellArgs {
 }
 
 impl AtmosphereArgs {
+    /// The flags that choose this atmosphere, for a still command.
+    pub fn flags(&self) -> String {
+        let mut out = match &self.atmosphere {
+            Some(path) => format!("--atmosphere {}", path.display()),
+            None => format!("--preset {}", self.preset),
+        };
+        if self.ozone {
+            out.push_str(" --ozone");
+        }
+        out
+    }
+
     /// The atmosphere from `--atmosphere` or `--preset`, with `--ozone` applied.
     pub fn load(&self) -> atmo::Result<Atmosphere> {
         let atmosphere = match &self.atmosphere {

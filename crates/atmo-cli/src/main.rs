@@ -10,7 +10,7 @@ mod commands;
 mod output;
 
 use clap::{Parser, Subcommand};
-use commands::{clouds, compare, inspect, precompute, shafts, sky};
+use commands::{clouds, compare, inspect, precompute, shafts, sky, view};
 
 #[derive(Parser)]
 #[command(
@@ -41,6 +41,9 @@ enum Command {
     /// What a skylight table holds (parameters, size, terms, error), and with --plots
     /// the pictures that explain it.
     Inspect(inspect::InspectArgs),
+    /// An interactive window: `atmo view sky` (every flag of `atmo sky`, and
+    /// --frames/--screenshot/--script to run without a person).
+    View(view::ViewArgs),
     /// Time each method against its baseline in the same run and print the ratios.
     Bench(bench::BenchArgs),
 }
@@ -59,6 +62,7 @@ fn main() {
         Command::Clouds(args) => clouds::run(args).map_err(|e| with_flag(e, clouds::FLAGS)),
         Command::Precompute(args) => precompute::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::View(args) => view::run(args).map_err(|e| with_flag(e, sky::FLAGS)),
         Command::Bench(args) => bench::run(args),
     };
     if let Err(error) = result {

@@ -7,3 +7,4 @@ pub mod precompute;
 pub mod shafts;
 pub mod sky;
 mod sky_table;
+pub mod view;

@@ -5,16 +5,15 @@ use std::time::Instant;
 
 use anyhow::Result;
 use atmo::image::{Display, ImageKind};
-use atmo::sky::{SkyModel, SkyPicture, SkylightTable, View};
-use atmo::view::{Camera, Fov, Sun};
+use atmo::sky::{SkyModel, SkyPicture, SkylightTable};
+use atmo::view::Sun;
 use atmo::{Atmosphere, Error};
 use atmo_gpu::sky::{GpuSkyModel, SkyPass, SkyTarget};
 use clap::Args;
-use glam::Vec3;
 use indicatif::ProgressBar;
 
 use super::sky_table::{self, Animate, Animation, TableDrawer};
-use crate::args::{AtmosphereArgs, ShellArgs, ToneMapArg};
+use crate::args::{AtmosphereArgs, ShellArgs, SkyPictureArgs};
 use crate::backend::{gpu_error, BackendArgs};
 
 /// The library's fields that this command's flags set, for error messages.
@@ -31,47 +30,12 @@ pub const FLAGS: &[(&str, &str)] = &[
 
 #[derive(Args)]
 pub struct SkyArgs {
-    /// Sun elevation above the horizontal, degrees, in [-90, 90].
-    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
-    sun_elevation: f64,
-    /// Sun azimuth, degrees clockwise from north.
-    #[arg(long, default_value_t = 180.0, allow_negative_numbers = true)]
-    sun_azimuth: f64,
-    /// Viewpoint altitude above the ground, metres, below the top of the atmosphere.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    altitude: f64,
-    /// Image width, pixels.
-    #[arg(long, default_value_t = 960)]
-    width: u32,
-    /// Image height, pixels.
-    #[arg(long, default_value_t = 540)]
-    height: u32,
-    /// Camera azimuth, degrees clockwise from north (default: toward the sun).
-    #[arg(long, allow_negative_numbers = true)]
-    yaw: Option<f64>,
-    /// Camera elevation, degrees.
-    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
-    pitch: f64,
-    /// Vertical field of view, degrees.
-    #[arg(long, default_value_t = 70.0)]
-    fov: f64,
-    /// The whole dome as a fisheye (zenith at the centre, north up, east left).
-    #[arg(long)]
-    fisheye: bool,
+    #[command(flatten)]
+    picture: SkyPictureArgs,
     #[command(flatten)]
     medium: AtmosphereArgs,
     #[command(flatten)]
     method: ShellArgs,
-    /// Multiplies radiance before the tone map (PNG only); 0.15 suits a day sky,
-    /// raise it for twilight.
-    #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
-    exposure: f32,
-    /// Tone map for PNG output.
-    #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]
-    tone_map: ToneMapArg,
-    /// Leave out the sun's disc.
-    #[arg(long)]
-    no_sun_disc: bool,
     /// Print the radiance per wavelength (CSV) along the directions of this CSV file
     /// (header `azimuth_deg,elevation_deg`, azimuth from the sun's) instead of a picture.
     #[arg(long, value_name = "DIRS.csv", conflicts_with = "output")]
@@ -100,9 +64,10 @@ pub struct SkyArgs {
 
 pub fn run(args: SkyArgs) -> Result<()> {
     // Everything is validated before any work or any file is written.
-    let sun = Sun::from_degrees(args.sun_elevation, args.sun_azimuth)?;
-    if !(args.exposure.is_finite() && args.exposure > 0.0) {
-        return Err(Error::out_of_range("exposure", args.exposure, "(0, inf)").into());
+    let picture = args.picture.params();
+    let sun = picture.sun()?;
+    if !(picture.exposure.is_finite() && picture.exposure > 0.0) {
+        return Err(Error::out_of_range("exposure", picture.exposure as f64, "(0, inf)").into());
     }
     let probe = args.probe.as_deref().map(read_directions).transpose()?;
     let view = match &args.output {
@@ -111,37 +76,26 @@ pub fn run(args: SkyArgs) -> Result<()> {
                 ImageKind::of(path)?;
             }
             // The sky's pictures are seen from the model's altitude; the camera turns.
-            let eye = Vec3::new(0.0, args.altitude as f32, 0.0);
-            let size = (args.width, args.height);
-            let camera = if args.fisheye {
-                Camera::dome(eye, size)?
-            } else {
-                let yaw = args.yaw.unwrap_or(args.sun_azimuth);
-                Camera::yaw_pitch(eye, yaw, args.pitch, Fov::Vertical(args.fov as f32), size)?
-            };
-            Some(View {
-                camera,
-                sun_disc: !args.no_sun_disc,
-            })
+            Some(picture.view((args.picture.width, args.picture.height))?)
         }
         None => None,
     };
     if let (Some(table), Some(view), Some(path)) = (&args.table, &view, &args.output) {
         let table = SkylightTable::read(table)?;
         let display = Display {
-            exposure: args.exposure,
-            tone: args.tone_map.into(),
+            exposure: picture.exposure,
+            tone: picture.tone,
         };
         let gpu = args.device.open()?;
         let drawer = TableDrawer::new(&table, gpu.as_ref())?;
         return match args.animate {
-            None => sky_table::draw(&drawer, sun, args.altitude, view, display, path),
+            None => sky_table::draw(&drawer, sun, picture.altitude_m, view, display, path),
             Some(what) => {
                 let frames = Animation {
                     what,
                     frames: args.frames,
                     sun,
-                    altitude_m: args.altitude,
+                    altitude_m: picture.altitude_m,
                 };
                 sky_table::animate(&drawer, &table, &frames, view, display, path)
             }
@@ -155,7 +109,7 @@ pub fn run(args: SkyArgs) -> Result<()> {
     // Light maps take 0.3 s at the defaults and seconds with --order 3 --multiple-mie.
     let spinner = ProgressBar::new_spinner().with_message("computing the sampling-shell maps");
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
-    let model = SkyModel::new(&atmosphere, &settings, args.altitude);
+    let model = SkyModel::new(&atmosphere, &settings, picture.altitude_m);
     spinner.finish_and_clear();
     let model = model?;
     if let Some(directions) = probe {
@@ -174,7 +128,7 @@ pub fn run(args: SkyArgs) -> Result<()> {
         }
         None => SkyPicture::new(&model, sun).render(&view),
     };
-    frame.write(path, args.exposure, args.tone_map.into())?;
+    frame.write(path, picture.exposure, picture.tone)?;
     eprintln!(
         "atmo: {} ({}x{}, {}, order {}) in {:.0} ms",
         path.display(),

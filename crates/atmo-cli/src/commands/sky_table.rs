@@ -30,7 +30,10 @@ pub enum Animate {
 pub enum TableDrawer<'a> {
     Cpu(&'a SkylightTable),
     /// The pass is the headless one, reused frame to frame.
-    Gpu(&'a Gpu, Box<(GpuSkyTable<&'a SkylightTable>, RefCell<SkyPass>)>),
+    Gpu(
+        &'a Gpu,
+        Box<(GpuSkyTable<&'a SkylightTable>, RefCell<SkyPass>)>,
+    ),
 }
 
 impl<'a> TableDrawer<'a> {

@@ -1,0 +1,474 @@
+//! The window: winit's event loop, the surface, the egui panel, the frame loop, and
+//! screenshots.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use atmo::Error;
+use atmo_gpu::device::choose_adapter;
+use atmo_gpu::display::DisplayPass;
+use atmo_gpu::{Gpu, GpuError};
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, KeyEvent, MouseButton, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+use crate::input::{Input, Key};
+use crate::sky::{unknown_parameter, SkyMode, SkyParams};
+use crate::{Backend, Options, Picture};
+
+/// Opens the window and runs until it is closed or [`Options::frames`] are drawn. Bad
+/// input found before the window is up (a script naming a parameter the sky lacks,
+/// no display, no adapter) is an `atmo::Error`; once it is up, a refused edit is shown
+/// in the window and the last good state stays.
+pub fn run(options: Options, mode: SkyMode) -> Result<()> {
+    let names: Vec<&str> = SkyParams::default()
+        .fields()
+        .iter()
+        .map(|(n, _)| *n)
+        .collect();
+    if let Some(name) = options.script.parameters().find(|n| !names.contains(n)) {
+        return Err(unknown_parameter(name).into());
+    }
+    if let Some(path) = &options.screenshot {
+        atmo::image::ImageKind::of(path)?;
+    }
+    let event_loop = EventLoop::new().map_err(|e| {
+        Error::Invalid(format!(
+            "cannot open a window ({e}): atmo view needs a display (DISPLAY); on a \
+             machine without one, run it under xvfb-run"
+        ))
+    })?;
+    let mut app = App {
+        options,
+        mode: Some(mode),
+        window: None,
+        error: None,
+    };
+    event_loop.run_app(&mut app)?;
+    match app.error {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+struct App {
+    options: Options,
+    /// The mode, until the window is up.
+    mode: Option<SkyMode>,
+    window: Option<Running>,
+    /// What ended the run, reported once the loop returns.
+    error: Option<anyhow::Error>,
+}
+
+/// The window once it is up.
+struct Running {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    gpu: Gpu,
+    mode: SkyMode,
+    picture: Picture,
+    display: DisplayPass,
+    egui: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+    /// Inputs from the window since the last frame.
+    pending: Vec<Input>,
+    /// Where the left button went down over the picture, while it is down.
+    drag_from: Option<(f64, f64)>,
+    cursor: (f64, f64),
+    frame: u64,
+    show_panel: bool,
+    /// The last refusal or failure, shown in the panel.
+    message: Option<String>,
+    /// The last screenshot's still command.
+    still: Option<String>,
+    last_frame: Option<Instant>,
+    frame_ms: f64,
+    method_ms: f64,
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_some() {
+            return;
+        }
+        let Some(mode) = self.mode.take() else {
+            return;
+        };
+        match open(event_loop, &self.options, mode) {
+            Ok(running) => self.window = Some(running),
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(r) = &mut self.window else { return };
+        let consumed = r.egui.on_window_event(&r.window, &event).consumed;
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => r.resize(size),
+            WindowEvent::RedrawRequested => match r.frame(&self.options) {
+                Ok(true) => {}
+                Ok(false) => event_loop.exit(),
+                Err(e) => {
+                    self.error = Some(e);
+                    event_loop.exit();
+                }
+            },
+            WindowEvent::KeyboardInput {
+                event:
+                    KeyEvent {
+                        physical_key: PhysicalKey::Code(code),
+                        state: ElementState::Pressed,
+                        ..
+                    },
+                ..
+            } if !consumed => {
+                if let Some(key) = key_of(code) {
+                    r.pending.push(Input::Key(key));
+                }
+            }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => {
+                r.drag_from = (state == ElementState::Pressed
+                    && !r.egui.egui_ctx().egui_wants_pointer_input())
+                .then_some(r.cursor);
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                r.cursor = (position.x, position.y);
+                if let Some((x, y)) = r.drag_from {
+                    r.pending.push(Input::Drag(
+                        (position.x - x) as f32,
+                        (position.y - y) as f32,
+                    ));
+                    r.drag_from = Some(r.cursor);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
+        if let Some(r) = &self.window {
+            r.window.request_redraw();
+        }
+    }
+}
+
+/// The viewer's key for a physical key.
+fn key_of(code: KeyCode) -> Option<Key> {
+    Some(match code {
+        KeyCode::KeyR => Key::Climb,
+        KeyCode::KeyF => Key::Descend,
+        KeyCode::Equal | KeyCode::NumpadAdd => Key::Faster,
+        KeyCode::Minus | KeyCode::NumpadSubtract => Key::Slower,
+        KeyCode::ArrowLeft => Key::SunLeft,
+        KeyCode::ArrowRight => Key::SunRight,
+        KeyCode::ArrowUp => Key::SunUp,
+        KeyCode::ArrowDown => Key::SunDown,
+        KeyCode::Space => Key::Animate,
+        KeyCode::KeyP => Key::Screenshot,
+        KeyCode::Tab => Key::Panel,
+        _ => return None,
+    })
+}
+
+/// A GPU error found while opening the window: what the user can act on is bad input.
+fn opening(e: GpuError) -> anyhow::Error {
+    match e {
+        GpuError::Atmo(e) => e.into(),
+        GpuError::NoAdapter | GpuError::NoMatch { .. } | GpuError::MissingFeature { .. } => {
+            Error::Invalid(format!("{e} (--adapter names another)")).into()
+        }
+        e => e.into(),
+    }
+}
+
+/// The window, its surface and device, the mode and the panel.
+fn open(event_loop: &ActiveEventLoop, options: &Options, mut mode: SkyMode) -> Result<Running> {
+    let (width, height) = options.size;
+    let attributes = Window::default_attributes()
+        .with_title("atmo view")
+        .with_inner_size(PhysicalSize::new(width, height));
+    let window = Arc::new(
+        event_loop
+            .create_window(attributes)
+            .context("cannot create the window")?,
+    );
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+        Box::new(event_loop.owned_display_handle()),
+    ));
+    let surface = instance
+        .create_surface(window.clone())
+        .context("cannot draw into the window")?;
+    let adapter =
+        choose_adapter(&instance, options.adapter.as_deref(), Some(&surface)).map_err(opening)?;
+    let gpu = Gpu::open(&adapter).map_err(opening)?;
+    let on_gpu = match options.backend {
+        Backend::Cpu => false,
+        Backend::Gpu => true,
+        Backend::Auto => !gpu.is_software(),
+    };
+    eprintln!(
+        "atmo: the window on {}; the sky drawn on the {}",
+        gpu.describe(),
+        if on_gpu { "GPU" } else { "CPU" }
+    );
+    mode.draw_on_gpu(on_gpu);
+    let size = window.inner_size();
+    let mut config = surface
+        .get_default_config(&adapter, size.width.max(1), size.height.max(1))
+        .context("the adapter cannot present to this window")?;
+    // A scripted run draws as fast as it can; a person's, at the display's rate.
+    if options.frames.is_some() {
+        config.present_mode = wgpu::PresentMode::AutoNoVsync;
+    }
+    surface.configure(&gpu.device, &config);
+    let display = DisplayPass::new(&gpu, config.format).map_err(opening)?;
+    let picture = Picture::new(&gpu, (config.width, config.height)).map_err(opening)?;
+    let context = egui::Context::default();
+    let egui = egui_winit::State::new(
+        context,
+        egui::ViewportId::ROOT,
+        &window,
+        Some(window.scale_factor() as f32),
+        None,
+        Some(gpu.limits().max_texture_dimension_2d as usize),
+    );
+    let egui_renderer = egui_wgpu::Renderer::new(&gpu.device, config.format, Default::default());
+    Ok(Running {
+        window,
+        surface,
+        config,
+        gpu,
+        mode,
+        picture,
+        display,
+        egui,
+        egui_renderer,
+        pending: Vec::new(),
+        drag_from: None,
+        cursor: (0.0, 0.0),
+        frame: 0,
+        show_panel: true,
+        message: None,
+        still: None,
+        last_frame: None,
+        frame_ms: 0.0,
+        method_ms: 0.0,
+    })
+}
+
+impl Running {
+    fn resize(&mut self, size: PhysicalSize<u32>) {
+        if size.width == 0 || size.height == 0 {
+            return;
+        }
+        (self.config.width, self.config.height) = (size.width, size.height);
+        self.surface.configure(&self.gpu.device, &self.config);
+        match Picture::new(&self.gpu, (size.width, size.height)) {
+            Ok(picture) => self.picture = picture,
+            Err(e) => self.message = Some(e.to_string()),
+        }
+    }
+
+    /// Draws one frame: the inputs of this frame, the picture, the panel; after the
+    /// last of [`Options::frames`], the screenshot. `false` when the run is over.
+    fn frame(&mut self, options: &Options) -> Result<bool> {
+        let inputs: Vec<Input> = options
+            .script
+            .at(self.frame)
+            .cloned()
+            .chain(self.pending.drain(..))
+            .collect();
+        for input in inputs {
+            self.apply(&input);
+        }
+        self.mode.update();
+        let mut encoder = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("a frame"),
+            });
+        let start = Instant::now();
+        let drawn = self.mode.draw(&self.gpu, &mut encoder, &self.picture);
+        self.method_ms = start.elapsed().as_secs_f64() * 1e3;
+        if let Err(e) = drawn {
+            self.refuse(e);
+        }
+        self.show(encoder)?;
+        let now = Instant::now();
+        if let Some(last) = self.last_frame.replace(now) {
+            self.frame_ms = (now - last).as_secs_f64() * 1e3;
+        }
+        self.frame += 1;
+        if options.frames == Some(self.frame) {
+            if let Some(path) = &options.screenshot {
+                self.screenshot(path)?;
+            }
+            return Ok(false);
+        }
+        Ok(true)
+    }
+
+    fn apply(&mut self, input: &Input) {
+        match input {
+            Input::Key(Key::Panel) => self.show_panel = !self.show_panel,
+            Input::Key(Key::Screenshot) => {
+                let path = PathBuf::from(format!("atmo-view-{:04}.png", self.frame));
+                if let Err(e) = self.screenshot(&path) {
+                    self.refuse(e);
+                }
+            }
+            input => {
+                if let Err(e) = self.mode.apply(input) {
+                    self.refuse(e);
+                }
+            }
+        }
+    }
+
+    /// Shows a refusal in the panel and on stderr; the state stays as it was.
+    fn refuse(&mut self, e: anyhow::Error) {
+        eprintln!("atmo view: {e:#}");
+        self.message = Some(format!("{e:#}"));
+    }
+
+    /// Writes the picture to `path` as the still command would (atomically), and prints
+    /// that command on stdout.
+    fn screenshot(&mut self, path: &Path) -> Result<()> {
+        let frame = self.picture.read(&self.gpu)?;
+        let p = &self.mode.params;
+        frame.write(path, p.exposure, p.tone)?;
+        let still = self.mode.still_command(path, self.picture.size);
+        println!("{still}");
+        self.still = Some(still);
+        Ok(())
+    }
+
+    /// The picture on the surface through the display pass, the panel over it.
+    fn show(&mut self, mut encoder: wgpu::CommandEncoder) -> Result<()> {
+        let texture = match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.surface.configure(&self.gpu.device, &self.config);
+                self.gpu.queue.submit([encoder.finish()]);
+                return Ok(());
+            }
+            other => {
+                // Occluded or timed out: the picture is drawn, nothing shown this time.
+                eprintln!("atmo view: the window's surface: {other:?}");
+                self.gpu.queue.submit([encoder.finish()]);
+                return Ok(());
+            }
+        };
+        let target = texture.texture.create_view(&Default::default());
+        let p = &self.mode.params;
+        self.display.display = atmo::image::Display {
+            exposure: p.exposure,
+            tone: p.tone,
+        };
+        self.display.prepare(&self.gpu, &self.picture.view);
+        let raw = self.egui.take_egui_input(&self.window);
+        let context = self.egui.egui_ctx().clone();
+        let mut edits = Vec::new();
+        let output = context.run_pass(raw, |ctx| {
+            if self.show_panel {
+                edits = self.panel(ctx);
+            }
+        });
+        self.egui
+            .handle_platform_output(&self.window, output.platform_output);
+        let primitives = context.tessellate(output.shapes, output.pixels_per_point);
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [self.config.width, self.config.height],
+            pixels_per_point: output.pixels_per_point,
+        };
+        // egui's texture changes: each applied (its deltas must not be dropped unread).
+        let mut textures = output.textures_delta;
+        for (id, deltas) in textures.set.drain() {
+            for delta in &deltas {
+                self.egui_renderer
+                    .update_texture(&self.gpu.device, &self.gpu.queue, id, delta);
+            }
+        }
+        let extra = self.egui_renderer.update_buffers(
+            &self.gpu.device,
+            &self.gpu.queue,
+            &mut encoder,
+            &primitives,
+            &screen,
+        );
+        {
+            let mut pass = encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("the window"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &target,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    ..Default::default()
+                })
+                .forget_lifetime();
+            self.display.draw(&mut pass);
+            self.egui_renderer.render(&mut pass, &primitives, &screen);
+        }
+        self.gpu
+            .queue
+            .submit(extra.into_iter().chain([encoder.finish()]));
+        self.window.pre_present_notify();
+        self.gpu.queue.present(texture);
+        for id in textures.free.drain() {
+            self.egui_renderer.free_texture(&id);
+        }
+        // Panel edits are inputs of the next frame, applied as any other.
+        self.pending.extend(edits);
+        Ok(())
+    }
+
+    /// The panel: the mode's parameters, the times, the last message and still command.
+    fn panel(&self, ctx: &egui::Context) -> Vec<Input> {
+        let mut edits = Vec::new();
+        egui::Window::new("atmo sky")
+            .default_width(300.0)
+            .show(ctx, |ui| {
+                edits = self.mode.panel(ui);
+                ui.separator();
+                ui.label(format!(
+                    "frame {:.1} ms, method {:.1} ms ({})",
+                    self.frame_ms,
+                    self.method_ms,
+                    self.gpu.describe()
+                ));
+                if ui.button("screenshot and still command (P)").clicked() {
+                    edits.push(Input::Key(Key::Screenshot));
+                }
+                if let Some(still) = &self.still {
+                    ui.label(egui::RichText::new(still).monospace().small());
+                }
+                if let Some(message) = &self.message {
+                    ui.colored_label(egui::Color32::from_rgb(255, 120, 100), message);
+                }
+                ui.label("drag: look; arrows: sun; R / F: climb; space: time of day; Tab: panel");
+            });
+        edits
+    }
+}

@@ -1,0 +1,182 @@
+//! What a user does to the picture, from the window or from a script: the one path by
+//! which the viewer's state changes, so that a scripted run and a person at the window
+//! reach the same pictures.
+
+use std::path::Path;
+
+use atmo::Error;
+
+/// One thing a user does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Input {
+    /// A key pressed.
+    Key(Key),
+    /// The mouse dragged over the picture by (x right, y down) pixels.
+    Drag(f32, f32),
+    /// A panel edit: the parameter that the still command's flag `--NAME` sets, to the
+    /// value as the flag would read it (`set sun-elevation 12.5`).
+    Set(String, String),
+}
+
+/// The keys the viewer answers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Key {
+    /// R: climb one step.
+    Climb,
+    /// F: descend one step.
+    Descend,
+    /// `+` (or `=`): double the step.
+    Faster,
+    /// `-`: halve the step.
+    Slower,
+    /// Left and Right arrows: the sun's azimuth by -5 and +5 deg.
+    SunLeft,
+    SunRight,
+    /// Up and Down arrows: the sun's elevation by +1 and -1 deg.
+    SunUp,
+    SunDown,
+    /// Space: the time-of-day animation on or off.
+    Animate,
+    /// P: a screenshot and its still command.
+    Screenshot,
+    /// Tab: the panel shown or hidden.
+    Panel,
+}
+
+impl Key {
+    /// Every key by the name scripts use.
+    pub const NAMES: &'static [(&'static str, Key)] = &[
+        ("r", Key::Climb),
+        ("f", Key::Descend),
+        ("plus", Key::Faster),
+        ("minus", Key::Slower),
+        ("left", Key::SunLeft),
+        ("right", Key::SunRight),
+        ("up", Key::SunUp),
+        ("down", Key::SunDown),
+        ("space", Key::Animate),
+        ("p", Key::Screenshot),
+        ("tab", Key::Panel),
+    ];
+
+    fn named(name: &str) -> Option<Key> {
+        Key::NAMES
+            .iter()
+            .find(|(n, _)| n.eq_ignore_ascii_case(name))
+            .map(|(_, k)| *k)
+    }
+}
+
+/// Input events replayed at given frames: one a line, `FRAME key NAME`,
+/// `FRAME drag DX DY` or `FRAME set PARAMETER VALUE`; `#` starts a comment.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Script {
+    /// (frame, input), in the file's order.
+    events: Vec<(u64, Input)>,
+}
+
+impl Script {
+    /// Reads and parses a script file; errors name the file and line.
+    pub fn read(path: &Path) -> atmo::Result<Script> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Script::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses a script's text; `origin` names it in errors (`origin:line`).
+    pub fn parse(text: &str, origin: &str) -> atmo::Result<Script> {
+        let mut events = Vec::new();
+        for (i, line) in text.lines().enumerate() {
+            let line = line.split('#').next().unwrap_or("").trim();
+            if line.is_empty() {
+                continue;
+            }
+            let bad = |message: String| Error::Parse {
+                path: format!("{origin}:{}", i + 1),
+                message,
+            };
+            let words: Vec<&str> = line.split_whitespace().collect();
+            let frame: u64 = words[0]
+                .parse()
+                .map_err(|_| bad(format!("'{}' is not a frame number", words[0])))?;
+            let number = |word: &str| -> atmo::Result<f32> {
+                word.parse::<f32>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| bad(format!("'{word}' is not a finite number")))
+            };
+            let input = match words[1..] {
+                ["key", name] => Input::Key(Key::named(name).ok_or_else(|| {
+                    let names: Vec<&str> = Key::NAMES.iter().map(|(n, _)| *n).collect();
+                    bad(format!("no key '{name}'; keys: {}", names.join(", ")))
+                })?),
+                ["drag", dx, dy] => Input::Drag(number(dx)?, number(dy)?),
+                ["set", name, value] => Input::Set(name.to_string(), value.to_string()),
+                _ => {
+                    return Err(bad(format!(
+                        "'{line}' is not 'FRAME key NAME', 'FRAME drag DX DY' or \
+                         'FRAME set PARAMETER VALUE'"
+                    )))
+                }
+            };
+            events.push((frame, input));
+        }
+        Ok(Script { events })
+    }
+
+    /// The inputs of `frame`, in order.
+    pub fn at(&self, frame: u64) -> impl Iterator<Item = &Input> {
+        self.events
+            .iter()
+            .filter(move |(f, _)| *f == frame)
+            .map(|(_, input)| input)
+    }
+
+    /// Every panel edit's parameter name, to check against a mode's before the window
+    /// opens.
+    pub fn parameters(&self) -> impl Iterator<Item = &str> {
+        self.events.iter().filter_map(|(_, input)| match input {
+            Input::Set(name, _) => Some(name.as_str()),
+            _ => None,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_script_reads_keys_drags_and_edits_by_frame() {
+        let script = Script::parse(
+            "# a climb\n0 key r\n0 drag 10 -4.5\n\n3 set sun-elevation 12.5 # dusk\n",
+            "s",
+        )
+        .unwrap();
+        let first: Vec<&Input> = script.at(0).collect();
+        assert_eq!(first, [&Input::Key(Key::Climb), &Input::Drag(10.0, -4.5)]);
+        assert_eq!(script.at(1).count(), 0);
+        assert_eq!(
+            script.at(3).next(),
+            Some(&Input::Set("sun-elevation".into(), "12.5".into()))
+        );
+        assert_eq!(script.parameters().collect::<Vec<_>>(), ["sun-elevation"]);
+    }
+
+    #[test]
+    fn a_bad_line_is_refused_with_its_file_and_line() {
+        for (text, says) in [
+            ("x key r", "not a frame number"),
+            ("1 key q", "no key 'q'"),
+            ("1 drag 1 nan", "not a finite number"),
+            ("1 jump", "is not 'FRAME key NAME'"),
+        ] {
+            let e = Script::parse(&format!("# ok\n{text}"), "run.txt")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("run.txt:2") && e.contains(says), "{text}: {e}");
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! atmo's viewer: a window (winit + wgpu) that draws the sky every frame as the sun,
+//! the altitude and the camera change, with a panel (egui) holding every parameter of
+//! the still command `atmo sky`, so that what a user finds in the window is written
+//! back as the still command that reproduces it.
+//!
+//! The picture is drawn into an RGBA f32 texture ([`Picture`]) by the same code as the
+//! stills: on the GPU through `atmo_gpu`'s embedding API (the sky's [`SkyPass`]
+//! recorded into this program's encoder), or on the CPU by `atmo`'s methods and
+//! uploaded; then `atmo_gpu`'s display pass tone-maps it onto the window's surface.
+//! A screenshot reads the picture back and writes it as the stills do, so a
+//! screenshot and the still command's file can be compared level for level.
+//!
+//! Runs without a person: [`Options::frames`] draws that many frames and saves the
+//! last ([`Options::screenshot`]); a [`Script`] replays key presses, mouse drags and
+//! panel edits at given frames.
+//!
+//! [`SkyPass`]: atmo_gpu::sky::SkyPass
+
+mod app;
+pub mod input;
+pub mod sky;
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use atmo::image::Frame;
+use atmo_gpu::display::picture_texture;
+use atmo_gpu::{Gpu, GpuError};
+
+pub use app::run;
+pub use input::{Input, Key, Script};
+
+/// Where the method runs; the window itself always shows through the GPU's surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    /// A hardware GPU's method when the window's adapter is one, else the CPU's (a
+    /// software adapter such as llvmpipe is slower than atmo's CPU path).
+    Auto,
+    /// The GPU's method, on any adapter.
+    Gpu,
+    /// The CPU's method (rayon over every core); the frame is uploaded and shown.
+    Cpu,
+}
+
+/// How the viewer runs.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// The window's inner size, pixels: the picture's.
+    pub size: (u32, u32),
+    /// Draw this many frames, save the last to [`Options::screenshot`] and close.
+    pub frames: Option<u64>,
+    /// Where the last frame goes (.png or .exr) when [`Options::frames`] is set.
+    pub screenshot: Option<PathBuf>,
+    /// Inputs replayed at given frames.
+    pub script: Script,
+    pub backend: Backend,
+    /// The adapter, by part of its name or a backend (see `atmo_gpu::Gpu::new`).
+    pub adapter: Option<String>,
+}
+
+/// The picture a mode draws each frame: linear radiance, RGBA f32, the window's size.
+pub struct Picture {
+    pub texture: wgpu::Texture,
+    pub view: wgpu::TextureView,
+    /// Width and height, pixels.
+    pub size: (u32, u32),
+}
+
+impl Picture {
+    fn new(gpu: &Gpu, size: (u32, u32)) -> Result<Picture, GpuError> {
+        let texture = picture_texture(gpu, size.0, size.1)?;
+        let view = texture.create_view(&Default::default());
+        Ok(Picture {
+            texture,
+            view,
+            size,
+        })
+    }
+
+    /// Records a render pass into the picture, cleared to black, in which `draw`
+    /// records its draws.
+    pub fn draw(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("the picture"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        draw(&mut pass);
+    }
+
+    /// The picture read back.
+    fn read(&self, gpu: &Gpu) -> Result<Frame, GpuError> {
+        let (width, height) = self.size;
+        let bytes = gpu.read_texture("the screenshot", &self.texture, width, height)?;
+        let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        let mut frame = Frame::new(width, height);
+        for (p, t) in frame.pixels.iter_mut().zip(texels) {
+            *p = glam::Vec3::new(t[0], t[1], t[2]);
+        }
+        Ok(frame)
+    }
+}

@@ -1,0 +1,508 @@
+//! The sky in the window: the parameters of `atmo sky`'s pictures, changed by the
+//! panel, the keys, the mouse and scripts, drawn each frame from a skylight table or by
+//! the shell method, on the CPU or on the GPU.
+
+use std::sync::Arc;
+
+use anyhow::Result;
+use atmo::image::{Frame, ToneMap};
+use atmo::sky::table::SkylightTable;
+use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
+use atmo::view::{Camera, Fov, Sun};
+use atmo::{Atmosphere, Error};
+use atmo_gpu::display::write_frame;
+use atmo_gpu::sky::{GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget};
+use atmo_gpu::Gpu;
+use glam::Vec3;
+
+use crate::input::{Input, Key};
+use crate::Picture;
+
+/// What `atmo sky` draws from.
+pub enum SkySource {
+    /// A skylight table (`atmo precompute sky`): any sun and altitude in its ranges.
+    Table(Arc<SkylightTable>),
+    /// The shell method: the model is rebuilt when the altitude changes.
+    Shells {
+        atmosphere: Box<Atmosphere>,
+        settings: SkySettings,
+    },
+}
+
+/// The picture's parameters, each the value of one of `atmo sky`'s flags.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkyParams {
+    /// `--sun-elevation`, degrees.
+    pub sun_elevation_deg: f64,
+    /// `--sun-azimuth`, degrees clockwise from north, in [0, 360).
+    pub sun_azimuth_deg: f64,
+    /// `--altitude`, metres.
+    pub altitude_m: f64,
+    /// `--yaw`, degrees clockwise from north.
+    pub yaw_deg: f64,
+    /// `--pitch`, degrees.
+    pub pitch_deg: f64,
+    /// `--fov`, vertical, degrees.
+    pub fov_deg: f64,
+    /// `--fisheye`.
+    pub fisheye: bool,
+    /// Not `--no-sun-disc`.
+    pub sun_disc: bool,
+    /// `--exposure`.
+    pub exposure: f32,
+    /// `--tone-map`.
+    pub tone: ToneMap,
+}
+
+impl SkyParams {
+    /// The sun.
+    pub fn sun(&self) -> atmo::Result<Sun> {
+        Sun::from_degrees(self.sun_elevation_deg, self.sun_azimuth_deg)
+    }
+
+    /// The view of a `width` x `height` picture, as `atmo sky` makes it.
+    pub fn view(&self, (width, height): (u32, u32)) -> atmo::Result<View> {
+        let eye = Vec3::new(0.0, self.altitude_m as f32, 0.0);
+        let camera = if self.fisheye {
+            Camera::dome(eye, (width, height))?
+        } else {
+            let fov = Fov::Vertical(self.fov_deg as f32);
+            Camera::yaw_pitch(eye, self.yaw_deg, self.pitch_deg, fov, (width, height))?
+        };
+        Ok(View {
+            camera,
+            sun_disc: self.sun_disc,
+        })
+    }
+
+    /// Each parameter by its flag's name, with its value as the flag reads it (floats
+    /// printed exactly: the still command gives the same picture).
+    pub fn fields(&self) -> Vec<(&'static str, String)> {
+        vec![
+            ("sun-elevation", self.sun_elevation_deg.to_string()),
+            ("sun-azimuth", self.sun_azimuth_deg.to_string()),
+            ("altitude", self.altitude_m.to_string()),
+            ("yaw", self.yaw_deg.to_string()),
+            ("pitch", self.pitch_deg.to_string()),
+            ("fov", self.fov_deg.to_string()),
+            ("fisheye", self.fisheye.to_string()),
+            ("sun-disc", self.sun_disc.to_string()),
+            ("exposure", self.exposure.to_string()),
+            ("tone-map", tone_name(self.tone).to_string()),
+        ]
+    }
+
+    /// The flags of `atmo sky` that give these parameters.
+    pub fn flags(&self) -> String {
+        let mut out = Vec::new();
+        for (name, value) in self.fields() {
+            match (name, value.as_str()) {
+                ("fisheye", "true") => out.push("--fisheye".to_string()),
+                ("sun-disc", "false") => out.push("--no-sun-disc".to_string()),
+                ("fisheye" | "sun-disc", _) => {}
+                _ => out.push(format!("--{name} {value}")),
+            }
+        }
+        out.join(" ")
+    }
+
+    /// Sets the parameter `name` (a flag's name) from `value`; an unknown name or a
+    /// value that does not parse is an error naming it.
+    pub fn set(&mut self, name: &str, value: &str) -> atmo::Result<()> {
+        let bad = |allowed: &str| Error::Invalid(format!("{name}: '{value}' is not {allowed}"));
+        let number = || {
+            value
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad("a finite number"))
+        };
+        let flag = || value.parse::<bool>().map_err(|_| bad("true or false"));
+        match name {
+            "sun-elevation" => self.sun_elevation_deg = number()?,
+            "sun-azimuth" => self.sun_azimuth_deg = number()?,
+            "altitude" => self.altitude_m = number()?,
+            "yaw" => self.yaw_deg = number()?,
+            "pitch" => self.pitch_deg = number()?,
+            "fov" => self.fov_deg = number()?,
+            "fisheye" => self.fisheye = flag()?,
+            "sun-disc" => self.sun_disc = flag()?,
+            "exposure" => self.exposure = number()? as f32,
+            "tone-map" => {
+                self.tone = TONES
+                    .iter()
+                    .find(|(n, _)| *n == value)
+                    .map(|(_, t)| *t)
+                    .ok_or_else(|| bad("clamp, exponential or aces"))?
+            }
+            _ => return Err(unknown_parameter(name)),
+        }
+        Ok(())
+    }
+}
+
+/// The tone maps by the names `--tone-map` takes.
+const TONES: [(&str, ToneMap); 3] = [
+    ("clamp", ToneMap::Clamp),
+    ("exponential", ToneMap::Exponential),
+    ("aces", ToneMap::Aces),
+];
+
+fn tone_name(tone: ToneMap) -> &'static str {
+    TONES
+        .iter()
+        .find(|(_, t)| *t == tone)
+        .map_or("", |(n, _)| n)
+}
+
+/// The error for a parameter the sky does not have, listing those it has.
+pub fn unknown_parameter(name: &str) -> Error {
+    let names: Vec<&str> = SkyParams::default()
+        .fields()
+        .iter()
+        .map(|(n, _)| *n)
+        .collect();
+    Error::Invalid(format!(
+        "no parameter '{name}' in the sky; parameters: {}",
+        names.join(", ")
+    ))
+}
+
+impl Default for SkyParams {
+    /// `atmo sky`'s defaults (the camera toward the sun).
+    fn default() -> Self {
+        SkyParams {
+            sun_elevation_deg: 30.0,
+            sun_azimuth_deg: 180.0,
+            altitude_m: 0.0,
+            yaw_deg: 180.0,
+            pitch_deg: 15.0,
+            fov_deg: 70.0,
+            fisheye: false,
+            sun_disc: true,
+            exposure: 0.15,
+            tone: ToneMap::Exponential,
+        }
+    }
+}
+
+/// What draws the sky: the CPU method or its GPU twin, from the table or a model
+/// (one a run: the sizes of the variants do not matter).
+#[allow(clippy::large_enum_variant)]
+enum Drawer {
+    CpuTable(Arc<SkylightTable>, Frame),
+    /// The model, built at its altitude.
+    CpuShells(SkyModel, Frame),
+    GpuTable(GpuSkyTable<Arc<SkylightTable>>, SkyPass),
+    GpuShells(GpuSkyModel<SkyModel>, SkyPass),
+}
+
+/// The sky mode: parameters, how they change, and the drawer.
+pub struct SkyMode {
+    pub params: SkyParams,
+    source: SkySource,
+    /// `atmo sky`'s flags for the source (`--table FILE`, or the atmosphere's and the
+    /// method's), repeated in the still command.
+    source_flags: String,
+    /// The climb per key press, metres.
+    pub step_m: f64,
+    /// The time-of-day animation: the sun sets by `SUNSET_STEP_DEG` a frame.
+    pub animate: bool,
+    drawer: Option<Drawer>,
+    on_gpu: bool,
+}
+
+/// The sun's descent per frame while animated, degrees.
+const SUNSET_STEP_DEG: f64 = 0.25;
+
+impl SkyMode {
+    /// The mode at `params` (checked) drawing from `source`, on the CPU until
+    /// [`SkyMode::draw_on_gpu`] says otherwise.
+    pub fn new(params: SkyParams, source: SkySource, source_flags: String) -> Result<SkyMode> {
+        let mode = SkyMode {
+            params: params.clone(),
+            source,
+            source_flags,
+            step_m: 250.0,
+            animate: false,
+            drawer: None,
+            on_gpu: false,
+        };
+        mode.check(&params)?;
+        Ok(mode)
+    }
+
+    /// Draws with the GPU's method if `on_gpu`, else the CPU's.
+    pub fn draw_on_gpu(&mut self, on_gpu: bool) {
+        if on_gpu != self.on_gpu {
+            self.on_gpu = on_gpu;
+            self.drawer = None;
+        }
+    }
+
+    /// The sun's elevation range, degrees: the table's, or the whole sky's.
+    pub fn sun_range(&self) -> (f64, f64) {
+        match &self.source {
+            SkySource::Table(t) => (
+                t.sun_axis().min().to_degrees(),
+                t.sun_axis().max().to_degrees(),
+            ),
+            SkySource::Shells { .. } => (-10.0, 90.0),
+        }
+    }
+
+    /// The altitude range, metres: the table's, or up to the atmosphere's top.
+    pub fn altitude_range(&self) -> (f64, f64) {
+        match &self.source {
+            SkySource::Table(t) => (t.altitude_axis().min(), t.altitude_axis().max()),
+            SkySource::Shells { atmosphere, .. } => (
+                0.0,
+                atmosphere.top_radius_m - atmosphere.bottom_radius_m - 1.0,
+            ),
+        }
+    }
+
+    /// Refuses parameters the sky cannot draw, with a message naming the field.
+    fn check(&self, p: &SkyParams) -> Result<()> {
+        let sun = p.sun()?;
+        p.view((2, 2))?;
+        if !(p.exposure.is_finite() && p.exposure > 0.0) {
+            return Err(Error::out_of_range("exposure", p.exposure as f64, "(0, inf)").into());
+        }
+        match &self.source {
+            SkySource::Table(t) => drop(t.coefficients(sun.elevation(), p.altitude_m)?),
+            SkySource::Shells { .. } => {
+                let (low, high) = self.altitude_range();
+                if !(low..=high).contains(&p.altitude_m) {
+                    let range = format!("[{low}, {high}]");
+                    return Err(Error::out_of_range("altitude_m", p.altitude_m, &range).into());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Applies `input`; parameters it would make invalid are refused (the error says
+    /// why) and the last good ones stay.
+    pub fn apply(&mut self, input: &Input) -> Result<()> {
+        let mut p = self.params.clone();
+        match input {
+            Input::Key(key) => match key {
+                Key::Climb => p.altitude_m += self.step_m,
+                Key::Descend => p.altitude_m -= self.step_m,
+                Key::Faster => self.step_m *= 2.0,
+                Key::Slower => self.step_m /= 2.0,
+                Key::SunLeft => p.sun_azimuth_deg = (p.sun_azimuth_deg - 5.0).rem_euclid(360.0),
+                Key::SunRight => p.sun_azimuth_deg = (p.sun_azimuth_deg + 5.0).rem_euclid(360.0),
+                Key::SunUp => p.sun_elevation_deg += 1.0,
+                Key::SunDown => p.sun_elevation_deg -= 1.0,
+                Key::Animate => self.animate = !self.animate,
+                // The window's own keys.
+                Key::Screenshot | Key::Panel => {}
+            },
+            Input::Drag(dx, dy) if !p.fisheye => {
+                p.yaw_deg = (p.yaw_deg + 0.2 * *dx as f64).rem_euclid(360.0);
+                p.pitch_deg = (p.pitch_deg - 0.2 * *dy as f64).clamp(-89.0, 89.0);
+            }
+            Input::Drag(..) => {}
+            Input::Set(name, value) => p.set(name, value)?,
+        }
+        if p != self.params {
+            self.check(&p)?;
+            self.params = p;
+        }
+        Ok(())
+    }
+
+    /// Advances the animation by a frame: the sun sets to the lowest elevation drawn,
+    /// then rises again at 60 deg (or the highest).
+    pub fn update(&mut self) {
+        if self.animate {
+            let (low, high) = self.sun_range();
+            let next = self.params.sun_elevation_deg - SUNSET_STEP_DEG;
+            self.params.sun_elevation_deg = if next < low { high.min(60.0) } else { next };
+        }
+    }
+
+    /// Draws the picture into `picture` (cleared), on the mode's backend. The model of
+    /// the shell method is rebuilt first where the altitude changed.
+    pub fn draw(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        picture: &Picture,
+    ) -> Result<()> {
+        let p = &self.params;
+        let (sun, view) = (p.sun()?, p.view(picture.size)?);
+        let stale = match &self.drawer {
+            Some(Drawer::CpuShells(m, _)) => m.altitude_m() != p.altitude_m,
+            Some(Drawer::GpuShells(m, _)) => m.model().altitude_m() != p.altitude_m,
+            Some(_) => false,
+            None => true,
+        };
+        if stale {
+            self.drawer = Some(self.make_drawer(gpu)?);
+        }
+        let altitude = p.altitude_m;
+        match self.drawer.as_mut().expect("made above") {
+            Drawer::CpuTable(table, frame) => {
+                let frame = resized(frame, picture.size);
+                SkyPicture::from_table(table, sun, altitude)?.render_into(&view, frame);
+                write_frame(gpu, &picture.texture, frame);
+            }
+            Drawer::CpuShells(model, frame) => {
+                let frame = resized(frame, picture.size);
+                SkyPicture::new(model, sun).render_into(&view, frame);
+                write_frame(gpu, &picture.texture, frame);
+            }
+            Drawer::GpuTable(sky, pass) => {
+                sky.prepare(gpu, encoder, pass, sun, altitude, &view)?;
+                picture.draw(encoder, |render| pass.draw(render));
+            }
+            Drawer::GpuShells(sky, pass) => {
+                sky.prepare(gpu, encoder, pass, sun, &view)?;
+                picture.draw(encoder, |render| pass.draw(render));
+            }
+        }
+        Ok(())
+    }
+
+    fn make_drawer(&self, gpu: &Gpu) -> Result<Drawer> {
+        let pass = || SkyPass::new(gpu, SkyTarget::HEADLESS);
+        Ok(match (&self.source, self.on_gpu) {
+            (SkySource::Table(t), false) => Drawer::CpuTable(t.clone(), Frame::new(1, 1)),
+            (SkySource::Table(t), true) => {
+                Drawer::GpuTable(GpuSkyTable::new(gpu, t.clone())?, pass()?)
+            }
+            (
+                SkySource::Shells {
+                    atmosphere,
+                    settings,
+                },
+                on_gpu,
+            ) => {
+                let model = SkyModel::new(atmosphere, settings, self.params.altitude_m)?;
+                if on_gpu {
+                    Drawer::GpuShells(GpuSkyModel::new(gpu, model)?, pass()?)
+                } else {
+                    Drawer::CpuShells(model, Frame::new(1, 1))
+                }
+            }
+        })
+    }
+
+    /// The still command that draws this picture to `output` at `size`.
+    pub fn still_command(&self, output: &std::path::Path, (width, height): (u32, u32)) -> String {
+        let backend = if self.on_gpu { "gpu" } else { "cpu" };
+        format!(
+            "atmo sky {} {} --width {width} --height {height} --backend {backend} -o {}",
+            self.source_flags,
+            self.params.flags(),
+            output.display()
+        )
+    }
+
+    /// The panel's widgets; edits come back as inputs, applied like any other.
+    pub fn panel(&self, ui: &mut egui::Ui) -> Vec<Input> {
+        let mut p = self.params.clone();
+        let (sun_low, sun_high) = self.sun_range();
+        let (low, high) = self.altitude_range();
+        let mut animate = self.animate;
+        ui.add(
+            egui::Slider::new(&mut p.sun_elevation_deg, sun_low..=sun_high)
+                .text("sun elevation, deg"),
+        );
+        ui.add(egui::Slider::new(&mut p.sun_azimuth_deg, 0.0..=359.9).text("sun azimuth, deg"));
+        ui.checkbox(&mut animate, "time of day (space)");
+        ui.add(egui::Slider::new(&mut p.altitude_m, low..=high).text("altitude, m"));
+        ui.label(format!("R / F: climb / descend {} m (+ / -)", self.step_m));
+        ui.separator();
+        ui.checkbox(&mut p.fisheye, "fisheye (the whole dome)");
+        ui.add_enabled_ui(!p.fisheye, |ui| {
+            ui.add(egui::Slider::new(&mut p.yaw_deg, 0.0..=359.9).text("yaw, deg (drag)"));
+            ui.add(egui::Slider::new(&mut p.pitch_deg, -89.0..=89.0).text("pitch, deg"));
+            ui.add(egui::Slider::new(&mut p.fov_deg, 10.0..=150.0).text("vertical fov, deg"));
+        });
+        ui.checkbox(&mut p.sun_disc, "sun disc");
+        ui.separator();
+        ui.add(
+            egui::Slider::new(&mut p.exposure, 0.001..=100.0)
+                .logarithmic(true)
+                .text("exposure"),
+        );
+        egui::ComboBox::from_label("tone map")
+            .selected_text(tone_name(p.tone))
+            .show_ui(ui, |ui| {
+                for (name, tone) in TONES {
+                    ui.selectable_value(&mut p.tone, tone, name);
+                }
+            });
+        let mut inputs: Vec<Input> = p
+            .fields()
+            .into_iter()
+            .zip(self.params.fields())
+            .filter(|(new, old)| new != old)
+            .map(|((name, value), _)| Input::Set(name.to_string(), value))
+            .collect();
+        if animate != self.animate {
+            inputs.push(Input::Key(Key::Animate));
+        }
+        inputs
+    }
+}
+
+/// `frame` at `size`, reallocated only when the size changed.
+fn resized(frame: &mut Frame, (width, height): (u32, u32)) -> &mut Frame {
+    if (frame.width, frame.height) != (width, height) {
+        *frame = Frame::new(width, height);
+    }
+    frame
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_field_sets_back_to_itself_and_reads_as_the_still_flags() {
+        let p = SkyParams {
+            sun_elevation_deg: 3.125,
+            altitude_m: 1234.5,
+            fisheye: true,
+            sun_disc: false,
+            tone: ToneMap::Aces,
+            ..SkyParams::default()
+        };
+        let mut q = SkyParams::default();
+        for (name, value) in p.fields() {
+            q.set(name, &value).unwrap();
+        }
+        assert_eq!(p, q);
+        let flags = p.flags();
+        for part in [
+            "--sun-elevation 3.125",
+            "--altitude 1234.5",
+            "--fisheye",
+            "--no-sun-disc",
+            "--tone-map aces",
+        ] {
+            assert!(flags.contains(part), "{part} missing from {flags}");
+        }
+    }
+
+    #[test]
+    fn bad_edits_name_the_parameter() {
+        let mut p = SkyParams::default();
+        let e = p.set("sun-elevation", "high").unwrap_err().to_string();
+        assert!(
+            e.contains("sun-elevation") && e.contains("finite number"),
+            "{e}"
+        );
+        let e = p.set("colour", "red").unwrap_err().to_string();
+        assert!(
+            e.contains("no parameter 'colour'") && e.contains("sun-azimuth"),
+            "{e}"
+        );
+        assert_eq!(p, SkyParams::default());
+    }
+}
