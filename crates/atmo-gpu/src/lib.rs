@@ -1,8 +1,69 @@
-//! atmo's methods on the GPU with wgpu, headless: the sky from the skylight table
-//! ([`sky`]), light shafts by sample planes ([`shafts`]) and clouds through the 3-D
-//! intensity buffer ([`clouds`]). Each translates the CPU method of the `atmo` crate,
-//! which stays the reference: the tests hold every pipeline's pictures to the CPU's
-//! within half a level of 255 RMS.
+//! atmo's methods on the GPU with wgpu: the sky from the skylight table or by the
+//! shell method ([`sky`]), light shafts by sample planes ([`shafts`]) and clouds
+//! through the 3-D intensity buffer ([`clouds`]). Each translates the CPU method of the
+//! `atmo` crate, which stays the reference: the tests hold every pipeline's pictures to
+//! the CPU's within half a level of 255 RMS.
+//!
+//! # In a program of one's own
+//!
+//! The sky draws into the caller's device, encoder and render pass, with no read-back:
+//! [`Gpu::from_device`] wraps the caller's device and queue; a [`sky::SkyPass`] is
+//! made once for the caller's colour format (and depth buffer, so that the sky fills
+//! only what is still at the far plane); each frame a sky's `prepare` records its maps
+//! into the caller's encoder, and [`sky::SkyPass::draw`] records one full-screen
+//! triangle into the caller's render pass. [`display::DisplayPass`] tone-maps an HDR
+//! picture onto an LDR target the same way. `examples/embed.rs` is a whole program.
+//!
+//! ```no_run
+//! # fn frame(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo,
+//! #          colour: &wgpu::TextureView, depth: &wgpu::TextureView)
+//! #          -> Result<(), atmo_gpu::GpuError> {
+//! use atmo::sky::{SkyModel, SkySettings, View};
+//! use atmo::view::{Camera, Fov, Sun};
+//! use atmo_gpu::sky::{DepthTarget, GpuSkyModel, SkyPass, SkyTarget};
+//!
+//! // Once: atmo on the program's device, the sky uploaded, the pass for its targets.
+//! let gpu = atmo_gpu::Gpu::from_device(device.clone(), queue.clone(), info)?;
+//! let model = SkyModel::new(&atmo::Atmosphere::earth(), &SkySettings::default(), 2.0)?;
+//! let sky = GpuSkyModel::new(&gpu, model)?;
+//! let depth_target = DepthTarget { format: wgpu::TextureFormat::Depth32Float, reversed_z: false };
+//! let target = SkyTarget { format: wgpu::TextureFormat::Rgba16Float, depth: Some(depth_target) };
+//! let mut sky_pass = SkyPass::new(&gpu, target)?;
+//!
+//! // Each frame: the camera in atmo's world frame (+y up, metres), the sun.
+//! let eye = glam::Vec3::new(0.0, 2.0, 0.0);
+//! let camera = Camera::look_at(eye, eye + glam::Vec3::NEG_Z, glam::Vec3::Y, Fov::Vertical(60.0), (1280, 720))?;
+//! let view = View { camera, sun_disc: true };
+//! let sun = Sun::from_degrees(10.0, 180.0)?;
+//! let mut encoder = device.create_command_encoder(&Default::default());
+//! sky.prepare(&gpu, &mut encoder, &mut sky_pass, sun, &view)?;
+//! {
+//!     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+//!         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+//!             view: colour, depth_slice: None, resolve_target: None,
+//!             ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+//!         })],
+//!         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+//!             view: depth,
+//!             depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
+//!             stencil_ops: None,
+//!         }),
+//!         ..Default::default()
+//!     });
+//!     // ... the program's own draws, then:
+//!     sky_pass.draw(&mut pass);
+//! }
+//! queue.submit([encoder.finish()]);
+//! # Ok(()) }
+//! ```
+//!
+//! What a frame costs on the GPU, per pass (counted at the default settings; docs/gpu.md
+//! has the counts for every method and the times measured on a software adapter): the
+//! table's map pass, 12,288 invocations summing 23 terms on average; the shell method's
+//! map pass, 4,096 + 2,048 invocations (sky and ground) of 35 and 16 shell samples;
+//! the picture pass, one bilinear lookup (4 texels) and a few transcendentals per pixel,
+//! 2.07 M at 1920 x 1080. The headless renders (`render`, read back as an
+//! `atmo::image::Frame`) are one user of this path, `atmo view` another.
 //!
 //! Shaders are WGSL under `shaders/`, one per pass, composed by [`wgsl::source`] after
 //! a prelude of constants generated from the Rust and the WGSL twins of the library's
