@@ -25,7 +25,7 @@ use crate::{Backend, Options, Picture};
 /// input found before the window is up (a script naming a parameter the sky lacks,
 /// no display, no adapter) is an `atmo::Error`; once it is up, a refused edit is shown
 /// in the window and the last good state stays.
-pub fn run(options: Options, mode: SkyMode) -> Result<()> {
+pub fn run(options: Options, mode: SkyMode) -> Result<Timings> {
     let names: Vec<&str> = SkyParams::default()
         .fields()
         .iter()
@@ -48,12 +48,22 @@ pub fn run(options: Options, mode: SkyMode) -> Result<()> {
         mode: Some(mode),
         window: None,
         error: None,
+        timings: Timings::default(),
     };
     event_loop.run_app(&mut app)?;
     match app.error {
         Some(e) => Err(e),
-        None => Ok(()),
+        None => Ok(app.timings),
     }
+}
+
+/// What each frame took, ms, in order: from one frame's start to the next's (drawing,
+/// display and presentation), and the method's own draw (on the GPU backend, the
+/// recording of its passes; their execution falls in the frame time).
+#[derive(Debug, Clone, Default)]
+pub struct Timings {
+    pub frame_ms: Vec<f64>,
+    pub method_ms: Vec<f64>,
 }
 
 struct App {
@@ -63,6 +73,7 @@ struct App {
     window: Option<Running>,
     /// What ended the run, reported once the loop returns.
     error: Option<anyhow::Error>,
+    timings: Timings,
 }
 
 /// The window once it is up.
@@ -116,8 +127,16 @@ impl ApplicationHandler for App {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => r.resize(size),
             WindowEvent::RedrawRequested => match r.frame(&self.options) {
-                Ok(true) => {}
-                Ok(false) => event_loop.exit(),
+                Ok(more) => {
+                    // The first frame has no predecessor to time from.
+                    if r.frame > 1 {
+                        self.timings.frame_ms.push(r.frame_ms);
+                    }
+                    self.timings.method_ms.push(r.method_ms);
+                    if !more {
+                        event_loop.exit();
+                    }
+                }
                 Err(e) => {
                     self.error = Some(e);
                     event_loop.exit();

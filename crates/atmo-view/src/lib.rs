@@ -27,7 +27,7 @@ use atmo::image::Frame;
 use atmo_gpu::display::picture_texture;
 use atmo_gpu::{Gpu, GpuError};
 
-pub use app::run;
+pub use app::{run, Timings};
 pub use input::{Input, Key, Script};
 
 /// Where the method runs; the window itself always shows through the GPU's surface.

@@ -5,6 +5,7 @@ mod clouds;
 mod shafts;
 mod sky;
 mod sky_table;
+mod view;
 
 use std::time::Instant;
 
@@ -54,9 +55,21 @@ enum Area {
     /// Clouds: the intensity buffer's light pass against the Harris baseline, its error,
     /// and a frame.
     Clouds,
+    /// The window of `atmo view`: frame times over scripted runs at 1280 x 720 (a
+    /// climb with the sun setting from a table; the sun setting by the shell method)
+    /// beside the still's draw of the same frame; needs a display (xvfb-run).
+    View,
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
+    if let Area::View = args.area {
+        let backends: &[&str] = match args.backend {
+            Backend::Cpu => &["cpu"],
+            Backend::Gpu => &["gpu"],
+            Backend::Auto => &["cpu", "gpu"],
+        };
+        return view::run(args.quick, args.json, backends);
+    }
     if args.backend != Backend::Cpu {
         let device = BackendArgs {
             backend: Backend::Gpu,
@@ -70,12 +83,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
             Area::SkyTable => sky_table::gpu(&gpu, args.quick, args.json),
             Area::Shafts => shafts::gpu(&gpu, args.quick, args.json, &args.scenes),
             Area::Clouds => clouds::gpu(&gpu, args.quick, args.json),
+            Area::View => unreachable!("handled above"),
         };
     }
     match args.area {
         Area::Sky => sky::cpu(args.quick, args.json),
         Area::SkyTable => sky_table::cpu(args.quick, args.json),
         Area::Clouds => clouds::cpu(args.quick, args.json),
+        Area::View => unreachable!("handled above"),
         Area::Shafts => {
             atmo::image::check_folder(&args.sweep_dir.join("shafts-sweep.csv"))?;
             shafts::cpu(args.quick, args.json, &args.scenes, &args.sweep_dir)

@@ -36,15 +36,21 @@ fn quantile(v: &mut [f32], q: f64) -> f32 {
     v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
-pub fn cpu(quick: bool, json: bool) -> Result<()> {
-    let atmosphere = Atmosphere::earth();
+/// The table the benches draw from: the defaults, or with --quick a coarse one (a
+/// tenth of a minute), for a smoke test; not the figures.
+pub(super) fn table_settings(quick: bool) -> TableSettings {
     let mut settings = TableSettings::default();
-    // --quick: a coarse table (a tenth of a minute), for a smoke test; not the figures.
     if quick {
         settings.sky.directions = 32;
         settings.sun_steps = 32;
         settings.altitude_steps = 8;
     }
+    settings
+}
+
+pub fn cpu(quick: bool, json: bool) -> Result<()> {
+    let atmosphere = Atmosphere::earth();
+    let settings = table_settings(quick);
     let (altitudes, suns_each, map_runs, frame_runs) = if quick {
         (5, 4, 50, 3)
     } else {
@@ -231,12 +237,7 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
 }
 
 pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
-    let mut settings = TableSettings::default();
-    if quick {
-        settings.sky.directions = 32;
-        settings.sun_steps = 32;
-        settings.altitude_steps = 8;
-    }
+    let settings = table_settings(quick);
     eprintln!("atmo: precomputing the table on the CPU (a minute at the defaults)");
     let table = SkylightTable::precompute(&Atmosphere::earth(), &settings, &|_, _| {})?;
     let sky = GpuSkyTable::new(gpu, &table).map_err(gpu_error)?;

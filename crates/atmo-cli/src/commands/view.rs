@@ -58,6 +58,10 @@ struct WindowArgs {
     /// Where --frames saves the last frame: .png (8-bit sRGB) or .exr (linear).
     #[arg(long, value_name = "FILE", requires = "frames")]
     screenshot: Option<PathBuf>,
+    /// At the end, print the frame and method times as one JSON line on stdout
+    /// (median and 95th percentile, ms; what `atmo bench view` reads).
+    #[arg(long)]
+    timings: bool,
     /// Replay inputs, one a line: `FRAME key NAME`, `FRAME drag DX DY` or
     /// `FRAME set PARAMETER VALUE` (PARAMETER: a flag of atmo sky, without --).
     #[arg(long, value_name = "FILE")]
@@ -107,5 +111,22 @@ pub fn run(args: ViewArgs) -> Result<()> {
         },
         adapter: args.device.adapter,
     };
-    atmo_view::run(options, mode)
+    let timings = atmo_view::run(options, mode)?;
+    if args.window.timings {
+        let stats = |v: &[f64]| {
+            let mut v = v.to_vec();
+            v.sort_by(f64::total_cmp);
+            let at = |q: f64| {
+                v.get(((v.len() as f64 - 1.0) * q).round() as usize)
+                    .copied()
+            };
+            serde_json::json!({"median_ms": at(0.5), "p95_ms": at(0.95), "count": v.len()})
+        };
+        let line = serde_json::json!({
+            "frame": stats(&timings.frame_ms),
+            "method": stats(&timings.method_ms),
+        });
+        println!("{line}");
+    }
+    Ok(())
 }

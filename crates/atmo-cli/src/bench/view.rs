@@ -1,0 +1,139 @@
+//! `atmo bench view`: the window's frame times over scripted runs at 1280 x 720, beside
+//! the still's draw of the same frame in the same run. Each case runs `atmo view` as
+//! its own process (a window per process), which prints its times as JSON.
+
+use std::path::Path;
+use std::process::Command;
+
+use anyhow::{bail, Context, Result};
+use atmo::sky::table::SkylightTable;
+use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
+use atmo::view::{Camera, Fov, Sun};
+use atmo::Atmosphere;
+use glam::Vec3;
+use serde_json::{json, Value};
+
+use super::sky_table::table_settings;
+use super::{emit, median, time_ms};
+
+const SIZE: (u32, u32) = (1280, 720);
+
+/// A flight: the time of day running (the sun sets a quarter degree a frame) while the
+/// viewpoint climbs 250 m a frame from the ground.
+fn flight(frames: u64) -> String {
+    let mut script = String::from("0 key space\n");
+    for f in 1..frames {
+        script.push_str(&format!("{f} key r\n"));
+    }
+    script
+}
+
+/// Runs `atmo view sky` with `args` for `frames` frames under the current display and
+/// returns its times.
+fn window(dir: &Path, args: &[&str], frames: u64, script: &str) -> Result<Value> {
+    let script_path = dir.join("script.txt");
+    std::fs::write(&script_path, script)?;
+    let shot = dir.join("last.png");
+    let exe = std::env::current_exe()?;
+    let (w, h) = (SIZE.0.to_string(), SIZE.1.to_string());
+    let output = Command::new(exe)
+        .args(["view", "sky", "--width", &w, "--height", &h, "--timings"])
+        .args(["--frames", &frames.to_string()])
+        .args(["--screenshot", shot.to_str().context("a UTF-8 path")?])
+        .args(["--script", script_path.to_str().context("a UTF-8 path")?])
+        .args(args)
+        .output()?;
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    if !output.status.success() {
+        bail!(
+            "atmo view failed: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+    let line = stdout
+        .lines()
+        .last()
+        .context("atmo view printed no times")?;
+    Ok(serde_json::from_str(line)?)
+}
+
+/// The still's draw of one frame (CPU, the picture only), median of `runs`.
+fn still_ms(runs: usize, mut draw: impl FnMut(&View)) -> Result<f64> {
+    let camera = Camera::yaw_pitch(Vec3::ZERO, 180.0, 15.0, Fov::Vertical(70.0), SIZE)?;
+    let view = View {
+        camera,
+        sun_disc: true,
+    };
+    draw(&view);
+    Ok(median((0..runs).map(|_| time_ms(|| draw(&view))).collect()))
+}
+
+pub fn run(quick: bool, json: bool, backends: &[&str]) -> Result<()> {
+    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        return Err(atmo::Error::Invalid(
+            "atmo bench view opens windows: it needs a display (run it under xvfb-run)".into(),
+        )
+        .into());
+    }
+    let dir = std::env::temp_dir().join(format!("atmo-bench-view-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let atmosphere = Atmosphere::earth();
+    eprintln!("atmo: precomputing the table (a minute at the defaults, --quick: seconds)");
+    let table = SkylightTable::precompute(&atmosphere, &table_settings(quick), &|_, _| {})?;
+    let table_path = dir.join("bench.atmo-sky");
+    table.write(&table_path)?;
+    let frames = if quick { 20 } else { 49 };
+    let sun = Sun::from_degrees(30.0, 180.0)?;
+    let table_still = still_ms(5, |view| {
+        let picture = SkyPicture::from_table(&table, sun, 3000.0).expect("inside the table");
+        std::hint::black_box(picture.render(view));
+    })?;
+    let model = SkyModel::new(&atmosphere, &SkySettings::default(), 0.0)?;
+    let shells_still = still_ms(5, |view| {
+        std::hint::black_box(SkyPicture::new(&model, sun).render(view));
+    })?;
+    let table_arg = table_path.to_str().context("a UTF-8 path")?;
+    for &backend in backends {
+        let cases = [
+            (
+                "view.sky",
+                vec!["--table", table_arg],
+                flight(frames),
+                table_still,
+            ),
+            (
+                "view.sky-shells",
+                vec![],
+                "0 key space\n".to_string(),
+                shells_still,
+            ),
+        ];
+        for (name, mut args, script, still) in cases {
+            args.extend(["--backend", backend]);
+            let times = window(&dir, &args, frames, &script)?;
+            let frame = &times["frame"];
+            let median_ms = frame["median_ms"].as_f64().context("a frame time")?;
+            emit(
+                json,
+                json!({
+                    "bench": name,
+                    "params": {"backend": backend, "width": SIZE.0, "height": SIZE.1,
+                               "frames": frames, "script": if name == "view.sky" {
+                                   "climb 250 m a frame, sun setting"
+                               } else { "sun setting" }},
+                    "median_ms": median_ms, "p95_ms": frame["p95_ms"],
+                    "method_median_ms": times["method"]["median_ms"],
+                    "baseline": "the still's CPU draw of the same frame (picture only)",
+                    "baseline_median_ms": still, "ratio": still / median_ms,
+                }),
+                format!(
+                    "{name:<16} {backend}: frame {median_ms:>7.1} ms (p95 {:.1}), method {:.1} ms; still draw {still:.1} ms",
+                    frame["p95_ms"].as_f64().unwrap_or(f64::NAN),
+                    times["method"]["median_ms"].as_f64().unwrap_or(f64::NAN),
+                ),
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
