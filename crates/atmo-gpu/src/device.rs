@@ -240,10 +240,32 @@ impl Gpu {
         layout: Option<&wgpu::PipelineLayout>,
         blend: wgpu::BlendComponent,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
-        self.scoped("a render pipeline", || {
+        let target = wgpu::ColorTargetState {
+            format: wgpu::TextureFormat::Rgba32Float,
+            blend: Some(wgpu::BlendState {
+                color: blend,
+                alpha: blend,
+            }),
+            write_mask: wgpu::ColorWrites::ALL,
+        };
+        self.screen_pipeline("a render pipeline", module, layout, target, None)
+    }
+
+    /// A render pipeline drawing `vertex` and `fragment` of `module` (no vertex
+    /// buffers, triangles) into one colour `target`, depth-tested by `depth` where given;
+    /// refused as a [`GpuError`] naming `what` where the device cannot make it.
+    pub fn screen_pipeline(
+        &self,
+        what: &str,
+        module: &wgpu::ShaderModule,
+        layout: Option<&wgpu::PipelineLayout>,
+        target: wgpu::ColorTargetState,
+        depth: Option<wgpu::DepthStencilState>,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        self.scoped(what, || {
             self.device
                 .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: None,
+                    label: Some(what),
                     layout,
                     vertex: wgpu::VertexState {
                         module,
@@ -255,17 +277,10 @@ impl Gpu {
                         module,
                         entry_point: Some("fragment"),
                         compilation_options: Default::default(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format: wgpu::TextureFormat::Rgba32Float,
-                            blend: Some(wgpu::BlendState {
-                                color: blend,
-                                alpha: blend,
-                            }),
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
+                        targets: &[Some(target)],
                     }),
                     primitive: Default::default(),
-                    depth_stencil: None,
+                    depth_stencil: depth,
                     multisample: Default::default(),
                     multiview_mask: None,
                     cache: None,

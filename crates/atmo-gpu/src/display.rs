@@ -87,30 +87,13 @@ impl DisplayPass {
                 bind_group_layouts: &[Some(&layout)],
                 immediate_size: 0,
             });
-        let pipeline = gpu.scoped("the display pass", || {
-            gpu.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("the display pass"),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vertex"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some("fragment"),
-                        compilation_options: Default::default(),
-                        targets: &[Some(format.into())],
-                    }),
-                    primitive: Default::default(),
-                    depth_stencil: None,
-                    multisample: Default::default(),
-                    multiview_mask: None,
-                    cache: None,
-                })
-        })?;
+        let pipeline = gpu.screen_pipeline(
+            "the display pass",
+            &module,
+            Some(&pipeline_layout),
+            format.into(),
+            None,
+        )?;
         Ok(DisplayPass {
             pipeline,
             layout,
@@ -157,6 +140,29 @@ impl DisplayPass {
             pass.draw(0..3, 0..1);
         }
     }
+}
+
+/// A render pass into `target` alone, cleared to `colour`: what a picture or a window's
+/// frame starts from.
+pub fn cleared_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &wgpu::TextureView,
+    label: &str,
+    colour: wgpu::Color,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(colour),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        ..Default::default()
+    })
 }
 
 /// An RGBA f32 picture texture of `width` x `height` (checked against the device's

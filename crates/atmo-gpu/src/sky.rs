@@ -19,6 +19,7 @@ use atmo::sky::{DirectionGrid, SkyModel};
 use atmo::view::{PixelBasis, Sun};
 use glam::Vec3;
 
+use crate::display::cleared_pass;
 use crate::wgsl;
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
@@ -165,30 +166,13 @@ impl SkyPass {
             stencil: Default::default(),
             bias: Default::default(),
         });
-        let pipeline = gpu.scoped("the sky's picture pass", || {
-            gpu.device
-                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("the sky's picture pass"),
-                    layout: None,
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vertex"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some("fragment"),
-                        compilation_options: Default::default(),
-                        targets: &[Some(target.format.into())],
-                    }),
-                    primitive: Default::default(),
-                    depth_stencil,
-                    multisample: Default::default(),
-                    multiview_mask: None,
-                    cache: None,
-                })
-        })?;
+        let pipeline = gpu.screen_pipeline(
+            "the sky's picture pass",
+            &module,
+            None,
+            target.format.into(),
+            depth_stencil,
+        )?;
         Ok(SkyPass {
             pipeline,
             params: gpu.uniform(
@@ -761,20 +745,12 @@ fn picture(
     let mut prepared = Ok(());
     let gpu_ms = gpu.run("the sky frame", |encoder| {
         prepared = prepare(encoder, pass);
-        let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("the sky frame"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..Default::default()
-        });
-        pass.draw(&mut render);
+        pass.draw(&mut cleared_pass(
+            encoder,
+            &target,
+            "the sky frame",
+            wgpu::Color::BLACK,
+        ));
     })?;
     prepared?;
     let bytes = gpu.read_texture("the sky frame", &texture, width, height)?;

@@ -4,7 +4,7 @@
 mod common;
 
 use atmo::image::{Display, Frame, ToneMap};
-use atmo_gpu::display::{picture_texture, write_frame, DisplayPass};
+use atmo_gpu::display::{cleared_pass, picture_texture, write_frame, DisplayPass};
 use common::gpu;
 use glam::Vec3;
 
@@ -32,20 +32,12 @@ fn the_display_pass_shows_a_frame_as_the_png_writer_does() {
         pass.corner = [5, 3];
         pass.prepare(&gpu, &picture.create_view(&Default::default()));
         gpu.run("display", |encoder| {
-            let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: None,
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLUE),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                ..Default::default()
-            });
-            pass.draw(&mut render);
+            pass.draw(&mut cleared_pass(
+                encoder,
+                &target_view,
+                "display",
+                wgpu::Color::BLUE,
+            ));
         })
         .unwrap();
         let bytes = gpu.read_texture("display", &target, 48, 28).unwrap();

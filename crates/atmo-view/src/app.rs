@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use atmo::Error;
 use atmo_gpu::device::choose_adapter;
-use atmo_gpu::display::DisplayPass;
+use atmo_gpu::display::{cleared_pass, DisplayPass};
 use atmo_gpu::{Gpu, GpuError};
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -432,20 +432,7 @@ impl Running {
             &screen,
         );
         {
-            let mut pass = encoder
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("the window"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &target,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    ..Default::default()
-                })
+            let mut pass = cleared_pass(&mut encoder, &target, "the window", wgpu::Color::BLACK)
                 .forget_lifetime();
             self.display.draw(&mut pass);
             self.egui_renderer.render(&mut pass, &primitives, &screen);

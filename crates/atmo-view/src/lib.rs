@@ -24,7 +24,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use atmo::image::Frame;
-use atmo_gpu::display::picture_texture;
+use atmo_gpu::display::{cleared_pass, picture_texture};
 use atmo_gpu::{Gpu, GpuError};
 
 pub use app::{run, Timings};
@@ -84,19 +84,7 @@ impl Picture {
         encoder: &mut wgpu::CommandEncoder,
         draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("the picture"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..Default::default()
-        });
+        let mut pass = cleared_pass(encoder, &self.view, "the picture", wgpu::Color::BLACK);
         draw(&mut pass);
     }
 
