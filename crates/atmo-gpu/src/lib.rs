@@ -118,8 +118,8 @@ pub enum GpuError {
     Atmo(#[from] atmo::Error),
 }
 
-/// A frame of `width` x `height` from RGBA f32 pixels, alpha dropped.
-pub(crate) fn frame_of(width: u32, height: u32, bytes: &[u8]) -> atmo::image::Frame {
+/// A frame of `width` x `height` from RGBA f32 pixels read back, alpha dropped.
+pub fn frame_of(width: u32, height: u32, bytes: &[u8]) -> atmo::image::Frame {
     let values: &[f32] = bytemuck::cast_slice(bytes);
     let mut frame = atmo::image::Frame::new(width, height);
     for (pixel, v) in frame.pixels.iter_mut().zip(values.chunks(4)) {

@@ -92,11 +92,6 @@ impl Picture {
     fn read(&self, gpu: &Gpu) -> Result<Frame, GpuError> {
         let (width, height) = self.size;
         let bytes = gpu.read_texture("the screenshot", &self.texture, width, height)?;
-        let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-        let mut frame = Frame::new(width, height);
-        for (p, t) in frame.pixels.iter_mut().zip(texels) {
-            *p = glam::Vec3::new(t[0], t[1], t[2]);
-        }
-        Ok(frame)
+        Ok(atmo_gpu::frame_of(width, height, &bytes))
     }
 }

@@ -60,6 +60,19 @@ impl SkyParams {
         Sun::from_degrees(self.sun_elevation_deg, self.sun_azimuth_deg)
     }
 
+    /// Refuses a sun out of range or an exposure that is not positive, naming the field.
+    pub fn validate(&self) -> atmo::Result<()> {
+        self.sun()?;
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            return Err(Error::out_of_range(
+                "exposure",
+                self.exposure as f64,
+                "(0, inf)",
+            ));
+        }
+        Ok(())
+    }
+
     /// The view of a `width` x `height` picture, as `atmo sky` makes it.
     pub fn view(&self, (width, height): (u32, u32)) -> atmo::Result<View> {
         let eye = Vec3::new(0.0, self.altitude_m as f32, 0.0);
@@ -264,11 +277,9 @@ impl SkyMode {
 
     /// Refuses parameters the sky cannot draw, with a message naming the field.
     fn check(&self, p: &SkyParams) -> Result<()> {
-        let sun = p.sun()?;
+        p.validate()?;
         p.view((2, 2))?;
-        if !(p.exposure.is_finite() && p.exposure > 0.0) {
-            return Err(Error::out_of_range("exposure", p.exposure as f64, "(0, inf)").into());
-        }
+        let sun = p.sun()?;
         match &self.source {
             SkySource::Table(t) => drop(t.coefficients(sun.elevation(), p.altitude_m)?),
             SkySource::Shells { .. } => {

@@ -99,9 +99,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
 }
 
 /// The median of `v` (the upper one of an even count).
-pub fn median(mut v: Vec<f64>) -> f64 {
+pub fn median(v: Vec<f64>) -> f64 {
+    percentile(v, 0.5)
+}
+
+/// The value of `v` at fraction `q` of its sorted order (the nearest rank, halves up).
+pub fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
+    v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
 /// Milliseconds taken by `f`.

@@ -65,10 +65,8 @@ pub struct SkyArgs {
 pub fn run(args: SkyArgs) -> Result<()> {
     // Everything is validated before any work or any file is written.
     let picture = args.picture.params();
+    picture.validate()?;
     let sun = picture.sun()?;
-    if !(picture.exposure.is_finite() && picture.exposure > 0.0) {
-        return Err(Error::out_of_range("exposure", picture.exposure as f64, "(0, inf)").into());
-    }
     let probe = args.probe.as_deref().map(read_directions).transpose()?;
     let view = match &args.output {
         Some(path) => {

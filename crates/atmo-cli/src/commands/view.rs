@@ -12,6 +12,7 @@ use clap::{Args, Subcommand};
 
 use crate::args::{AtmosphereArgs, ShellArgs, SkyPictureArgs};
 use crate::backend::{Backend, BackendArgs};
+use crate::bench::percentile;
 
 #[derive(Args)]
 pub struct ViewArgs {
@@ -114,12 +115,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
     let timings = atmo_view::run(options, mode)?;
     if args.window.timings {
         let stats = |v: &[f64]| {
-            let mut v = v.to_vec();
-            v.sort_by(f64::total_cmp);
-            let at = |q: f64| {
-                v.get(((v.len() as f64 - 1.0) * q).round() as usize)
-                    .copied()
-            };
+            let at = |q| (!v.is_empty()).then(|| percentile(v.to_vec(), q));
             serde_json::json!({"median_ms": at(0.5), "p95_ms": at(0.95), "count": v.len()})
         };
         let line = serde_json::json!({
