@@ -469,6 +469,8 @@ pub struct GpuSkyModel<M: Borrow<SkyModel>> {
     shells: wgpu::ComputePipeline,
     /// The shell pass's parameters of the sky's and the ground's grids, written per sun.
     uniforms: [wgpu::Buffer; 2],
+    /// The sun disc's spectrum to linear sRGB, made once (it integrates the CMFs).
+    to_rgb: SpectrumToRgb,
 }
 
 impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
@@ -583,7 +585,9 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
             )
         };
         let module = wgsl::module(gpu, "sky_shells.wgsl")?;
+        let to_rgb = SpectrumToRgb::new(&model.borrow().atmosphere().wavelengths_nm);
         Ok(GpuSkyModel {
+            to_rgb,
             model,
             data: buffer,
             sky_params,
@@ -693,7 +697,7 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
                 atmosphere.bottom_radius_m,
                 model.altitude_m(),
             ),
-            sun_rgb: SpectrumToRgb::new(&atmosphere.wavelengths_nm).rgb(&spectrum),
+            sun_rgb: self.to_rgb.rgb(&spectrum),
             sun_radius: atmosphere.sun_angular_radius,
         };
         pass.set(gpu, &inputs, sun, view);
