@@ -118,6 +118,10 @@ pub struct ShellArgs {
     /// Let aerosols scatter the higher orders too (the paper: Rayleigh only).
     #[arg(long)]
     multiple_mie: bool,
+    /// Longest interval between samples along a ray, metres (longer ones are split);
+    /// raise it for planets far larger than the Earth.
+    #[arg(long, value_name = "METRES", default_value_t = SkySettings::default().max_interval_m)]
+    max_interval: f64,
 }
 
 impl ShellArgs {
@@ -130,6 +134,9 @@ impl ShellArgs {
         if self.multiple_mie {
             out.push_str(" --multiple-mie");
         }
+        if self.max_interval != SkySettings::default().max_interval_m {
+            out.push_str(&format!(" --max-interval {}", self.max_interval));
+        }
         out
     }
 
@@ -141,6 +148,7 @@ impl ShellArgs {
             scattering_directions: self.scattering_directions,
             order: self.order,
             multiple_mie: self.multiple_mie,
+            max_interval_m: self.max_interval,
             ..SkySettings::default()
         }
     }

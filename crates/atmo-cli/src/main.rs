@@ -21,6 +21,18 @@ use commands::{clouds, compare, inspect, precompute, shafts, sky, view};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Memory the run may use for everything whose size depends on the input (maps,
+    /// frames, buffers, shadow maps, files): 2G, 512M, 4096 (MiB). Larger requests are
+    /// refused before they are made, naming the setting to lower.
+    #[arg(long, global = true, value_name = "SIZE", default_value = "2G", value_parser = memory_limit)]
+    memory_limit: u64,
+}
+
+/// `--memory-limit`: a size of at least [`atmo::budget::MIN_LIMIT_BYTES`].
+fn memory_limit(text: &str) -> Result<u64, String> {
+    let bytes = atmo::budget::parse_size(text)?;
+    atmo::budget::check_limit(bytes).map_err(|e| e.to_string())?;
+    Ok(bytes)
 }
 
 #[derive(Subcommand)]
@@ -54,7 +66,22 @@ fn main() {
     if std::env::var_os("NODEVICE_SELECT").is_none() {
         std::env::set_var("NODEVICE_SELECT", "1");
     }
+    // An interrupted run leaves no temporary behind (SIGINT, SIGTERM, SIGHUP); one
+    // killed outright leaves them for the next write into the folder to remove.
+    let _ = ctrlc::set_handler(|| {
+        atmo::files::interrupt();
+        eprintln!("atmo: interrupted; nothing was left half-written");
+        std::process::exit(130);
+    });
+    // `atmo ... | head`: a closed pipe ends the run quietly, as it does other Unix
+    // tools (Rust ignores SIGPIPE, and printing then panics).
+    #[cfg(unix)]
+    // SAFETY: called before any other thread starts; SIG_DFL is a valid disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
+    atmo::budget::set_limit(cli.memory_limit).expect("checked by clap");
     let result = match cli.command {
         Command::Sky(args) => sky::run(args).map_err(|e| with_flag(e, sky::FLAGS)),
         Command::Shafts(args) => shafts::run(args),
@@ -66,6 +93,12 @@ fn main() {
         Command::Bench(args) => bench::run(args),
     };
     if let Err(error) = result {
+        if atmo::files::interrupted() {
+            // A write refused because of the signal: the handler is exiting.
+            loop {
+                std::thread::park();
+            }
+        }
         eprintln!("atmo: {error:#}");
         // Errors of the library are about what the user asked for; others are ours.
         let code = if error.downcast_ref::<atmo::Error>().is_some() {

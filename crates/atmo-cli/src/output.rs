@@ -3,13 +3,15 @@
 
 use std::path::Path;
 
-use atmo::image::{write_atomically, Display, Frame};
+use atmo::files::{check_folder, write_atomically, write_folder_atomically};
+use atmo::image::{Display, Frame};
 use atmo::Error;
 
 /// Writes the frames `fill` draws (given the frame number and a `size` frame to draw
-/// into) into the folder `folder` (created) as `frame-0000.png` ... and
-/// `animation.png`, an animated PNG at 30 frames/s, each file atomically. Returns the
-/// animation's path.
+/// into) into the folder `folder` as `frame-0000.png` ... and `animation.png`, an
+/// animated PNG at 30 frames/s. They are written into a temporary folder that becomes
+/// `folder` at the end (or whose files move into it, where it exists), so an
+/// interrupted or failed run leaves no partial frames. Returns the animation's path.
 pub fn write_animation(
     folder: &Path,
     frames: usize,
@@ -24,45 +26,44 @@ pub fn write_animation(
         ))
         .into());
     }
-    std::fs::create_dir_all(folder).map_err(|source| Error::Io {
-        path: folder.to_path_buf(),
-        source,
-    })?;
-    let apng = folder.join("animation.png");
-    let png_error = |e: png::EncodingError| Error::Image {
-        path: apng.clone(),
-        message: e.to_string(),
-    };
-    // A frame's own error, kept whole (it may not be atmo's) while the file is dropped.
+    check_folder(folder)?;
+    // A frame's own error, kept whole (it may not be atmo's) while the files are dropped.
     let mut failed: Option<anyhow::Error> = None;
-    let written = write_atomically(&apng, |w| {
-        let mut encoder = png::Encoder::new(w, width, height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_animated(frames as u32, 0).map_err(png_error)?;
-        encoder.set_frame_delay(1, 30).map_err(png_error)?;
-        let mut writer = encoder.write_header().map_err(png_error)?;
-        let mut frame = Frame::new(width, height);
-        for k in 0..frames {
-            if let Err(e) = fill(k, &mut frame) {
-                let message = format!("frame {k}: {e:#}");
-                failed = Some(e);
-                return Err(Error::Invalid(message));
+    let written = write_folder_atomically(folder, |tmp| {
+        let apng = tmp.join("animation.png");
+        let png_error = |e: png::EncodingError| Error::Image {
+            path: apng.clone(),
+            message: e.to_string(),
+        };
+        write_atomically(&apng, |w| {
+            let mut encoder = png::Encoder::new(w, width, height);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            encoder.set_animated(frames as u32, 0).map_err(png_error)?;
+            encoder.set_frame_delay(1, 30).map_err(png_error)?;
+            let mut writer = encoder.write_header().map_err(png_error)?;
+            let mut frame = Frame::new(width, height);
+            for k in 0..frames {
+                if let Err(e) = fill(k, &mut frame) {
+                    let message = format!("frame {k}: {e:#}");
+                    failed = Some(e);
+                    return Err(Error::Invalid(message));
+                }
+                frame.write(
+                    &tmp.join(format!("frame-{k:04}.png")),
+                    display.exposure,
+                    display.tone,
+                )?;
+                writer
+                    .write_image_data(&frame.to_srgb8(display.exposure, display.tone))
+                    .map_err(png_error)?;
             }
-            frame.write(
-                &folder.join(format!("frame-{k:04}.png")),
-                display.exposure,
-                display.tone,
-            )?;
-            writer
-                .write_image_data(&frame.to_srgb8(display.exposure, display.tone))
-                .map_err(png_error)?;
-        }
-        writer.finish().map_err(png_error)
+            writer.finish().map_err(png_error)
+        })
     });
     match (written, failed) {
         (_, Some(e)) => Err(e),
         (Err(e), None) => Err(e.into()),
-        (Ok(()), None) => Ok(apng),
+        (Ok(()), None) => Ok(folder.join("animation.png")),
     }
 }

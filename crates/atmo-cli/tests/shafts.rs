@@ -92,6 +92,13 @@ fn bad_shafts_input_exits_2_and_writes_nothing() {
             good.replacen("fov_deg = 50.0", "fov_deg = 0.0", 1),
             "fov_deg",
         ),
+        // A mesh that never ends stops at the bounded reader's limit (it aborted).
+        #[cfg(target_os = "linux")]
+        (
+            "endless.toml",
+            format!("{good}\n[[object]]\nkind = \"mesh\"\nfile = \"/dev/zero\"\nalbedo = 0.5\n"),
+            "OBJ file is longer than the limit of 64 MiB",
+        ),
     ];
     let out = dir.join("out.png");
     for (name, text, wanted) in bad {
@@ -103,6 +110,8 @@ fn bad_shafts_input_exits_2_and_writes_nothing() {
             path.to_str().unwrap(),
             "-o",
             out.to_str().unwrap(),
+            "--memory-limit",
+            "64M",
         ]);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{name}: {stderr}");

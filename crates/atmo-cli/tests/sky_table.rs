@@ -192,3 +192,80 @@ fn an_interrupted_precompute_leaves_no_table() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The temporaries in `dir` (`.atmo-PID-N.tmp`, files or folders).
+fn temporaries(dir: &std::path::Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".atmo-") && n.ends_with(".tmp"))
+        .collect()
+}
+
+/// An animation stopped by SIGTERM leaves no frames and no temporary; one stopped by
+/// SIGKILL leaves its temporary folder, which the next write into the folder removes.
+#[cfg(unix)]
+#[test]
+fn interrupted_animations_leave_no_partial_frames() {
+    let dir = scratch("interrupted-animation");
+    let table = tiny_table(&dir);
+    let frames = dir.join("sunset");
+    let start = || {
+        Command::new(env!("CARGO_BIN_EXE_atmo"))
+            .args([
+                "sky",
+                "--table",
+                table.to_str().unwrap(),
+                "--animate",
+                "sun",
+            ])
+            .args(["--frames", "10000", "--width", "64", "--height", "32", "-o"])
+            .arg(&frames)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    // Waits until the run has written frames into its temporary folder.
+    let writing = || {
+        for _ in 0..600 {
+            if let Some(tmp) = temporaries(&dir).first() {
+                if files_in(&dir.join(tmp)) > 2 {
+                    return;
+                }
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        panic!("no frames were written in 30 s");
+    };
+    let child = start();
+    writing();
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(temporaries(&dir).is_empty() && !frames.exists());
+    // SIGKILL: no handler runs; the folder stays until the next write beside it.
+    let mut child = start();
+    writing();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(temporaries(&dir).len(), 1);
+    let o = atmo(
+        &["sky", "--table", table.to_str().unwrap(), "-o"]
+            .into_iter()
+            .chain([dir.join("one.png").to_str().unwrap()])
+            .chain(SMALL)
+            .collect::<Vec<_>>(),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+    std::fs::remove_dir_all(dir).unwrap();
+}

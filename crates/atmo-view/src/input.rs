@@ -78,10 +78,7 @@ pub struct Script {
 impl Script {
     /// Reads and parses a script file; errors name the file and line.
     pub fn read(path: &Path) -> atmo::Result<Script> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = atmo::files::read_text(path, "script", atmo::files::TEXT_LIMIT_BYTES)?;
         Script::parse(&text, &path.display().to_string())
     }
 

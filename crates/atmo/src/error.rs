@@ -12,8 +12,8 @@ pub enum Error {
         value: String,
         allowed: String,
     },
-    /// A request would need more memory than the stated budget.
-    #[error("{what} would need {needed_bytes} bytes, above the budget of {budget_bytes} bytes; lower {setting}")]
+    /// A request would need more memory than the run's budget ([`crate::budget`]).
+    #[error("{what} would need {} MiB, above the memory budget of {} MiB; lower {setting} (or raise --memory-limit)", mib(*needed_bytes), mib(*budget_bytes))]
     OverBudget {
         what: String,
         needed_bytes: u64,
@@ -36,6 +36,11 @@ pub enum Error {
     /// Anything else the user asked for that cannot be done, said plainly.
     #[error("{0}")]
     Invalid(String),
+}
+
+/// Bytes as MiB with one decimal, for messages.
+fn mib(bytes: u64) -> String {
+    format!("{:.1}", bytes as f64 / (1u64 << 20) as f64)
 }
 
 /// Result with the library's [`Error`].
@@ -62,21 +67,6 @@ pub fn check_range(field: &str, value: f64, min: f64, max: f64) -> Result<()> {
             value,
             &format!("[{min}, {max}]"),
         ))
-    }
-}
-
-/// Checks that `needed_bytes` fits `budget_bytes`, else an [`Error::OverBudget`] naming
-/// `what` needs it and the `setting` to lower.
-pub fn check_budget(what: &str, needed_bytes: u64, budget_bytes: u64, setting: &str) -> Result<()> {
-    if needed_bytes <= budget_bytes {
-        Ok(())
-    } else {
-        Err(Error::OverBudget {
-            what: what.to_string(),
-            needed_bytes,
-            budget_bytes,
-            setting: setting.to_string(),
-        })
     }
 }
 

@@ -2,19 +2,15 @@
 //! atomically (to a temporary name in the same folder, then renamed), so a failed or
 //! interrupted run never leaves a half-written picture.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::io::Write;
+use std::path::Path;
 
 use glam::Vec3;
 use image::ImageResult;
 #[cfg(any(feature = "png", feature = "exr"))]
 use image::{ExtendedColorType, ImageEncoder};
 
-use crate::error::{check_budget, check_range, Error, Result};
-
-/// Largest frame atmo allocates, bytes (a 16k x 16k float RGB image is 3 GiB).
-pub const FRAME_BUDGET_BYTES: u64 = 1 << 30;
+use crate::error::{check_range, Error, Result};
 
 /// How linear radiance becomes a displayable value in [0, 1] before sRGB encoding.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -145,10 +141,9 @@ impl Frame {
     pub fn check_size(width: u32, height: u32) -> Result<()> {
         check_range("width", width as f64, 1.0, 16384.0)?;
         check_range("height", height as f64, 1.0, 16384.0)?;
-        check_budget(
+        crate::budget::check(
             &format!("a {width} x {height} frame"),
             width as u64 * height as u64 * 12,
-            FRAME_BUDGET_BYTES,
             "width or height",
         )
     }
@@ -179,7 +174,7 @@ impl Frame {
             path: path.to_path_buf(),
             message: e.to_string(),
         };
-        write_atomically(path, |w| match kind {
+        crate::files::write_atomically(path, |w| match kind {
             ImageKind::Png => self.encode_png(w, exposure, tone).map_err(encode_error),
             ImageKind::Exr => self.encode_exr(w).map_err(encode_error),
         })
@@ -249,7 +244,8 @@ impl Frame {
                 ".exr (linear radiance; 8-bit PNG has lost it)",
             ));
         }
-        let rgb = image::open(path)
+        let bytes = crate::files::read_bounded(path, "picture", crate::files::DATA_LIMIT_BYTES)?;
+        let rgb = image::load_from_memory_with_format(&bytes, image::ImageFormat::OpenExr)
             .map_err(|e| Error::Invalid(format!("{}: cannot read the image: {e}", path.display())))?
             .to_rgb32f();
         Ok(Frame {
@@ -293,64 +289,6 @@ impl Frame {
             max,
         })
     }
-}
-
-fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
-    move |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
-/// Checks, before any work, that the folder `path` would be written into exists, so a
-/// long computation does not end in a failed write.
-pub fn check_folder(path: &Path) -> Result<()> {
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if folder.is_dir() {
-        Ok(())
-    } else {
-        Err(Error::Io {
-            path: path.to_path_buf(),
-            source: std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                format!("the folder {} does not exist", folder.display()),
-            ),
-        })
-    }
-}
-
-/// Writes `path` through `fill` into a temporary file beside it, then renames it into
-/// place; on any error the temporary file is removed and `path` is left untouched.
-pub fn write_atomically(
-    path: &Path,
-    fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
-) -> Result<()> {
-    if path.file_name().is_none() {
-        return Err(Error::Invalid(format!(
-            "{}: not a file name",
-            path.display()
-        )));
-    }
-    // A short name of its own, so that any file name the system allows can be written
-    // (a name built from the target's passed the 255-byte limit for long ones).
-    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let tmp: PathBuf = path.with_file_name(format!(".atmo-{}-{n}.tmp", std::process::id()));
-    let result = (|| {
-        let file = File::create(&tmp).map_err(io(&tmp))?;
-        let mut w = BufWriter::new(file);
-        fill(&mut w)?;
-        w.flush().map_err(io(&tmp))?;
-        w.get_ref().sync_all().map_err(io(&tmp))?;
-        std::fs::rename(&tmp, path).map_err(io(path))
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }
 
 #[cfg(test)]
@@ -440,21 +378,5 @@ mod tests {
             .to_string();
         assert!(e.contains("second picture has 1 of 36"), "{e}");
         assert_eq!(black.level_errors(&black, display).unwrap().rms, 0.0);
-    }
-
-    #[test]
-    fn the_longest_file_names_can_be_written() {
-        let dir = std::env::temp_dir().join(format!("atmo-long-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        // 251 characters and ".exr": the most most file systems allow.
-        let path = dir.join(format!("{}.exr", "a".repeat(251)));
-        Frame::new(2, 2).write(&path, 1.0, ToneMap::Clamp).unwrap();
-        assert!(path.exists());
-        assert_eq!(
-            std::fs::read_dir(&dir).unwrap().count(),
-            1,
-            "a temporary was left"
-        );
-        std::fs::remove_dir_all(dir).unwrap();
     }
 }

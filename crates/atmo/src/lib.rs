@@ -70,9 +70,11 @@
 //! and `obj` (OBJ meshes in shafts scenes).
 
 pub mod atmosphere;
+pub mod budget;
 pub mod clouds;
 pub mod error;
 pub mod fast;
+pub mod files;
 pub mod geometry;
 pub mod image;
 pub mod quadrature;

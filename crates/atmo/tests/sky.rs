@@ -273,6 +273,41 @@ fn bad_settings_and_altitudes_are_refused() {
     assert!(err(huge, 0.0).contains("budget"));
 }
 
+/// A planet of a million kilometres is inside the documented radii, but its rays are
+/// split into sub-samples every `max_interval_m`: the budget counts them (it left them
+/// out and the maps grew past 2.5 GB), and a longer interval brings it back within.
+#[test]
+fn sub_samples_along_long_rays_enter_the_memory_budget() {
+    let earth = include_str!("../presets/earth.toml");
+    let huge = earth
+        .lines()
+        .map(|l| match l.split('=').next().map(str::trim) {
+            Some("bottom_radius_m") => "bottom_radius_m = 1e9".to_string(),
+            Some("top_radius_m") => "top_radius_m = 2e9".to_string(),
+            _ => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let planet = Atmosphere::from_toml_str(&huge, "huge planet").unwrap();
+    assert_eq!(planet.bottom_radius_m, 1e9);
+    let refused = SkySettings::default()
+        .validate(&planet)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        refused.contains("budget") && refused.contains("max_interval_m"),
+        "{refused}"
+    );
+    let coarse = SkySettings {
+        max_interval_m: 1e7,
+        ..SkySettings::default()
+    };
+    coarse.validate(&planet).unwrap();
+    // The Earth at the defaults stays well inside.
+    let earth = SkySettings::default().memory_bytes(&Atmosphere::earth());
+    assert!(earth < atmo::budget::DEFAULT_LIMIT_BYTES / 2, "{earth}");
+}
+
 #[test]
 fn pictures_are_symmetric_about_the_suns_vertical_plane() {
     use atmo::sky::SkyPicture;

@@ -92,7 +92,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         Area::Clouds => clouds::cpu(args.quick, args.json),
         Area::View => unreachable!("handled above"),
         Area::Shafts => {
-            atmo::image::check_folder(&args.sweep_dir.join("shafts-sweep.csv"))?;
+            atmo::files::check_folder(&args.sweep_dir.join("shafts-sweep.csv"))?;
             shafts::cpu(args.quick, args.json, &args.scenes, &args.sweep_dir)
         }
     }

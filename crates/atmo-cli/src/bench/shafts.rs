@@ -7,7 +7,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use atmo::image::{write_atomically, Frame};
+use atmo::files::write_atomically;
+use atmo::image::Frame;
 use atmo::reference::shafts::RayMarcher;
 use atmo::shafts::{SamplePlanes, Scene};
 use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};

@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use atmo::image::{check_folder, Display, Frame, ImageKind};
+use atmo::files::check_folder;
+use atmo::image::{Display, Frame, ImageKind};
 use clap::Args;
 
 use crate::args::ToneMapArg;

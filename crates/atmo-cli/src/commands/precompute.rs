@@ -104,7 +104,7 @@ pub fn run(args: PrecomputeArgs) -> Result<()> {
         },
     };
     settings.validate(&atmosphere)?;
-    atmo::image::check_folder(&args.output)?;
+    atmo::files::check_folder(&args.output)?;
     let start = Instant::now();
     let bar = ProgressBar::new((settings.sun_steps * settings.altitude_steps) as u64)
         .with_style(

@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Result;
-use atmo::image::{check_folder, Frame, ImageKind};
+use atmo::files::check_folder;
+use atmo::image::{Frame, ImageKind};
 use atmo::reference::shafts::RayMarcher;
 use atmo::shafts::{SamplePlanes, Scene};
 use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};

@@ -26,6 +26,7 @@ pub const FLAGS: &[(&str, &str)] = &[
     ("camera.fov_deg", "--fov"),
     ("width", "--width"),
     ("height", "--height"),
+    ("max_interval_m", "--max-interval"),
 ];
 
 #[derive(Args)]
@@ -44,7 +45,7 @@ pub struct SkyArgs {
     /// any sun elevation and altitude inside the table's ranges, in well under a millisecond.
     #[arg(long, value_name = "FILE.atmo-sky", conflicts_with_all = [
         "probe", "atmosphere", "ozone", "shells", "directions", "scattering_directions",
-        "multiple_mie", "order",
+        "multiple_mie", "order", "max_interval",
     ])]
     table: Option<PathBuf>,
     /// With --table: write a sequence to the folder -o, the sun setting from
@@ -102,7 +103,7 @@ pub fn run(args: SkyArgs) -> Result<()> {
     // Without a table: the atmosphere and the shell method's settings.
     let atmosphere = args.medium.load()?;
     let settings = args.method.settings();
-    settings.validate(atmosphere.channels())?;
+    settings.validate(&atmosphere)?;
     let start = Instant::now();
     // Light maps take 0.3 s at the defaults and seconds with --order 3 --multiple-mie.
     let spinner = ProgressBar::new_spinner().with_message("computing the sampling-shell maps");
@@ -142,10 +143,7 @@ pub fn run(args: SkyArgs) -> Result<()> {
 /// Reads a probe file: header `azimuth_deg,elevation_deg`, then one direction a line.
 /// Returns (azimuth from the sun, elevation) pairs in degrees.
 fn read_directions(path: &Path) -> atmo::Result<Vec<(f64, f64)>> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = atmo::files::read_text(path, "probe file", atmo::files::TEXT_LIMIT_BYTES)?;
     let bad = |line: usize, message: String| Error::Parse {
         path: format!("{}:{line}", path.display()),
         message,

@@ -88,7 +88,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
         None => {
             let atmosphere = args.medium.load()?;
             let settings = args.method.settings();
-            settings.validate(atmosphere.channels())?;
+            settings.validate(&atmosphere)?;
             let flags = format!("{} {}", args.medium.flags(), args.method.flags());
             (
                 SkySource::Shells {

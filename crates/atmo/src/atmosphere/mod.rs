@@ -232,10 +232,8 @@ impl Atmosphere {
 
     /// Reads, parses and validates a TOML file.
     pub fn from_toml_file(path: &std::path::Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text =
+            crate::files::read_text(path, "atmosphere file", crate::files::TEXT_LIMIT_BYTES)?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 

@@ -22,10 +22,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::particles::{erf_table, Particle};
-use crate::error::{check_budget, check_range, Error, Result};
-
-/// Largest buffer atmo allocates, bytes.
-pub const BUFFER_BUDGET_BYTES: u64 = 1 << 30;
+use crate::error::{check_range, Error, Result};
 
 /// How each particle's factor goes into the buffer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,13 +59,12 @@ impl IntensityBuffer {
         2 * (resolution as u64).pow(3) * 4
     }
 
-    /// Refuses a resolution outside [2, 2048] or over [`BUFFER_BUDGET_BYTES`].
+    /// Refuses a resolution outside [2, 2048] or over the run's memory budget ([`crate::budget`]).
     pub fn check_resolution(resolution: usize) -> Result<()> {
         check_range("buffer.resolution", resolution as f64, 2.0, 2048.0)?;
-        check_budget(
+        crate::budget::check(
             &format!("a {resolution}^3 intensity buffer"),
             Self::bytes(resolution),
-            BUFFER_BUDGET_BYTES,
             "the buffer resolution",
         )
     }

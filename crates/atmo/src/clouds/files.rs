@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use super::particles::Particle;
 use crate::error::{Error, Result};
-use crate::image::write_atomically;
+use crate::files::write_atomically;
 
 const MAGIC: &[u8; 8] = b"ATMOPART";
 
@@ -168,10 +168,7 @@ pub fn parse_binary(bytes: &[u8], origin: &str) -> Result<Vec<Particle>> {
 
 /// Reads a particle file: binary if it starts with `ATMOPART`, CSV otherwise.
 pub fn read(path: &Path, default_albedo: f32) -> Result<Vec<Particle>> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = crate::files::read_bounded(path, "particle file", crate::files::DATA_LIMIT_BYTES)?;
     let origin = path.display().to_string();
     if bytes.starts_with(MAGIC) {
         parse_binary(&bytes, &origin)

@@ -303,10 +303,7 @@ impl Scene {
     /// Loads and validates the scene file at `path`; gobo and OBJ paths in it are
     /// relative to its folder.
     pub fn from_file(path: &Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::files::read_text(path, "scene file", crate::files::TEXT_LIMIT_BYTES)?;
         let folder = path.parent().unwrap_or(Path::new("."));
         Scene::from_toml_str(&text, &path.display().to_string(), folder)
     }
@@ -547,12 +544,12 @@ pub const GOBO_MAX_SIDE: u32 = 4096;
 fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
     use image::ImageDecoder as _;
     let bad = |e: image::ImageError| Error::Invalid(format!("gobo {}: {e}", path.display()));
+    let bytes = crate::files::read_bounded(path, "gobo image", crate::files::DATA_LIMIT_BYTES)?;
     let io = |source| Error::Io {
         path: path.to_path_buf(),
         source,
     };
-    let decoder = image::ImageReader::open(path)
-        .map_err(io)?
+    let decoder = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(io)?
         .into_decoder()
@@ -673,15 +670,12 @@ impl ObjectSpec {
 #[cfg(feature = "obj")]
 pub fn load_obj(path: &Path, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
     let fail = |why: String| Error::Invalid(format!("OBJ file {}: {why}", path.display()));
-    let file = std::fs::File::open(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = crate::files::read_bounded(path, "OBJ file", crate::files::DATA_LIMIT_BYTES)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         ..Default::default()
     };
-    let (models, _) = tobj::load_obj_buf(&mut std::io::BufReader::new(file), &options, |_| {
+    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| {
         Err(tobj::LoadError::OpenFileFailed)
     })
     .map_err(|e| fail(e.to_string()))?;

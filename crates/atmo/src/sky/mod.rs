@@ -41,6 +41,3 @@ pub use grid::DirectionGrid;
 pub use shells::{SkyModel, SkySettings, SkylightMap};
 #[cfg(feature = "table")]
 pub use table::{SkylightTable, TableSettings};
-
-/// Memory the sky may use for its maps, bytes; larger settings are refused up front.
-pub const MEMORY_BUDGET_BYTES: u64 = 2 << 30;

@@ -20,11 +20,11 @@ use std::sync::Arc;
 use rayon::prelude::*;
 use serde::Deserialize;
 
-use super::{DirectionGrid, MEMORY_BUDGET_BYTES};
+use super::DirectionGrid;
 use crate::atmosphere::geometry::horizon_dip;
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::{Atmosphere, TransmittanceTable};
-use crate::error::{check_budget, check_range, Error, Result};
+use crate::error::{check_range, Error, Result};
 use light_map::{LightMap, ScatteredLightMap};
 use maps::{Orders, ScatteringMaps, Sources, SunGeometry};
 use sampling_shells::SamplingShells;
@@ -78,8 +78,9 @@ impl Default for SkySettings {
 }
 
 impl SkySettings {
-    /// Checks every field, and that the maps fit [`MEMORY_BUDGET_BYTES`].
-    pub fn validate(&self, channels: usize) -> Result<()> {
+    /// Checks every field, and that the maps for `atmosphere` fit the run's memory
+    /// budget ([`crate::budget`]).
+    pub fn validate(&self, atmosphere: &Atmosphere) -> Result<()> {
         check_range("shells", self.shells as f64, 2.0, 2000.0)?;
         check_range("directions", self.directions as f64, 2.0, 4096.0)?;
         check_range(
@@ -91,31 +92,41 @@ impl SkySettings {
         check_range("sun_bins", self.sun_bins as f64, 4.0, 4096.0)?;
         check_range("order", self.order as f64, 1.0, 3.0)?;
         check_range("max_interval_m", self.max_interval_m, 100.0, 1e7)?;
-        check_budget(
-            "the sky maps",
-            self.memory_bytes(channels),
-            MEMORY_BUDGET_BYTES,
-            "directions, shells, scattering_directions or sun_bins",
+        crate::budget::check(
+            &format!("the sky maps of {}", atmosphere.name),
+            self.memory_bytes(atmosphere),
+            "directions, shells, scattering_directions or sun_bins, or raise max_interval_m (--max-interval)",
         )
     }
 
-    /// An upper bound of the bytes the maps of one model take.
-    pub fn memory_bytes(&self, channels: usize) -> u64 {
+    /// An upper bound of the bytes the maps of one model take in `atmosphere`.
+    pub fn memory_bytes(&self, atmosphere: &Atmosphere) -> u64 {
         let (k, l, nd, b, n) = (
             self.shells as u64 + 1,
             self.directions as u64,
             self.scattering_directions as u64,
             self.sun_bins as u64,
-            channels as u64,
+            atmosphere.channels() as u64,
         );
-        // A ray crosses each shell at most twice; a sample holds 2 maps per channel + 18 B.
+        // A ray crosses each shell at most twice, and sub-samples split the intervals
+        // between crossings: at most the longest chord (tangent to the ground) over
+        // max_interval_m of them along one ray. A sample
+        // holds 2 maps per channel + 18 B, and the maps of all rays are held twice
+        // while they are gathered.
+        let (rb, rt) = (atmosphere.bottom_radius_m, atmosphere.top_radius_m);
+        let chord = 2.0 * (rt * rt - rb * rb).sqrt();
+        let per_ray = 2 * k + (chord / self.max_interval_m).ceil() as u64;
         let sample = 8 * n + 18;
         let view_rays = 2 * l;
         let light_rays = k * nd;
-        let samples = (view_rays + light_rays) * 2 * k * sample;
+        let samples = (view_rays + light_rays)
+            .saturating_mul(per_ray)
+            .saturating_mul(2 * sample);
         let light_maps = (self.order as u64 - 1) * k * b * (nd + 5) * n * 4;
         let skylight = 2 * l * l * n * 4;
-        samples + light_maps + skylight + k * 512 * n * 4
+        samples
+            .saturating_add(light_maps)
+            .saturating_add(skylight + k * 512 * n * 4)
     }
 }
 
@@ -184,7 +195,7 @@ impl SkyModel {
         altitude_m: f64,
         min_elevation: f64,
     ) -> Result<Self> {
-        settings.validate(atmosphere.channels())?;
+        settings.validate(atmosphere)?;
         let top = atmosphere.thickness_m();
         if !(altitude_m.is_finite() && (0.0..top).contains(&altitude_m)) {
             return Err(Error::out_of_range(

@@ -38,7 +38,8 @@ use super::factors::{dequantize, to_fixed, Factors};
 use super::{ErrorBound, SkylightTable, TableSettings, CHANNELS};
 use crate::atmosphere::Atmosphere;
 use crate::error::{Error, Result};
-use crate::image::{write_atomically, Display, ToneMap};
+use crate::files::write_atomically;
+use crate::image::{Display, ToneMap};
 use crate::sky::SkySettings;
 
 /// The first bytes of every table file.
@@ -136,10 +137,7 @@ impl SkylightTable {
 
     /// Reads and validates a table file.
     pub fn read(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = crate::files::read_bounded(path, "table file", crate::files::DATA_LIMIT_BYTES)?;
         Self::from_bytes(&bytes, &path.display().to_string())
     }
 

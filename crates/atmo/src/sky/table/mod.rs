@@ -35,11 +35,11 @@ pub use error_bound::ErrorBound;
 pub use factors::TableFactors;
 
 use super::grid::DirectionGrid;
-use super::{SkyModel, SkySettings, MEMORY_BUDGET_BYTES};
+use super::{SkyModel, SkySettings};
 use crate::atmosphere::geometry::horizon_dip;
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::{Atmosphere, TransmittanceTable};
-use crate::error::{check_budget, check_positive, check_range, Error, Result};
+use crate::error::{check_positive, check_range, Error, Result};
 use crate::image::{Display, ToneMap};
 use factors::Factors;
 
@@ -98,9 +98,9 @@ impl Default for TableSettings {
 }
 
 impl TableSettings {
-    /// Checks every field and that the precompute fits [`MEMORY_BUDGET_BYTES`].
+    /// Checks every field and that the precompute fits the run's memory budget ([`crate::budget`]).
     pub fn validate(&self, atmosphere: &Atmosphere) -> Result<()> {
-        self.sky.validate(atmosphere.channels())?;
+        self.sky.validate(atmosphere)?;
         check_range("sun_steps", self.sun_steps as f64, 2.0, 4096.0)?;
         check_range("altitude_steps", self.altitude_steps as f64, 2.0, 1024.0)?;
         check_range(
@@ -127,10 +127,9 @@ impl TableSettings {
             ));
         }
         check_positive("exposure", self.bound.display.exposure as f64, 1e9)?;
-        check_budget(
+        crate::budget::check(
             "the skylight table's precompute",
-            self.memory_bytes(atmosphere.channels()),
-            MEMORY_BUDGET_BYTES,
+            self.memory_bytes(atmosphere),
             "directions, sun_steps or altitude_steps",
         )
     }
@@ -138,11 +137,11 @@ impl TableSettings {
     /// An upper bound of the bytes the precompute holds at once: the table as maps and
     /// as one f32 matrix per channel, the stacked f64 matrix of the SVD, and the shell
     /// models of two altitudes.
-    pub fn memory_bytes(&self, spectral_channels: usize) -> u64 {
+    pub fn memory_bytes(&self, atmosphere: &Atmosphere) -> u64 {
         let entries = (self.sky.directions as u64).pow(2)
             * self.sun_steps as u64
             * self.altitude_steps as u64;
-        entries * (12 + 12 + 24) + 2 * self.sky.memory_bytes(spectral_channels)
+        (entries * (12 + 12 + 24)).saturating_add(2 * self.sky.memory_bytes(atmosphere))
     }
 
     /// The sun elevation axis, rad: `sun_horizon_density` times denser at the horizon

@@ -1,0 +1,111 @@
+//! One memory budget for a run. Every allocation whose size depends on the input (maps,
+//! frames, buffers, shadow maps, files read whole) is checked against it before it is
+//! made, and refused with a message naming the input, what it would need and the
+//! setting to lower, never an allocation failure that aborts the process.
+//!
+//! The budget is one number for the process (the CLI's `--memory-limit`), read where a
+//! size is checked; library users set it once with [`set_limit`].
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::error::{Error, Result};
+
+/// The budget when nothing sets another: 2 GiB.
+pub const DEFAULT_LIMIT_BYTES: u64 = 2 << 30;
+
+/// The smallest budget that [`set_limit`] takes, 64 MiB: below it the defaults fail.
+pub const MIN_LIMIT_BYTES: u64 = 64 << 20;
+
+static LIMIT: AtomicU64 = AtomicU64::new(DEFAULT_LIMIT_BYTES);
+
+/// Sets the run's budget, bytes; refuses less than [`MIN_LIMIT_BYTES`].
+pub fn set_limit(bytes: u64) -> Result<()> {
+    check_limit(bytes)?;
+    LIMIT.store(bytes, Ordering::Relaxed);
+    Ok(())
+}
+
+/// Checks that `bytes` may be a budget: at least [`MIN_LIMIT_BYTES`].
+pub fn check_limit(bytes: u64) -> Result<()> {
+    if bytes < MIN_LIMIT_BYTES {
+        return Err(Error::out_of_range(
+            "memory_limit",
+            format!("{} MiB", bytes >> 20),
+            &format!("at least {} MiB", MIN_LIMIT_BYTES >> 20),
+        ));
+    }
+    Ok(())
+}
+
+/// The run's budget, bytes.
+pub fn limit() -> u64 {
+    LIMIT.load(Ordering::Relaxed)
+}
+
+/// Checks that `needed_bytes` fits the run's budget, else an [`Error::OverBudget`]
+/// naming what needs it and the `setting` to lower.
+pub fn check(what: &str, needed_bytes: u64, setting: &str) -> Result<()> {
+    let budget_bytes = limit();
+    if needed_bytes <= budget_bytes {
+        Ok(())
+    } else {
+        Err(Error::OverBudget {
+            what: what.to_string(),
+            needed_bytes,
+            budget_bytes,
+            setting: setting.to_string(),
+        })
+    }
+}
+
+/// Parses a size as a user writes it: a number with an optional unit K, M, G or T
+/// (binary, `Ki`/`iB` spellings too); a bare number is MiB. `"2G"`, `"512M"`, `"4096"`.
+pub fn parse_size(text: &str) -> std::result::Result<u64, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("`{text}` is not a size like 2G, 512M or 4096 (MiB)"))?;
+    let shift = match unit
+        .trim()
+        .trim_end_matches("iB")
+        .trim_end_matches(['i', 'B'])
+    {
+        "K" | "k" => 10,
+        "" | "M" | "m" => 20,
+        "G" | "g" => 30,
+        "T" | "t" => 40,
+        other => {
+            return Err(format!(
+                "unknown unit `{other}` in `{text}`: use K, M, G or T"
+            ))
+        }
+    };
+    let bytes = value * (1u64 << shift) as f64;
+    if bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64 {
+        Ok(bytes as u64)
+    } else {
+        Err(format!("`{text}` is not a size a machine has"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_read_as_users_write_them() {
+        assert_eq!(parse_size("2G"), Ok(2 << 30));
+        assert_eq!(parse_size("2GiB"), Ok(2 << 30));
+        assert_eq!(parse_size("512M"), Ok(512 << 20));
+        assert_eq!(parse_size("4096"), Ok(4096 << 20));
+        assert_eq!(parse_size("1.5G"), Ok(3 << 29));
+        assert_eq!(parse_size("64k"), Ok(64 << 10));
+        assert!(parse_size("-1G").is_err());
+        assert!(parse_size("2X").is_err());
+        assert!(parse_size("").is_err());
+    }
+}
