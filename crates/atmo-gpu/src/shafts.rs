@@ -569,7 +569,7 @@ impl Geometry {
                     None => (GOBO_NONE, 0, 0, 0),
                     Some(g) => {
                         let at = values.len() as u32;
-                        values.extend(g.texels.iter().map(|t| v4(*t, 0.0)));
+                        values.extend((0..g.srgb.len()).map(|k| v4(g.texel(k), 0.0)));
                         let sampling = match g.sampling {
                             Sampling::Nearest => GOBO_NEAREST,
                             Sampling::Bilinear => GOBO_BILINEAR,

@@ -92,6 +92,21 @@ pub fn parse_size(text: &str) -> std::result::Result<u64, String> {
     }
 }
 
+/// The process's peak resident memory since it started or since [`reset_peak_rss`],
+/// bytes (Linux's `VmHWM`); `None` where the system does not say.
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb << 10)
+}
+
+/// Starts the peak of [`peak_rss_bytes`] again from the present (Linux 4.0 and later),
+/// so that one bench case measures its own; whether it could.
+pub fn reset_peak_rss() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -107,5 +122,19 @@ mod tests {
         assert!(parse_size("-1G").is_err());
         assert!(parse_size("2X").is_err());
         assert!(parse_size("").is_err());
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn the_peak_follows_what_is_touched() {
+        let before = peak_rss_bytes().unwrap();
+        let block = vec![1u8; 64 << 20];
+        std::hint::black_box(&block);
+        let after = peak_rss_bytes().unwrap();
+        assert!(after >= before + (60 << 20), "{before} -> {after}");
+        drop(block);
+        if reset_peak_rss() {
+            assert!(peak_rss_bytes().unwrap() < after);
+        }
     }
 }

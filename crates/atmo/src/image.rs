@@ -82,6 +82,15 @@ pub fn srgb_decode(v: f32) -> f32 {
     }
 }
 
+/// The linear value of an 8-bit sRGB value, from a table made once (as
+/// `srgb_decode(v / 255)`).
+#[inline]
+pub fn srgb8_decode(v: u8) -> f32 {
+    static TABLE: std::sync::LazyLock<[f32; 256]> =
+        std::sync::LazyLock::new(|| std::array::from_fn(|v| srgb_decode(v as f32 / 255.0)));
+    TABLE[v as usize]
+}
+
 /// The sRGB transfer function of a linear value in [0, 1].
 #[inline]
 pub fn srgb_encode(v: f32) -> f32 {

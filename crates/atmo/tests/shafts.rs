@@ -85,6 +85,16 @@ fn the_example_scenes_load_with_their_gobo_and_mesh() {
         .as_ref()
         .expect("the first light has the dotted gobo");
     assert_eq!((gobo.width, gobo.height), (256, 256));
+    // Kept compact: the file's 8-bit sRGB values, 3 bytes a texel, decoded on lookup.
+    assert_eq!(std::mem::size_of_val(gobo.srgb.as_slice()), 3 * 256 * 256);
+    let file = image::open(scenes().join("gobos/dots.png"))
+        .unwrap()
+        .to_rgb8();
+    for k in [0, 1000, 40_000, 65_535] {
+        let p = file.get_pixel(k as u32 % 256, k as u32 / 256).0;
+        let linear = p.map(|v| atmo::image::srgb_decode(v as f32 / 255.0));
+        assert_eq!(gobo.texel(k).to_array(), linear, "texel {k}");
+    }
     let mesh = stage
         .objects
         .list
@@ -405,6 +415,34 @@ fn png_header_only(width: u32, height: u32) -> Vec<u8> {
     png.extend(b"IEND");
     png.extend(crc32(b"IEND").to_be_bytes());
     png
+}
+
+/// Twelve lights with 8192^2 shadow maps need 3.2 GB: refused by the run's memory
+/// budget when the scene is read, naming the setting (it aborted mid-render).
+#[test]
+fn shadow_maps_enter_the_memory_budget() {
+    let one = small_scene(SPHERE);
+    let light = &one[one.find("[[spotlight]]").unwrap()..one.find("[[object]]").unwrap()];
+    let scene = format!("{one}\n{}", light.repeat(11)).replacen(
+        "[camera]",
+        "[render]\nshadow_map = 8192\n\n[camera]",
+        1,
+    );
+    let message = Scene::from_toml_str(&scene, "test.toml", Path::new("."))
+        .expect_err("3.2 GB of shadow maps")
+        .to_string();
+    assert!(
+        message.contains("12 shadow maps of 8192^2") && message.contains("render.shadow_map"),
+        "{message}"
+    );
+    let fewer = scene.replacen("shadow_map = 8192", "shadow_map = 2048", 1);
+    assert_eq!(
+        Scene::from_toml_str(&fewer, "test.toml", Path::new("."))
+            .unwrap()
+            .lights
+            .len(),
+        12
+    );
 }
 
 #[test]

@@ -88,7 +88,7 @@ pub fn load_scene(
     scene.planes.planes = planes.unwrap_or(scene.planes.planes);
     scene.planes.sub_planes = sub_planes.unwrap_or(scene.planes.sub_planes);
     scene.planes.shadow_map = shadow_map.unwrap_or(scene.planes.shadow_map);
-    scene.planes.validate()?;
+    scene.validate_planes()?;
     Ok(scene)
 }
 

@@ -190,35 +190,43 @@ fn read_directions(path: &Path) -> atmo::Result<Vec<(f64, f64)>> {
     Ok(directions)
 }
 
+/// Directions per block of `--probe`: each holds a few kB of scattering maps while its
+/// block is computed, so a file of millions of directions streams in bounded memory.
+const PROBE_BLOCK: usize = 4096;
+
 fn print_probe(
     model: &SkyModel,
     atmosphere: &Atmosphere,
     sun: Sun,
     directions: &[(f64, f64)],
 ) -> Result<()> {
-    let rad: Vec<(f64, f64)> = directions
-        .iter()
-        .map(|&(a, e)| {
-            let mut relative = a.to_radians().rem_euclid(std::f64::consts::TAU);
-            if relative > std::f64::consts::PI {
-                relative = std::f64::consts::TAU - relative;
-            }
-            (relative, e.to_radians())
-        })
-        .collect();
-    let spectra = model.radiance_along(sun.elevation(), &rad);
-    let mut out = String::from("azimuth_deg,elevation_deg");
+    use std::io::Write;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let mut header = String::from("azimuth_deg,elevation_deg");
     for l in &atmosphere.wavelengths_nm {
-        out.push_str(&format!(",radiance_{l}nm"));
+        header.push_str(&format!(",radiance_{l}nm"));
     }
-    out.push('\n');
-    for ((a, e), spectrum) in directions.iter().zip(spectra) {
-        out.push_str(&format!("{a},{e}"));
-        for v in spectrum {
-            out.push_str(&format!(",{v:.6e}"));
+    writeln!(out, "{header}")?;
+    for block in directions.chunks(PROBE_BLOCK) {
+        let rad: Vec<(f64, f64)> = block
+            .iter()
+            .map(|&(a, e)| {
+                let mut relative = a.to_radians().rem_euclid(std::f64::consts::TAU);
+                if relative > std::f64::consts::PI {
+                    relative = std::f64::consts::TAU - relative;
+                }
+                (relative, e.to_radians())
+            })
+            .collect();
+        let spectra = model.radiance_along(sun.elevation(), &rad);
+        for ((a, e), spectrum) in block.iter().zip(spectra) {
+            write!(out, "{a},{e}")?;
+            for v in spectrum {
+                write!(out, ",{v:.6e}")?;
+            }
+            writeln!(out)?;
         }
-        out.push('\n');
     }
-    print!("{out}");
+    out.flush()?;
     Ok(())
 }

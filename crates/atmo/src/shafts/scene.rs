@@ -322,7 +322,6 @@ impl Scene {
             sub_planes: spec.render.sub_planes,
             shadow_map: spec.render.shadow_map,
         };
-        planes.validate()?;
         check_positive("display.exposure", spec.display.exposure as f64, 1e12)?;
         let display = Display {
             exposure: spec.display.exposure,
@@ -348,7 +347,7 @@ impl Scene {
             .enumerate()
             .map(|(i, o)| o.validate(&format!("object[{i}]"), folder))
             .collect::<Result<Vec<_>>>()?;
-        Ok(Scene {
+        let scene = Scene {
             camera,
             haze,
             lights,
@@ -356,7 +355,27 @@ impl Scene {
             planes,
             display,
             unit,
-        })
+        };
+        scene.validate_planes()?;
+        Ok(scene)
+    }
+
+    /// Checks the plane settings, and that the shadow maps they make for these lights
+    /// fit the run's memory budget ([`crate::budget`]); again after a caller changes
+    /// them.
+    pub fn validate_planes(&self) -> Result<()> {
+        self.planes.validate()?;
+        // Each light's shadow map, 4 bytes a texel, on the CPU or on the GPU.
+        let texels = self.lights.len() as u64 * (self.planes.shadow_map as u64).pow(2);
+        crate::budget::check(
+            &format!(
+                "{} shadow maps of {}^2",
+                self.lights.len(),
+                self.planes.shadow_map
+            ),
+            4 * texels,
+            "render.shadow_map (--shadow-map) or the number of spotlights",
+        )
     }
 }
 
@@ -535,7 +554,7 @@ impl SpotlightSpec {
 }
 
 /// The largest gobo image, pixels a side: four times a projector's finest gobo, and
-/// 200 MB as linear texels.
+/// 50 MB as texels.
 pub const GOBO_MAX_SIDE: u32 = 4096;
 
 /// A gobo from an image file: its sRGB values decoded to linear transmittance. The size
@@ -562,17 +581,20 @@ fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
             path.display()
         )));
     }
+    // Decoding holds the image as the file stores it (up to 8 bytes a pixel), its
+    // 8-bit RGB copy and the texels kept, 3 bytes a pixel each.
+    crate::budget::check(
+        &format!("gobo {} ({width} x {height})", path.display()),
+        decoder.total_bytes() + 6 * width as u64 * height as u64,
+        "the gobo image's size",
+    )?;
     let image = image::DynamicImage::from_decoder(decoder)
         .map_err(bad)?
-        .to_rgb32f();
-    let texels = image
-        .pixels()
-        .map(|p| Vec3::from(p.0.map(crate::image::srgb_decode)))
-        .collect();
+        .to_rgb8();
     Ok(Gobo {
         width: image.width() as usize,
         height: image.height() as usize,
-        texels,
+        srgb: image.pixels().map(|p| p.0).collect(),
         sampling,
     })
 }

@@ -39,13 +39,21 @@ pub struct Gobo {
     pub width: usize,
     /// Height in texels.
     pub height: usize,
-    /// Row-major texels, top row first.
-    pub texels: Vec<Vec3>,
+    /// Row-major texels, top row first, as the image's 8-bit sRGB values: 3 bytes a
+    /// texel (a 4096^2 gobo holds 50 MB, where linear f32 took 200 MB); [`Gobo::texel`]
+    /// is the linear transmittance.
+    pub srgb: Vec<[u8; 3]>,
     /// Lookup.
     pub sampling: Sampling,
 }
 
 impl Gobo {
+    /// The linear transmittance of texel `k` (row-major).
+    #[inline]
+    pub fn texel(&self, k: usize) -> Vec3 {
+        Vec3::from(self.srgb[k].map(crate::image::srgb8_decode))
+    }
+
     /// The transmittance at `(u, v)` in `[-1, 1]^2` (`v = 1` at the image's top).
     #[inline]
     pub fn sample(&self, u: f32, v: f32) -> Vec3 {
@@ -53,7 +61,7 @@ impl Gobo {
         let y = (0.5 * (1.0 - v)) * self.height as f32;
         let (w, h) = (self.width as isize, self.height as isize);
         let at =
-            |i: isize, j: isize| self.texels[(j.clamp(0, h - 1) * w + i.clamp(0, w - 1)) as usize];
+            |i: isize, j: isize| self.texel((j.clamp(0, h - 1) * w + i.clamp(0, w - 1)) as usize);
         match self.sampling {
             Sampling::Nearest => at(x.floor() as isize, y.floor() as isize),
             Sampling::Bilinear => {
@@ -340,7 +348,7 @@ mod tests {
         let gobo = |sampling| Gobo {
             width: 2,
             height: 2,
-            texels: vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE],
+            srgb: vec![[255, 0, 0], [0, 255, 0], [0, 0, 255], [255; 3]],
             sampling,
         };
         let g = gobo(Sampling::Nearest);
