@@ -9,7 +9,7 @@ mod bench;
 mod commands;
 mod output;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use commands::{clouds, compare, inspect, precompute, shafts, sky, view};
 
 #[derive(Parser)]
@@ -80,7 +80,7 @@ fn main() {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    let cli = Cli::parse();
+    let cli = parse_args();
     atmo::budget::set_limit(cli.memory_limit).expect("checked by clap");
     let result = match cli.command {
         Command::Sky(args) => sky::run(args).map_err(|e| with_flag(e, sky::FLAGS)),
@@ -108,6 +108,41 @@ fn main() {
         };
         std::process::exit(code);
     }
+}
+
+/// The command line, where every option's value may start with a hyphen (`--exposure
+/// -1`, `--sun-elevation -inf`): such values are numbers to refuse by range, not unknown
+/// flags. A negative value for a flag that counts something is refused naming the flag.
+fn parse_args() -> Cli {
+    fn hyphen_values(command: clap::Command) -> clap::Command {
+        command
+            .mut_args(|a| {
+                if a.get_action().takes_values() && !a.is_positional() {
+                    a.allow_hyphen_values(true)
+                } else {
+                    a
+                }
+            })
+            .mut_subcommands(hyphen_values)
+    }
+    let refuse = |error: clap::Error| -> ! {
+        use clap::error::{ContextKind, ContextValue};
+        if let (Some(ContextValue::String(arg)), Some(ContextValue::String(value))) = (
+            error.get(ContextKind::InvalidArg),
+            error.get(ContextKind::InvalidValue),
+        ) {
+            if value.parse::<f64>().is_ok_and(|v| v < 0.0) {
+                let flag = arg.split_whitespace().next().unwrap_or(arg);
+                eprintln!("atmo: {flag} = {value} is out of range: allowed whole numbers >= 0");
+                std::process::exit(2);
+            }
+        }
+        error.exit()
+    };
+    let matches = hyphen_values(Cli::command())
+        .try_get_matches()
+        .unwrap_or_else(|e| refuse(e));
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| refuse(e))
 }
 
 /// The library names what was wrong as its own field (`sun.elevation_deg`); where a

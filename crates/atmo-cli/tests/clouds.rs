@@ -75,6 +75,9 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
     .unwrap();
     let empty = dir.join("empty.csv");
     std::fs::write(&empty, "x,y,z,radius,density\n").unwrap();
+    // Finite, and inside the ranges before: NaN pixels with exit 0, CPU and GPU.
+    let dense = dir.join("dense.csv");
+    std::fs::write(&dense, "x,y,z,radius,density\n0,0,0,100,3e38\n").unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
             vec!["--particles-file", bad_file.to_str().unwrap()],
@@ -83,6 +86,11 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
         (
             vec!["--particles-file", empty.to_str().unwrap()],
             "no particles",
+        ),
+        (
+            vec!["--particles-file", dense.to_str().unwrap()],
+            "dense.csv:2: density = 300000000000000000000000000000000000000 is out of range: \
+             allowed [0, 1] 1/m at radius 100 m",
         ),
         (
             vec!["--generate", "cumulus", "--sun-elevation", "-5"],

@@ -124,7 +124,22 @@ fn bad_input_exits_2_with_a_message_and_no_file() {
     refused("order", &["--order", "4"], "order");
     refused("shells", &["--shells", "1"], "shells");
     refused("fov", &["--fov", "0"], "fov");
-    refused("exposure", &["--exposure", "-1"], "exposure");
+    refused(
+        "exposure",
+        &["--exposure", "-1"],
+        "--exposure: exposure = -1",
+    );
+    // Negative values are numbers refused by range, not clap's "unexpected argument".
+    refused(
+        "width-negative",
+        &["--width", "-1"],
+        "--width = -1 is out of range",
+    );
+    refused(
+        "sun-minus-inf",
+        &["--sun-elevation", "-inf"],
+        "sun.elevation_deg = -inf is out of range",
+    );
     refused("preset", &["--preset", "mars"], "preset");
     refused(
         "missing",
@@ -154,6 +169,16 @@ fn bad_input_exits_2_with_a_message_and_no_file() {
             "rayleigh.scale_height_m",
         ),
         ("syntax", earth.replacen("name = ", "name == ", 1), "line"),
+        // In the documented range before, and NaN pixels with exit 0.
+        (
+            "tiny-sun",
+            earth.replacen(
+                "sun_angular_radius_deg = 0.2678",
+                "sun_angular_radius_deg = 1e-20",
+                1,
+            ),
+            "sun_angular_radius_deg = 0.00000000000000000001 is out of range: allowed [0.001, 10]",
+        ),
     ] {
         let file = dir.join(format!("{name}.toml"));
         std::fs::write(&file, text).unwrap();

@@ -126,7 +126,7 @@ fn bad_tables_and_ranges_exit_2_and_write_nothing() {
         "epsilon",
     );
     expect_2(
-        &["precompute", "sky", "-o", sky, "--epsilon=-1/255"],
+        &["precompute", "sky", "-o", sky, "--epsilon", "-1/255"],
         "epsilon",
     );
     expect_2(

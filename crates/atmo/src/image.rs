@@ -176,9 +176,19 @@ impl Frame {
             .collect()
     }
 
-    /// Writes the frame to `path` (.png or .exr), atomically.
+    /// Writes the frame to `path` (.png or .exr), atomically. A frame with a NaN or
+    /// infinite value is refused, never written: no picture atmo writes holds one.
     pub fn write(&self, path: &Path, exposure: f32, tone: ToneMap) -> Result<()> {
         let kind = ImageKind::of(path)?;
+        let bad = self.non_finite();
+        if bad > 0 {
+            return Err(Error::Invalid(format!(
+                "{}: not written, the picture has {bad} of {} values that are not finite \
+                 (NaN or infinite); the inputs are outside what the arithmetic holds",
+                path.display(),
+                3 * self.pixels.len()
+            )));
+        }
         let encode_error = |e: image::ImageError| Error::Image {
             path: path.to_path_buf(),
             message: e.to_string(),
@@ -387,5 +397,19 @@ mod tests {
             .to_string();
         assert!(e.contains("second picture has 1 of 36"), "{e}");
         assert_eq!(black.level_errors(&black, display).unwrap().rms, 0.0);
+        // Nor is such a picture ever written.
+        let dir = std::env::temp_dir().join(format!("atmo-nan-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for name in ["nan.exr", "nan.png"] {
+            let e = one_inf
+                .write(&dir.join(name), 1.0, ToneMap::Clamp)
+                .unwrap_err();
+            assert!(
+                e.to_string().contains("1 of 36 values that are not finite"),
+                "{e}"
+            );
+        }
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        std::fs::remove_dir_all(dir).unwrap();
     }
 }

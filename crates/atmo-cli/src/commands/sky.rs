@@ -27,6 +27,7 @@ pub const FLAGS: &[(&str, &str)] = &[
     ("width", "--width"),
     ("height", "--height"),
     ("max_interval_m", "--max-interval"),
+    ("exposure", "--exposure"),
 ];
 
 #[derive(Args)]

@@ -246,7 +246,14 @@ impl Atmosphere {
                 &format!("({}, {}]", s.bottom_radius_m, 2.0 * s.bottom_radius_m),
             ));
         }
-        check_positive("sun_angular_radius_deg", s.sun_angular_radius_deg, 10.0)?;
+        // Below 0.001 deg the disc's radiance (irradiance over its solid angle) leaves
+        // f32's range in the pictures.
+        check_range(
+            "sun_angular_radius_deg",
+            s.sun_angular_radius_deg,
+            1e-3,
+            10.0,
+        )?;
         let l = &s.wavelengths_nm;
         if l.len() < 3 || l.len() > 64 {
             return Err(Error::out_of_range(

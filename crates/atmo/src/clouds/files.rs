@@ -20,6 +20,13 @@ use crate::files::write_atomically;
 const MAGIC: &[u8; 8] = b"ATMOPART";
 
 /// Checks one particle's numbers, naming `at` (file and line, or index) on error.
+/// Largest distance of a particle from the origin, m.
+pub const MAX_POSITION_M: f32 = 1e7;
+/// Largest particle radius, m.
+pub const MAX_RADIUS_M: f32 = 1e5;
+/// Largest peak density times radius: an optical depth of 0.84 x this through the centre.
+pub const MAX_DENSITY_RADIUS: f32 = 100.0;
+
 fn check(p: &Particle, at: &str) -> Result<()> {
     let fields = [
         ("x", p.position.x),
@@ -36,18 +43,33 @@ fn check(p: &Particle, at: &str) -> Result<()> {
             )));
         }
     }
-    if p.radius <= 0.0 {
+    // The ranges the arithmetic holds: positions and sizes where f32 keeps a metre's
+    // precision over the buffer, and at most an optical depth of about 84 through a
+    // particle's centre (density x radius <= 100; e^-84 is opaque to any display), which
+    // the GPU's fixed-point light pass sums without overflow.
+    if p.position.abs().max_element() > MAX_POSITION_M {
+        return Err(Error::out_of_range(
+            &format!("{at}: x, y, z"),
+            format!("{:?}", p.position.to_array()),
+            &format!("[-{MAX_POSITION_M:e}, {MAX_POSITION_M:e}] m"),
+        ));
+    }
+    if !(p.radius > 0.0 && p.radius <= MAX_RADIUS_M) {
         return Err(Error::out_of_range(
             &format!("{at}: radius"),
             p.radius,
-            "(0, inf) m",
+            &format!("(0, {MAX_RADIUS_M:e}] m"),
         ));
     }
-    if p.density < 0.0 {
+    if !(p.density >= 0.0 && p.density * p.radius <= MAX_DENSITY_RADIUS) {
         return Err(Error::out_of_range(
             &format!("{at}: density"),
             p.density,
-            "[0, inf) 1/m",
+            &format!(
+                "[0, {}] 1/m at radius {} m (density x radius <= {MAX_DENSITY_RADIUS}: opaque)",
+                MAX_DENSITY_RADIUS / p.radius,
+                p.radius
+            ),
         ));
     }
     if !(0.0..=1.0).contains(&p.albedo) {
