@@ -49,7 +49,9 @@ impl BackendArgs {
                 eprintln!("atmo: running on the GPU: {}", gpu.describe());
                 Ok(Some(gpu))
             }
-            Err(GpuError::NoAdapter) if self.backend == Backend::Auto && self.adapter.is_none() => {
+            Err(GpuError::NoAdapter { .. })
+                if self.backend == Backend::Auto && self.adapter.is_none() =>
+            {
                 eprintln!("atmo: no GPU adapter found; running on the CPU");
                 Ok(None)
             }
@@ -73,7 +75,7 @@ pub fn gpu_error(e: GpuError) -> anyhow::Error {
     };
     let message = format!("{e} ({flag})");
     match e {
-        GpuError::NoAdapter
+        GpuError::NoAdapter { .. }
         | GpuError::NoMatch { .. }
         | GpuError::MissingFeature { .. }
         | GpuError::OverLimit { .. } => atmo::Error::Invalid(message).into(),

@@ -76,6 +76,8 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
     let empty = dir.join("empty.csv");
     std::fs::write(&empty, "x,y,z,radius,density\n").unwrap();
     // Finite, and inside the ranges before: NaN pixels with exit 0, CPU and GPU.
+    let good = dir.join("good.csv");
+    std::fs::write(&good, "x,y,z,radius,density\n0,0,0,100,0.05\n").unwrap();
     let dense = dir.join("dense.csv");
     std::fs::write(&dense, "x,y,z,radius,density\n0,0,0,100,3e38\n").unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
@@ -86,6 +88,16 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
         (
             vec!["--particles-file", empty.to_str().unwrap()],
             "no particles",
+        ),
+        // The output is the input: refused before it is overwritten.
+        (
+            vec![
+                "--particles-file",
+                good.to_str().unwrap(),
+                "--save-particles",
+                good.to_str().unwrap(),
+            ],
+            "the output is the input of --particles-file",
         ),
         (
             vec!["--particles-file", dense.to_str().unwrap()],

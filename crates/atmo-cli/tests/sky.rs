@@ -215,3 +215,39 @@ fn bad_output_names_and_probe_files_are_refused() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// `atmo sky --probe ... | head`: the reader closes the pipe, the run ends quietly as
+/// other Unix tools do (it panicked on the closed pipe).
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_the_run_quietly() {
+    use std::io::Read;
+    use std::os::unix::process::ExitStatusExt;
+    let dir = scratch("pipe");
+    let file = dir.join("many.csv");
+    let mut text = String::from("azimuth_deg,elevation_deg\n");
+    for k in 0..20_000 {
+        text.push_str(&format!("{},{}\n", k % 360, (k % 90) as f64));
+    }
+    std::fs::write(&file, text).unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_atmo"))
+        .args(["sky", "--probe", file.to_str().unwrap(), "--shells", "8"])
+        .args(["--directions", "8", "--scattering-directions", "8"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 64];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    // The pipe's reader is gone now.
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(
+        o.status.signal(),
+        Some(13),
+        "ended by SIGPIPE: {:?}",
+        o.status
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -517,6 +517,30 @@ fn missing_feature(features: wgpu::Features, info: &wgpu::AdapterInfo) -> Result
     }
 }
 
+/// Why no adapter was found, from the variables `var` reads: `WGPU_BACKEND` or the
+/// Vulkan loader's driver list pointing nowhere, else no driver installed.
+fn no_adapter_hint(var: impl Fn(&str) -> Option<String>) -> String {
+    if let Some(backends) = var("WGPU_BACKEND") {
+        return format!(
+            "WGPU_BACKEND={backends} leaves out every backend with an adapter here; unset it \
+             or name another (vulkan, metal, dx12)"
+        );
+    }
+    for name in ["VK_DRIVER_FILES", "VK_ICD_FILENAMES"] {
+        if let Some(files) = var(name) {
+            let sep = if cfg!(windows) { ';' } else { ':' };
+            return match files
+                .split(sep)
+                .find(|f| !f.is_empty() && !std::path::Path::new(f).exists())
+            {
+                Some(missing) => format!("{name} names {missing}, which does not exist; unset it"),
+                None => format!("the drivers {name}={files} names found no device; unset it"),
+            };
+        }
+    }
+    "install mesa-vulkan-drivers for a software one".to_string()
+}
+
 /// The adapter of `instance` that `choice` names (see [`Gpu::new`]), among those that
 /// can present to `surface` where one is given (a window's).
 pub fn choose_adapter(
@@ -530,7 +554,9 @@ pub fn choose_adapter(
             .filter(|a| surface.is_none_or(|s| a.is_surface_supported(s)))
             .collect();
     if adapters.is_empty() {
-        return Err(GpuError::NoAdapter);
+        return Err(GpuError::NoAdapter {
+            hint: no_adapter_hint(|name| std::env::var(name).ok()),
+        });
     }
     let wanted = choice
         .map(str::to_owned)
@@ -570,4 +596,28 @@ fn describe(info: &wgpu::AdapterInfo) -> String {
         wgpu::DeviceType::Other => "other",
     };
     format!("{} ({:?}, {kind})", info.name, info.backend)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::no_adapter_hint;
+
+    #[test]
+    fn the_hint_names_the_variable_that_hides_the_drivers() {
+        let env = |pairs: &'static [(&'static str, &'static str)]| {
+            move |name: &str| {
+                pairs
+                    .iter()
+                    .find(|(n, _)| *n == name)
+                    .map(|(_, v)| v.to_string())
+            }
+        };
+        assert!(no_adapter_hint(env(&[("WGPU_BACKEND", "dx12")])).starts_with("WGPU_BACKEND=dx12"));
+        let hint = no_adapter_hint(env(&[("VK_DRIVER_FILES", "/nowhere/icd.json")]));
+        assert!(
+            hint.contains("VK_DRIVER_FILES names /nowhere/icd.json, which does not exist"),
+            "{hint}"
+        );
+        assert!(no_adapter_hint(env(&[])).contains("mesa-vulkan-drivers"));
+    }
 }

@@ -90,8 +90,9 @@ pub struct Rendered {
 /// What can go wrong on the GPU, with what to do about it.
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
-    #[error("no GPU adapter found; install mesa-vulkan-drivers for a software one, or render on the CPU")]
-    NoAdapter,
+    /// `hint` says what to do: the variable that hides the drivers, or what to install.
+    #[error("no GPU adapter found; {hint}")]
+    NoAdapter { hint: String },
     #[error("no GPU adapter matches {wanted:?}; found: {found}")]
     NoMatch { wanted: String, found: String },
     #[error(

@@ -207,7 +207,7 @@ fn key_of(code: KeyCode) -> Option<Key> {
 fn opening(e: GpuError) -> anyhow::Error {
     match e {
         GpuError::Atmo(e) => e.into(),
-        GpuError::NoAdapter | GpuError::NoMatch { .. } | GpuError::MissingFeature { .. } => {
+        GpuError::NoAdapter { .. } | GpuError::NoMatch { .. } | GpuError::MissingFeature { .. } => {
             Error::Invalid(format!("{e} (--adapter names another)")).into()
         }
         e => e.into(),

@@ -23,12 +23,12 @@ pub enum Error {
     /// A parameter file could not be parsed (message carries line and column).
     #[error("{path}: {message}")]
     Parse { path: String, message: String },
-    /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    /// A file could not be read or written. The system's reason is part of the
+    /// message, not a separate source, so that a chain of causes says it once.
+    #[error("{path}: {error}")]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// An image could not be encoded.
     #[error("{path}: could not encode image: {message}")]
@@ -47,6 +47,14 @@ fn mib(bytes: u64) -> String {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// For `map_err`: an I/O error at `path` as an [`Error::Io`].
+    pub fn io_at(path: &std::path::Path) -> impl Fn(std::io::Error) -> Error + Copy + '_ {
+        move |error| Error::Io {
+            path: path.to_path_buf(),
+            error,
+        }
+    }
+
     /// Shorthand for [`Error::OutOfRange`].
     pub fn out_of_range(field: &str, value: impl std::fmt::Display, allowed: &str) -> Self {
         Error::OutOfRange {

@@ -37,23 +37,16 @@ struct Live {
 /// Folders already swept of stale temporaries by this process.
 static SWEPT: Mutex<Option<HashSet<PathBuf>>> = Mutex::new(None);
 
-fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
-    move |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// Reads the whole file `path` (a `what`, for messages), refusing one longer than
 /// `limit` bytes or than the run's memory budget; reads at most one byte past the
 /// limit, so a file that never ends (a FIFO, `/dev/zero`) stops there.
 pub fn read_bounded(path: &Path, what: &str, limit: u64) -> Result<Vec<u8>> {
     let limit = limit.min(crate::budget::limit());
-    let file = File::open(path).map_err(io(path))?;
+    let file = File::open(path).map_err(Error::io_at(path))?;
     let mut bytes = Vec::new();
     file.take(limit + 1)
         .read_to_end(&mut bytes)
-        .map_err(io(path))?;
+        .map_err(Error::io_at(path))?;
     if bytes.len() as u64 > limit {
         return Err(Error::Invalid(format!(
             "{}: the {what} is longer than the limit of {} MiB",
@@ -79,7 +72,7 @@ pub fn check_folder(path: &Path) -> Result<()> {
     } else {
         Err(Error::Io {
             path: path.to_path_buf(),
-            source: std::io::Error::new(
+            error: std::io::Error::new(
                 std::io::ErrorKind::NotFound,
                 format!("the folder {} does not exist", folder.display()),
             ),
@@ -255,17 +248,17 @@ pub fn write_atomically(
     fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
 ) -> Result<()> {
     through_temporary(path, "file", |tmp, target| {
-        let file = File::create(tmp).map_err(io(tmp))?;
+        let file = File::create(tmp).map_err(Error::io_at(tmp))?;
         let mut w = BufWriter::new(file);
         fill(&mut w)?;
-        w.flush().map_err(io(tmp))?;
+        w.flush().map_err(Error::io_at(tmp))?;
         if let Ok(old) = std::fs::metadata(target) {
             w.get_ref()
                 .set_permissions(old.permissions())
-                .map_err(io(tmp))?;
+                .map_err(Error::io_at(tmp))?;
         }
-        w.get_ref().sync_all().map_err(io(tmp))?;
-        std::fs::rename(tmp, target).map_err(io(path))
+        w.get_ref().sync_all().map_err(Error::io_at(tmp))?;
+        std::fs::rename(tmp, target).map_err(Error::io_at(path))
     })
 }
 
@@ -278,17 +271,17 @@ pub fn write_folder_atomically<T>(
     fill: impl FnOnce(&Path) -> Result<T>,
 ) -> Result<T> {
     through_temporary(folder, "folder", |tmp, target| {
-        std::fs::create_dir(tmp).map_err(io(tmp))?;
+        std::fs::create_dir(tmp).map_err(Error::io_at(tmp))?;
         let value = fill(tmp)?;
         if target.is_dir() {
-            for entry in std::fs::read_dir(tmp).map_err(io(tmp))? {
-                let from = entry.map_err(io(tmp))?.path();
+            for entry in std::fs::read_dir(tmp).map_err(Error::io_at(tmp))? {
+                let from = entry.map_err(Error::io_at(tmp))?.path();
                 let to = target.join(from.file_name().expect("a folder's entry"));
-                std::fs::rename(&from, &to).map_err(io(&to))?;
+                std::fs::rename(&from, &to).map_err(Error::io_at(&to))?;
             }
-            std::fs::remove_dir(tmp).map_err(io(tmp))?;
+            std::fs::remove_dir(tmp).map_err(Error::io_at(tmp))?;
         } else {
-            std::fs::rename(tmp, target).map_err(io(folder))?;
+            std::fs::rename(tmp, target).map_err(Error::io_at(folder))?;
         }
         Ok(value)
     })
@@ -315,7 +308,7 @@ mod tests {
     }
 
     fn put(w: &mut BufWriter<File>, bytes: &[u8]) -> Result<()> {
-        w.write_all(bytes).map_err(io(Path::new("test")))
+        w.write_all(bytes).map_err(Error::io_at(Path::new("test")))
     }
 
     #[test]
@@ -413,14 +406,14 @@ mod tests {
         assert!(e.is_err());
         assert!(names(&dir).is_empty(), "{:?}", names(&dir));
         write_folder_atomically(&frames, |tmp| {
-            std::fs::write(tmp.join("frame-0000.png"), b"1").map_err(io(tmp))
+            std::fs::write(tmp.join("frame-0000.png"), b"1").map_err(Error::io_at(tmp))
         })
         .unwrap();
         assert_eq!(names(&frames), ["frame-0000.png"]);
         // Into an existing folder: the new files join what is there.
         std::fs::write(frames.join("notes.txt"), b"mine").unwrap();
         write_folder_atomically(&frames, |tmp| {
-            std::fs::write(tmp.join("frame-0000.png"), b"2").map_err(io(tmp))
+            std::fs::write(tmp.join("frame-0000.png"), b"2").map_err(Error::io_at(tmp))
         })
         .unwrap();
         assert_eq!(names(&frames), ["frame-0000.png", "notes.txt"]);

@@ -168,6 +168,43 @@ fn any_damaged_byte_or_truncation_is_detected() {
     }
 }
 
+/// A table altered with its checksum made to match is refused by its values: NaN, a
+/// negative singular value, a fixed-point step so large that drawing overflows.
+#[test]
+fn tampered_values_with_a_valid_checksum_are_refused() {
+    let (table, _) = small();
+    let bytes = table.to_bytes();
+    let sigma = table.singular_values();
+    let sigma_at = (0..bytes.len() - 4)
+        .find(|&k| {
+            bytes[k..k + 4] == (sigma.len() as u32).to_le_bytes()
+                && bytes[k + 4..k + 8] == sigma[0].to_le_bytes()
+        })
+        .expect("the singular values follow their count")
+        + 4;
+    let rows = CHANNELS * table.terms(0).len();
+    let step_at = sigma_at + 4 * sigma.len() + 2 * rows;
+    let tampered = |at: usize, value: f32| {
+        let mut copy = bytes.clone();
+        copy[at..at + 4].copy_from_slice(&value.to_le_bytes());
+        let body = copy.len() - 4;
+        let crc = crc32fast::hash(&copy[..body]);
+        copy[body..].copy_from_slice(&crc.to_le_bytes());
+        SkylightTable::from_bytes(&copy, "tampered")
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
+    assert!(tampered(sigma_at, f32::NAN).contains("not a finite number"));
+    assert!(tampered(sigma_at, -1.0).contains("singular value -1 is not"));
+    assert!(tampered(step_at, f32::NAN).contains("not a finite number"));
+    // Finite, but the draw's sums would pass f32's range.
+    let e = tampered(step_at, 1e35);
+    assert!(e.contains("past what a sky can draw"), "{e}");
+    // The same bytes untouched still read.
+    SkylightTable::from_bytes(&bytes, "intact").unwrap();
+}
+
 #[test]
 fn precompute_is_deterministic_across_thread_counts() {
     let (table, _) = small();

@@ -30,9 +30,10 @@ pub struct BenchArgs {
     /// shafts: the folder holding spotlight-sphere.toml and stage.toml.
     #[arg(long, default_value = "scenes")]
     scenes: std::path::PathBuf,
-    /// shafts: where the plane sweep's shafts-sweep.csv and .svg are written.
-    #[arg(long, default_value = ".")]
-    sweep_dir: std::path::PathBuf,
+    /// shafts: a folder to write the plane sweep into as shafts-sweep.csv and .svg
+    /// (without it the sweep is only printed).
+    #[arg(long, value_name = "FOLDER")]
+    sweep_dir: Option<std::path::PathBuf>,
     /// cpu: each method against its baseline; gpu: each GPU pipeline beside the same
     /// method on the CPU.
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
@@ -92,8 +93,15 @@ pub fn run(args: BenchArgs) -> Result<()> {
         Area::Clouds => clouds::cpu(args.quick, args.json),
         Area::View => unreachable!("handled above"),
         Area::Shafts => {
-            atmo::files::check_folder(&args.sweep_dir.join("shafts-sweep.csv"))?;
-            shafts::cpu(args.quick, args.json, &args.scenes, &args.sweep_dir)
+            if let Some(dir) = &args.sweep_dir {
+                atmo::files::check_folder(&dir.join("shafts-sweep.csv"))?;
+            }
+            shafts::cpu(
+                args.quick,
+                args.json,
+                &args.scenes,
+                args.sweep_dir.as_deref(),
+            )
         }
     }
 }

@@ -4,7 +4,7 @@
 //! sub-plane counts (the paper's Figs. 4 and 5) as CSV and SVG.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::Result;
 use atmo::files::write_atomically;
@@ -30,7 +30,7 @@ fn time_planes(scene: &Scene, runs: usize) -> (f64, Frame) {
     (ms, frame)
 }
 
-pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: &Path) -> Result<()> {
+pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Result<()> {
     let fig6 = Scene::from_file(&scenes.join("spotlight-sphere.toml"))?;
     let stage = Scene::from_file(&scenes.join("stage.toml"))?;
     let runs = if quick { 5 } else { 21 };
@@ -165,13 +165,13 @@ struct SweepRow {
 }
 
 /// Planes with 6 sub-planes, then sub-planes with 30 planes: time and error against the
-/// converged reference, to `shafts-sweep.csv` and `shafts-sweep.svg` in `folder`.
+/// converged reference, to `shafts-sweep.csv` and `shafts-sweep.svg` in `folder` if given.
 fn sweep_planes(
     fig6: &Scene,
     reference: &Frame,
     quick: bool,
     json: bool,
-    folder: &Path,
+    folder: Option<&Path>,
 ) -> Result<()> {
     let plane_counts: &[u32] = if quick {
         &[10, 30, 60]
@@ -211,33 +211,33 @@ fn sweep_planes(
             r.planes, r.sub_planes, r.ms, r.rms_levels, r.max_levels
         )?;
     }
-    let csv_path: PathBuf = folder.join("shafts-sweep.csv");
-    let svg_path: PathBuf = folder.join("shafts-sweep.svg");
-    write_atomically(&csv_path, |w| write_all(w, &csv_path, csv.as_bytes()))?;
-    let svg = plot(&rows, plane_counts.len());
-    write_atomically(&svg_path, |w| write_all(w, &svg_path, svg.as_bytes()))?;
+    // Files only where asked for (--sweep-dir); the sweep is printed either way.
+    let paths = folder.map(|f| (f.join("shafts-sweep.csv"), f.join("shafts-sweep.svg")));
+    if let Some((csv_path, svg_path)) = &paths {
+        write_atomically(csv_path, |w| write_all(w, csv_path, csv.as_bytes()))?;
+        let svg = plot(&rows, plane_counts.len());
+        write_atomically(svg_path, |w| write_all(w, svg_path, svg.as_bytes()))?;
+    }
     if json {
         println!(
             "{}",
-            json!({"bench": "shafts.sweep", "csv": csv_path, "plot": svg_path,
+            json!({"bench": "shafts.sweep", "csv": paths.as_ref().map(|p| &p.0),
+                   "plot": paths.as_ref().map(|p| &p.1),
                    "rows": rows.iter().map(|r| json!({"planes": r.planes, "sub_planes": r.sub_planes,
                    "median_ms": r.ms, "rms_levels": r.rms_levels, "max_levels": r.max_levels})).collect::<Vec<_>>()})
         );
     } else {
-        print!(
-            "sweep ({} and {}):\n{csv}",
-            csv_path.display(),
-            svg_path.display()
-        );
+        match &paths {
+            Some((c, s)) => println!("sweep ({} and {}):", c.display(), s.display()),
+            None => println!("sweep (--sweep-dir to write it as CSV and SVG):"),
+        }
+        print!("{csv}");
     }
     Ok(())
 }
 
 fn write_all(w: &mut impl std::io::Write, path: &Path, bytes: &[u8]) -> atmo::Result<()> {
-    w.write_all(bytes).map_err(|source| atmo::Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    w.write_all(bytes).map_err(atmo::Error::io_at(path))
 }
 
 /// Two panels side by side, as the paper's Figs. 4 and 5: error (levels, solid) and

@@ -266,6 +266,9 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     };
     if let Some(path) = &args.save_particles {
         check_folder(path)?;
+        if let Some(input) = &args.particles_file {
+            atmo::files::check_distinct(path, &[("--particles-file", input)])?;
+        }
     }
     let camera = camera_for(&particles, &args)?;
     let splat = match args.splat {

@@ -41,10 +41,7 @@ pub fn run(args: InspectArgs) -> Result<()> {
     }
     print_summary(&table, &args.table, bytes);
     if let Some(folder) = &args.plots {
-        std::fs::create_dir_all(folder).map_err(|source| Error::Io {
-            path: folder.clone(),
-            source,
-        })?;
+        std::fs::create_dir_all(folder).map_err(Error::io_at(folder))?;
         write_plots(&table, folder, sun, args.altitude)?;
     }
     Ok(())

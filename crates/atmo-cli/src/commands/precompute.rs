@@ -105,6 +105,9 @@ pub fn run(args: PrecomputeArgs) -> Result<()> {
     };
     settings.validate(&atmosphere)?;
     atmo::files::check_folder(&args.output)?;
+    if let Some(input) = &args.medium.atmosphere {
+        atmo::files::check_distinct(&args.output, &[("--atmosphere", input)])?;
+    }
     let start = Instant::now();
     let bar = ProgressBar::new((settings.sun_steps * settings.altitude_steps) as u64)
         .with_style(

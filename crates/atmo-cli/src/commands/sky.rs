@@ -74,6 +74,17 @@ pub fn run(args: SkyArgs) -> Result<()> {
         Some(path) => {
             if args.animate.is_none() {
                 ImageKind::of(path)?;
+                // Checked before the work, not after it.
+                atmo::files::check_folder(path)?;
+                let inputs = [
+                    ("--table", &args.table),
+                    ("--atmosphere", &args.medium.atmosphere),
+                ];
+                for (flag, input) in inputs {
+                    if let Some(input) = input {
+                        atmo::files::check_distinct(path, &[(flag, input)])?;
+                    }
+                }
             }
             // The sky's pictures are seen from the model's altitude; the camera turns.
             Some(picture.view((args.picture.width, args.picture.height))?)

@@ -11,7 +11,7 @@ use atmo_gpu::{Gpu, GpuError};
 pub fn gpu() -> Option<Gpu> {
     match Gpu::new(None) {
         Ok(gpu) => Some(gpu),
-        Err(GpuError::NoAdapter) if std::env::var("CI").as_deref() != Ok("true") => {
+        Err(GpuError::NoAdapter { .. }) if std::env::var("CI").as_deref() != Ok("true") => {
             eprintln!("skipped: no GPU adapter (install mesa-vulkan-drivers)");
             None
         }

@@ -208,10 +208,7 @@ pub fn read(path: &Path, default_albedo: f32) -> Result<Vec<Particle>> {
 /// CSV otherwise.
 pub fn write(path: &Path, particles: &[Particle]) -> Result<()> {
     let binary = path.extension().is_some_and(|e| e == "atmo-particles");
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io = Error::io_at(path);
     write_atomically(path, |w| {
         if binary {
             w.write_all(MAGIC).map_err(io)?;

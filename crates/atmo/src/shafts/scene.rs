@@ -564,10 +564,7 @@ fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
     use image::ImageDecoder as _;
     let bad = |e: image::ImageError| Error::Invalid(format!("gobo {}: {e}", path.display()));
     let bytes = crate::files::read_bounded(path, "gobo image", crate::files::DATA_LIMIT_BYTES)?;
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io = Error::io_at(path);
     let decoder = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(io)?

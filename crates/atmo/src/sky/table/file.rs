@@ -128,10 +128,7 @@ impl SkylightTable {
     pub fn write(&self, path: &Path) -> Result<()> {
         let bytes = self.to_bytes();
         write_atomically(path, |w| {
-            std::io::Write::write_all(w, &bytes).map_err(|source| Error::Io {
-                path: path.to_path_buf(),
-                source,
-            })
+            std::io::Write::write_all(w, &bytes).map_err(Error::io_at(path))
         })
     }
 
@@ -271,6 +268,11 @@ fn read_factors(r: &mut Reader, rows: usize, cols: usize, sun_steps: usize) -> R
     let sigma = (0..rank)
         .map(|_| r.f32("singular values"))
         .collect::<Result<Vec<_>>>()?;
+    if let Some(bad) = sigma.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+        return Err(Error::Invalid(format!(
+            "singular value {bad} is not a finite number >= 0"
+        )));
+    }
     let terms = (0..rows)
         .map(|_| {
             let b = r.take(2, "term counts")?;
@@ -287,9 +289,9 @@ fn read_factors(r: &mut Reader, rows: usize, cols: usize, sun_steps: usize) -> R
     let steps = (0..2 * most)
         .map(|_| r.f32("fixed-point steps"))
         .collect::<Result<Vec<_>>>()?;
-    if let Some(bad) = steps.iter().find(|&&x| x <= 0.0) {
+    if let Some(bad) = steps.iter().find(|x| !(x.is_finite() && **x > 0.0)) {
         return Err(Error::Invalid(format!(
-            "fixed-point step {bad} is not positive"
+            "fixed-point step {bad} is not a positive number"
         )));
     }
     let (s_step, t_step) = (steps[..most].to_vec(), steps[most..].to_vec());
@@ -312,6 +314,15 @@ fn read_factors(r: &mut Reader, rows: usize, cols: usize, sun_steps: usize) -> R
         let (these, others) = rest.split_at(n as usize);
         s.extend(these.iter().map(|&v| dequantize(v, step)));
         rest = others;
+    }
+    // Values, not only bytes: a table whose checksum holds may still have been made to
+    // draw infinity (sum over the terms of s_k t_k); real tables stay below 1e6.
+    let max_abs = |v: &[f32]| v.iter().fold(0.0f64, |m, &x| m.max(x.abs() as f64));
+    let largest = max_abs(&s) * max_abs(&t) * most as f64;
+    if largest.is_nan() || largest >= 1e30 {
+        return Err(Error::Invalid(format!(
+            "the tables' values reach {largest:e}, past what a sky can draw in f32"
+        )));
     }
     Ok(Factors {
         s_step,
