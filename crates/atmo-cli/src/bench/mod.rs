@@ -186,11 +186,19 @@ pub(crate) fn report(json: bool, gpu: &Gpu, case: Case) {
     );
 }
 
-/// Prints `line` as JSON with --json, else `text`.
-pub fn emit(json: bool, line: Value, text: String) {
+/// Prints `line` as JSON with --json, else `text`. The JSON line gets `peak_rss_mb`:
+/// the process's peak resident memory since the previous line (the peak starts again
+/// after each), MiB, or null where the system does not say.
+pub fn emit(json: bool, mut line: Value, text: String) {
     if json {
+        let peak = atmo::budget::peak_rss_bytes()
+            .map(|b| (b as f64 / (1u64 << 20) as f64 * 10.0).round() / 10.0);
+        if let Value::Object(fields) = &mut line {
+            fields.insert("peak_rss_mb".into(), json!(peak));
+        }
         println!("{line}");
     } else {
         println!("{text}");
     }
+    atmo::budget::reset_peak_rss();
 }

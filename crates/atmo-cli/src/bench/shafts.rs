@@ -127,20 +127,15 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
         scene.lights.truncate(k);
         lines.push(("lights", k as u32, time_planes(&scene, runs.min(7)).0));
     }
-    for text in lines
-        .iter()
-        .map(|(what, k, ms)| format!("  stage, {k} {what}: {ms:.2} ms"))
-    {
-        if !json {
-            println!("{text}");
-        }
-    }
-    if json {
-        println!(
-            "{}",
-            json!({"bench": "shafts.stage-lights", "median_ms_by_lights": lines.iter().map(|l| l.2).collect::<Vec<_>>()})
-        );
-    }
+    emit(
+        json,
+        json!({"bench": "shafts.stage-lights", "median_ms_by_lights": lines.iter().map(|l| l.2).collect::<Vec<_>>()}),
+        lines
+            .iter()
+            .map(|(what, k, ms)| format!("  stage, {k} {what}: {ms:.2} ms"))
+            .collect::<Vec<_>>()
+            .join("\n"),
+    );
 
     sweep_planes(&fig6, &reference, quick, json, sweep)
 }
@@ -218,21 +213,18 @@ fn sweep_planes(
         let svg = plot(&rows, plane_counts.len());
         write_atomically(svg_path, |w| write_all(w, svg_path, svg.as_bytes()))?;
     }
-    if json {
-        println!(
-            "{}",
-            json!({"bench": "shafts.sweep", "csv": paths.as_ref().map(|p| &p.0),
-                   "plot": paths.as_ref().map(|p| &p.1),
-                   "rows": rows.iter().map(|r| json!({"planes": r.planes, "sub_planes": r.sub_planes,
-                   "median_ms": r.ms, "rms_levels": r.rms_levels, "max_levels": r.max_levels})).collect::<Vec<_>>()})
-        );
-    } else {
-        match &paths {
-            Some((c, s)) => println!("sweep ({} and {}):", c.display(), s.display()),
-            None => println!("sweep (--sweep-dir to write it as CSV and SVG):"),
-        }
-        print!("{csv}");
-    }
+    let title = match &paths {
+        Some((c, s)) => format!("sweep ({} and {}):", c.display(), s.display()),
+        None => "sweep (--sweep-dir to write it as CSV and SVG):".into(),
+    };
+    emit(
+        json,
+        json!({"bench": "shafts.sweep", "csv": paths.as_ref().map(|p| &p.0),
+               "plot": paths.as_ref().map(|p| &p.1),
+               "rows": rows.iter().map(|r| json!({"planes": r.planes, "sub_planes": r.sub_planes,
+               "median_ms": r.ms, "rms_levels": r.rms_levels, "max_levels": r.max_levels})).collect::<Vec<_>>()}),
+        format!("{title}\n{}", csv.trim_end()),
+    );
     Ok(())
 }
 

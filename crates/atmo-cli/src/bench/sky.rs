@@ -16,7 +16,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::{json, Value};
 
-use super::{median, report, time_gpu, time_ms, Case};
+use super::{emit, median, report, time_gpu, time_ms, Case};
 use crate::backend::gpu_error;
 
 /// The frame the sky benches draw: 1920 x 1080, looking north 15 deg up, 70 deg high.
@@ -138,16 +138,16 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
             "baseline_median_ms": baseline_ms, "ratio": baseline_ms / ms,
             "error": {"rms": rms, "max": max}, "reference": reference_info,
         });
-        if json {
-            println!("{line}");
-        } else {
-            println!(
+        emit(
+            json,
+            line,
+            format!(
                 "{name:<14} {ms:>9.2} ms   reference {baseline_ms:>10.0} ms   ratio {:>8.0}   error rms {:.4} max {:.4}",
                 baseline_ms / ms,
                 rms,
                 max
-            );
-        }
+            ),
+        );
     }
     if !json {
         println!(

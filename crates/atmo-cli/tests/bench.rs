@@ -1,0 +1,30 @@
+//! `atmo bench`: what its JSON lines carry.
+
+mod common;
+
+use common::atmo;
+
+/// Each line of `atmo bench --json` reports the peak memory of its case (clouds, the
+/// quickest area: 3 s).
+#[test]
+fn bench_lines_report_their_peak_memory() {
+    let o = atmo(&["bench", "clouds", "--quick", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(lines.len() >= 2, "{stdout}");
+    for line in lines {
+        let field = line
+            .split("\"peak_rss_mb\":")
+            .nth(1)
+            .unwrap_or_else(|| panic!("no peak_rss_mb in {line}"));
+        let mb: f64 = field
+            .split([',', '}'])
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap_or_else(|_| panic!("{line}"));
+        // A case holds at least its buffer, and far less than the budget.
+        assert!(mb > 1.0 && mb < 2048.0, "{line}");
+    }
+}
