@@ -1,13 +1,13 @@
 //! `atmo sky`: a picture of the sky, or its radiance along given directions.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Result;
 use atmo::image::{Display, ImageKind};
 use atmo::sky::{SkyModel, SkyPicture, SkylightTable};
 use atmo::view::Sun;
-use atmo::{Atmosphere, Error};
+use atmo::Atmosphere;
 use atmo_gpu::sky::{GpuSkyModel, SkyPass, SkyTarget};
 use clap::Args;
 use indicatif::ProgressBar;
@@ -69,7 +69,11 @@ pub fn run(args: SkyArgs) -> Result<()> {
     let picture = args.picture.params();
     picture.validate()?;
     let sun = picture.sun()?;
-    let probe = args.probe.as_deref().map(read_directions).transpose()?;
+    let probe = args
+        .probe
+        .as_deref()
+        .map(atmo::sky::probe::read_directions)
+        .transpose()?;
     let view = match &args.output {
         Some(path) => {
             if args.animate.is_none() {
@@ -150,56 +154,6 @@ pub fn run(args: SkyArgs) -> Result<()> {
         start.elapsed().as_secs_f64() * 1e3
     );
     Ok(())
-}
-
-/// Reads a probe file: header `azimuth_deg,elevation_deg`, then one direction a line.
-/// Returns (azimuth from the sun, elevation) pairs in degrees.
-fn read_directions(path: &Path) -> atmo::Result<Vec<(f64, f64)>> {
-    let text = atmo::files::read_text(path, "probe file", atmo::files::TEXT_LIMIT_BYTES)?;
-    let bad = |line: usize, message: String| Error::Parse {
-        path: format!("{}:{line}", path.display()),
-        message,
-    };
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty());
-    match lines.next() {
-        Some((_, header)) if header.trim().replace(' ', "") == "azimuth_deg,elevation_deg" => {}
-        _ => {
-            return Err(bad(
-                1,
-                "the first line must be the header `azimuth_deg,elevation_deg`".into(),
-            ))
-        }
-    }
-    let mut directions = Vec::new();
-    for (k, line) in lines {
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        let parse = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite());
-        match fields.as_slice() {
-            [a, e] => match (parse(a), parse(e)) {
-                (Some(a), Some(e)) if (-90.0..=90.0).contains(&e) => directions.push((a, e)),
-                (Some(_), Some(e)) => {
-                    return Err(bad(
-                        k + 1,
-                        format!("elevation_deg = {e} is out of range: allowed [-90, 90]"),
-                    ))
-                }
-                _ => return Err(bad(k + 1, format!("expected two numbers, found `{line}`"))),
-            },
-            _ => {
-                return Err(bad(
-                    k + 1,
-                    format!("expected `azimuth_deg,elevation_deg`, found `{line}`"),
-                ))
-            }
-        }
-    }
-    if directions.is_empty() {
-        return Err(bad(1, "no directions after the header".into()));
-    }
-    Ok(directions)
 }
 
 /// Directions per block of `--probe`: each holds a few kB of scattering maps while its

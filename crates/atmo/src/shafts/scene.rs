@@ -557,31 +557,34 @@ impl SpotlightSpec {
 /// 50 MB as texels.
 pub const GOBO_MAX_SIDE: u32 = 4096;
 
-/// A gobo from an image file: its sRGB values decoded to linear transmittance. The size
-/// is read from the file's header and checked before anything is decoded: a small file
-/// can claim a huge image.
+/// A gobo from an image file (through the bounded reader).
 fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
-    use image::ImageDecoder as _;
-    let bad = |e: image::ImageError| Error::Invalid(format!("gobo {}: {e}", path.display()));
     let bytes = crate::files::read_bounded(path, "gobo image", crate::files::DATA_LIMIT_BYTES)?;
-    let io = Error::io_at(path);
+    gobo_from_image(&bytes, &path.display().to_string(), sampling)
+}
+
+/// A gobo from the bytes of an image file (PNG, or what the build's image features
+/// read); `origin` names it in messages. The size is read from the header and checked
+/// before anything is decoded: a small file can claim a huge image.
+pub fn gobo_from_image(bytes: &[u8], origin: &str, sampling: Sampling) -> Result<Gobo> {
+    use image::ImageDecoder as _;
+    let bad = |e: image::ImageError| Error::Invalid(format!("gobo {origin}: {e}"));
     let decoder = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
-        .map_err(io)?
+        .map_err(|e| Error::Invalid(format!("gobo {origin}: {e}")))?
         .into_decoder()
         .map_err(bad)?;
     let (width, height) = decoder.dimensions();
     if width.max(height) > GOBO_MAX_SIDE {
         return Err(Error::Invalid(format!(
-            "gobo {}: {width} x {height} pixels is above the limit of {GOBO_MAX_SIDE} a side; \
-             scale the image down",
-            path.display()
+            "gobo {origin}: {width} x {height} pixels is above the limit of {GOBO_MAX_SIDE} a \
+             side; scale the image down"
         )));
     }
     // Decoding holds the image as the file stores it (up to 8 bytes a pixel), its
     // 8-bit RGB copy and the texels kept, 3 bytes a pixel each.
     crate::budget::check(
-        &format!("gobo {} ({width} x {height})", path.display()),
+        &format!("gobo {origin} ({width} x {height})"),
         decoder.total_bytes() + 6 * width as u64 * height as u64,
         "the gobo image's size",
     )?;
@@ -688,8 +691,20 @@ impl ObjectSpec {
 /// coordinates is an error, never a panic.
 #[cfg(feature = "obj")]
 pub fn load_obj(path: &Path, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
-    let fail = |why: String| Error::Invalid(format!("OBJ file {}: {why}", path.display()));
     let bytes = crate::files::read_bounded(path, "OBJ file", crate::files::DATA_LIMIT_BYTES)?;
+    mesh_from_obj(&bytes, &path.display().to_string(), place)
+}
+
+/// [`load_obj`] from the bytes of an OBJ file; `origin` names it in messages.
+#[cfg(feature = "obj")]
+pub fn mesh_from_obj(bytes: &[u8], origin: &str, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
+    let fail = |why: String| Error::Invalid(format!("OBJ file {origin}: {why}"));
+    // The parsed lists, the triangles and their hierarchy hold a few times the text.
+    crate::budget::check(
+        &format!("the mesh of OBJ file {origin}"),
+        4 * bytes.len() as u64,
+        "the mesh's size",
+    )?;
     let options = tobj::LoadOptions {
         triangulate: true,
         ..Default::default()
@@ -706,11 +721,14 @@ pub fn load_obj(path: &Path, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
             let v = p
                 .get(i..i + 3)
                 .ok_or_else(|| fail(format!("vertex index {} out of range", i / 3 + 1)))?;
-            let v = Vec3::new(v[0], v[1], v[2]);
+            let v = place(Vec3::new(v[0], v[1], v[2]));
             if v.is_finite() {
-                Ok(place(v))
+                Ok(v)
             } else {
-                Err(fail(format!("vertex {} is not finite", i / 3 + 1)))
+                Err(fail(format!(
+                    "vertex {} is not finite where it is placed",
+                    i / 3 + 1
+                )))
             }
         };
         for t in idx.chunks_exact(3) {

@@ -31,6 +31,7 @@
 pub mod daylight;
 pub mod frame;
 pub mod grid;
+pub mod probe;
 pub mod shells;
 #[cfg(feature = "table")]
 pub mod table;
