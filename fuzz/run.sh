@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Runs the fuzz targets (all, or those named after SECONDS) for SECONDS each from their
-# seed corpora (corpus/TARGET, the project's own files), with a 256 MiB budget inside
-# and libFuzzer's limits outside: any single allocation of 512 MB or more, or 2 GB
-# resident, is a failure. New inputs go to work/TARGET (not committed); crashes to
-# artifacts/TARGET. Needs the nightly toolchain and cargo-fuzz (installed if missing).
+# seed corpora (corpus/TARGET, the project's own files), JOBS at a time (default 2, one
+# a core), with a 256 MiB budget inside and libFuzzer's limits outside: any single
+# allocation of 512 MB or more, or 2 GB resident, is a failure. New inputs go to
+# work/TARGET (not committed); a failing input to artifacts/TARGET, and the run fails.
+# Needs the nightly toolchain and cargo-fuzz (installed if missing).
 set -euo pipefail
 cd "$(dirname "$0")"
 seconds=${1:-60}
@@ -13,16 +14,27 @@ if [ ${#targets[@]} -eq 0 ]; then
   targets=(atmosphere_toml scene_toml sky_table particles obj gobo probe_csv)
 fi
 command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked --version 0.13.2
-cargo +nightly fuzz build 2>&1 | tail -n 3
-for target in "${targets[@]}"; do
-  mkdir -p "work/$target"
-  echo "== fuzz $target for ${seconds}s"
+cargo +nightly fuzz build 2>&1 | tail -n 1
+
+fuzz_one() {
+  target=$1
+  mkdir -p "work/$target" "artifacts/$target"
+  log="work/$target.log"
   cargo +nightly fuzz run "$target" "work/$target" "corpus/$target" -- \
-    -max_total_time="$seconds" -rss_limit_mb=2048 -malloc_limit_mb=512 -print_final_stats=1 \
-    2>&1 | grep -E "(DONE|stat::number_of_executed_units|stat::peak_rss_mb|^==|SUMMARY|panicked|INFO: seed corpus)" || true
-  # A crash leaves its input in artifacts/ and a non-zero status in the log above.
+    -max_total_time="$seconds" -rss_limit_mb=2048 -malloc_limit_mb=512 \
+    -print_final_stats=1 >"$log" 2>&1 || true
+  # The closing lines: executions, coverage, corpus, peak memory, any failure.
+  echo "== $target ($seconds s): $(grep -E "DONE|SUMMARY|panicked" "$log" | tail -n 2 | tr -s ' \t' ' ')"
+  grep -E "stat::(number_of_executed_units|peak_rss_mb)" "$log" | tr -s ' ' | sed 's/^/   /'
+}
+export -f fuzz_one
+export seconds
+printf '%s\n' "${targets[@]}" | xargs -P "${JOBS:-2}" -I{} bash -c 'fuzz_one {}'
+failed=0
+for target in "${targets[@]}"; do
   if compgen -G "artifacts/$target/*" >/dev/null; then
-    echo "fuzz $target: found a failing input: $(ls artifacts/"$target")" >&2
-    exit 1
+    echo "fuzz $target: failing input $(ls "artifacts/$target"); log: fuzz/work/$target.log" >&2
+    failed=1
   fi
 done
+exit $failed

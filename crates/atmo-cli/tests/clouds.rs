@@ -97,7 +97,7 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
                 "--save-particles",
                 good.to_str().unwrap(),
             ],
-            "the output is the input of --particles-file",
+            "the output is also an input (--particles-file)",
         ),
         (
             vec!["--particles-file", dense.to_str().unwrap()],

@@ -118,6 +118,35 @@ fn bad_shafts_input_exits_2_and_writes_nothing() {
         assert!(stderr.contains(wanted), "{name}: {stderr}");
         assert!(!out.exists(), "{name}");
     }
+    // An output over the scene's own gobo is refused before anything is written.
+    let scenes = dir.join("scenes");
+    std::fs::create_dir_all(scenes.join("gobos")).unwrap();
+    let gobo = scenes.join("gobos/dots.png");
+    std::fs::copy(scene("gobos/dots.png"), &gobo).unwrap();
+    let with_gobo = scenes.join("gobo.toml");
+    std::fs::write(
+        &with_gobo,
+        good.replacen(
+            "kelvin = 3200",
+            "kelvin = 3200\ngobo = \"gobos/dots.png\"",
+            1,
+        ),
+    )
+    .unwrap();
+    let before = std::fs::read(&gobo).unwrap();
+    let o = atmo(&[
+        "shafts",
+        with_gobo.to_str().unwrap(),
+        "-o",
+        gobo.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("also an input (a file the scene names)"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(&gobo).unwrap(), before);
     // compare: pictures of different sizes, and PNG input.
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
     atmo::image::Frame::new(4, 3)

@@ -81,7 +81,7 @@ pub fn check_folder(path: &Path) -> Result<()> {
 }
 
 /// Refuses an output that is one of the inputs (it would be overwritten before, or
-/// while, it is read): `inputs` are (flag, path) pairs.
+/// while, it is read): `inputs` are (what names it, path) pairs, e.g. a flag.
 pub fn check_distinct(output: &Path, inputs: &[(&str, &Path)]) -> Result<()> {
     let Ok(out) = output.canonicalize() else {
         return Ok(()); // not there yet: not an input
@@ -89,7 +89,7 @@ pub fn check_distinct(output: &Path, inputs: &[(&str, &Path)]) -> Result<()> {
     for (flag, input) in inputs {
         if input.canonicalize().is_ok_and(|i| i == out) {
             return Err(Error::Invalid(format!(
-                "{}: the output is the input of {flag}; write somewhere else",
+                "{}: the output is also an input ({flag}); write somewhere else",
                 output.display()
             )));
         }

@@ -96,6 +96,15 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
     ImageKind::of(&args.output)?;
     check_folder(&args.output)?;
     let mut scene = load_scene(&args.scene, args.planes, args.sub_planes, args.shadow_map)?;
+    let inputs: Vec<(&str, &std::path::Path)> = std::iter::once(("the scene", &*args.scene))
+        .chain(
+            scene
+                .files
+                .iter()
+                .map(|f| ("a file the scene names", f.as_path())),
+        )
+        .collect();
+    atmo::files::check_distinct(&args.output, &inputs)?;
     if let Some(k) = args.supersampling {
         atmo::error::check_range("--supersampling", k as f64, 1.0, 16.0)?;
         scene.camera.supersampling = k;

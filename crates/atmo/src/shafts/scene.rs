@@ -37,6 +37,9 @@ pub struct Scene {
     pub display: Display,
     /// The unit of the lights' intensities, and so of the pixels' radiance.
     pub unit: IntensityUnit,
+    /// The files the scene names (gobo images, meshes) as they were read, so that a
+    /// command does not write over one of them.
+    pub files: Vec<PathBuf>,
 }
 
 /// What a light's `intensity` means; pixels are radiance in the same unit per m^2.
@@ -347,6 +350,11 @@ impl Scene {
             .enumerate()
             .map(|(i, o)| o.validate(&format!("object[{i}]"), folder))
             .collect::<Result<Vec<_>>>()?;
+        let gobos = spec.spotlight.iter().filter_map(|l| l.gobo.as_ref());
+        let meshes = spec.object.iter().filter_map(|o| match o {
+            ObjectSpec::Mesh { file, .. } => Some(file),
+            _ => None,
+        });
         let scene = Scene {
             camera,
             haze,
@@ -355,6 +363,7 @@ impl Scene {
             planes,
             display,
             unit,
+            files: gobos.chain(meshes).map(|f| folder.join(f)).collect(),
         };
         scene.validate_planes()?;
         Ok(scene)
