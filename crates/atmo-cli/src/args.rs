@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use atmo::image::ToneMap;
 use atmo::sky::SkySettings;
+use atmo::view::place::{parse_time, Place, SunPosition};
 use atmo::Atmosphere;
 use atmo_view::sky::SkyParams;
 use clap::{Args, ValueEnum};
@@ -66,23 +67,63 @@ pub struct SkyPictureArgs {
     /// Leave out the sun's disc.
     #[arg(long)]
     pub no_sun_disc: bool,
+    #[command(flatten)]
+    pub place: PlaceArgs,
+}
+
+/// Where and when: the sun from a place and a time instead of its angles.
+#[derive(Args)]
+pub struct PlaceArgs {
+    /// Latitude, degrees north, in [-90, 90]; with --longitude and --time the sun is
+    /// placed by NREL's SPA (overrides --sun-elevation and --sun-azimuth).
+    #[arg(long, requires_all = ["longitude", "time"])]
+    pub latitude: Option<f64>,
+    /// Longitude, degrees east, in [-180, 180].
+    #[arg(long, requires_all = ["latitude", "time"])]
+    pub longitude: Option<f64>,
+    /// The time, RFC 3339 with its offset: 2026-06-21T20:30:00+02:00 (or Z for UTC).
+    #[arg(long, requires_all = ["latitude", "longitude"])]
+    pub time: Option<String>,
+}
+
+impl PlaceArgs {
+    /// The sun's position at the place and time, seen from `altitude_m` above sea
+    /// level, if they are given.
+    pub fn sun_position(&self, altitude_m: f64) -> atmo::Result<Option<SunPosition>> {
+        let (Some(latitude_deg), Some(longitude_deg), Some(time)) =
+            (self.latitude, self.longitude, &self.time)
+        else {
+            return Ok(None);
+        };
+        let place = Place {
+            latitude_deg,
+            longitude_deg,
+            altitude_m,
+        };
+        place.sun_at(parse_time(time)?).map(Some)
+    }
 }
 
 impl SkyPictureArgs {
-    /// The parameters (the camera toward the sun unless `--yaw`), not yet validated.
-    pub fn params(&self) -> SkyParams {
-        SkyParams {
-            sun_elevation_deg: self.sun_elevation,
-            sun_azimuth_deg: self.sun_azimuth,
+    /// The parameters (the camera toward the sun unless `--yaw`; the sun from the place
+    /// and time where they are given), not yet validated.
+    pub fn params(&self) -> atmo::Result<SkyParams> {
+        let (sun_elevation, sun_azimuth) = match self.place.sun_position(self.altitude)? {
+            Some(p) => (p.elevation_deg, p.azimuth_deg),
+            None => (self.sun_elevation, self.sun_azimuth),
+        };
+        Ok(SkyParams {
+            sun_elevation_deg: sun_elevation,
+            sun_azimuth_deg: sun_azimuth,
             altitude_m: self.altitude,
-            yaw_deg: self.yaw.unwrap_or(self.sun_azimuth),
+            yaw_deg: self.yaw.unwrap_or(sun_azimuth),
             pitch_deg: self.pitch,
             fov_deg: self.fov,
             fisheye: self.fisheye,
             sun_disc: !self.no_sun_disc,
             exposure: self.exposure,
             tone: self.tone_map.into(),
-        }
+        })
     }
 }
 

@@ -10,7 +10,7 @@ mod commands;
 mod output;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use commands::{clouds, compare, inspect, precompute, shafts, sky, view};
+use commands::{clouds, compare, inspect, precompute, shafts, sky, sun, view};
 
 #[derive(Parser)]
 #[command(
@@ -56,6 +56,9 @@ enum Command {
     /// An interactive window: `atmo view sky` (every flag of `atmo sky`, and
     /// --frames/--screenshot/--script to run without a person).
     View(view::ViewArgs),
+    /// Where the sun is at a place and a time (NREL's SPA) and the sunlight reaching
+    /// that point through the atmosphere, as JSON.
+    Sun(sun::SunArgs),
     /// Time each method against its baseline in the same run and print the ratios.
     Bench(bench::BenchArgs),
 }
@@ -90,6 +93,7 @@ fn main() {
         Command::Precompute(args) => precompute::run(args),
         Command::Inspect(args) => inspect::run(args),
         Command::View(args) => view::run(args).map_err(|e| with_flag(e, sky::FLAGS)),
+        Command::Sun(args) => sun::run(args).map_err(|e| with_flag(e, sky::FLAGS)),
         Command::Bench(args) => bench::run(args),
     };
     if let Err(error) = result {

@@ -251,3 +251,71 @@ fn a_closed_pipe_ends_the_run_quietly() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// `atmo sun` and `--latitude/--longitude/--time`: the sun of a place and a time (SPA),
+/// the sunlight at that point, the same sky as the angles it prints, and bad input.
+#[test]
+fn the_sun_comes_from_a_place_and_a_time() {
+    let place = [
+        "--latitude",
+        "48.85",
+        "--longitude",
+        "2.35",
+        "--time",
+        "2026-06-21T14:00:00+02:00",
+    ];
+    let o = atmo(&[&["sun"][..], &place].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // Paris, midsummer, 12:00 UTC: high in the south (64.5 deg by SPA).
+    let elevation = v["elevation_deg"].as_f64().unwrap();
+    let azimuth = v["azimuth_deg"].as_f64().unwrap();
+    assert!(
+        (64.0..65.0).contains(&elevation) && (180.0..190.0).contains(&azimuth),
+        "{v}"
+    );
+    let lux = v["sunlight"]["illuminance_lux"]["horizontal"]
+        .as_f64()
+        .unwrap();
+    assert!((60e3..130e3).contains(&lux), "{v}");
+    let colour = v["sunlight"]["linear_srgb_colour"].as_array().unwrap();
+    assert!(
+        colour[0].as_f64() > colour[2].as_f64(),
+        "sunlight is warmer than white: {v}"
+    );
+    // The sky of the place and time is the sky of those angles.
+    let dir = scratch("sun-place");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    let o = atmo(&[&["sky", "-o", a.to_str().unwrap()][..], &place, &SMALL].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (e, az) = (format!("{elevation}"), format!("{azimuth}"));
+    let angles = ["--sun-elevation", &e, "--sun-azimuth", &az];
+    let o = atmo(&[&["sky", "-o", b.to_str().unwrap()][..], &angles, &SMALL].concat());
+    assert!(o.status.success());
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    // Bad places and times name the flag and its range; nothing is written.
+    let c = dir.join("c.png");
+    for (flag, value, wanted) in [
+        (
+            "--latitude",
+            "95",
+            "--latitude: latitude = 95 is out of range: allowed [-90, 90]",
+        ),
+        (
+            "--time",
+            "2026-06-21T14:00:00",
+            "--time: time = 2026-06-21T14:00:00 is out of range",
+        ),
+    ] {
+        let mut args = vec!["sky", "-o", c.to_str().unwrap()];
+        args.extend(place);
+        let at = args.iter().position(|a| *a == flag).unwrap();
+        args[at + 1] = value;
+        let o = atmo(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(wanted), "{stderr}");
+        assert!(!c.exists());
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}

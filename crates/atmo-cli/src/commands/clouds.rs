@@ -23,12 +23,15 @@ use glam::Vec3;
 use atmo_gpu::clouds::GpuClouds;
 use atmo_gpu::Gpu;
 
-use crate::args::ToneMapArg;
+use crate::args::{PlaceArgs, ToneMapArg};
 use crate::backend::{gpu_error, BackendArgs};
 use crate::output::write_animation;
 
 /// The library's fields that this command's flags set, for error messages.
 pub const FLAGS: &[(&str, &str)] = &[
+    ("latitude", "--latitude"),
+    ("longitude", "--longitude"),
+    ("time", "--time"),
     ("sun.azimuth_deg", "--sun-azimuth"),
     ("camera.fov_deg", "--fov"),
     ("buffer.resolution", "--resolution"),
@@ -66,6 +69,8 @@ pub struct CloudsArgs {
     /// Sun azimuth, degrees clockwise from north.
     #[arg(long, default_value_t = 40.0, allow_negative_numbers = true)]
     sun_azimuth: f32,
+    #[command(flatten)]
+    place: PlaceArgs,
     /// Intensity buffer voxels along each axis (the paper: 128, 256, 384).
     #[arg(long, default_value_t = 256)]
     resolution: usize,
@@ -235,7 +240,15 @@ fn camera_for(particles: &[Particle], args: &CloudsArgs) -> atmo::Result<Camera>
     Camera::look_at(position, centre, Vec3::Y, fov, (args.width, args.height))
 }
 
-pub fn run(args: CloudsArgs) -> Result<()> {
+pub fn run(mut args: CloudsArgs) -> Result<()> {
+    // The sun from a place and a time, where they are given (at the cloud's base).
+    if let Some(p) = args.place.sun_position(Cumulus::default().base as f64)? {
+        eprintln!(
+            "atmo: the sun at {:.3} deg elevation, {:.3} deg azimuth (SPA)",
+            p.elevation_deg, p.azimuth_deg
+        );
+        (args.sun_elevation, args.sun_azimuth) = (p.elevation_deg as f32, p.azimuth_deg as f32);
+    }
     check_range(
         "--sun-elevation (a sun at or below the horizon does not light a cloud from above)",
         args.sun_elevation as f64,

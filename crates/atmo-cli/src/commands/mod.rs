@@ -7,4 +7,5 @@ pub mod precompute;
 pub mod shafts;
 pub mod sky;
 mod sky_table;
+pub mod sun;
 pub mod view;

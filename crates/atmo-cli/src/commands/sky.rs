@@ -28,6 +28,9 @@ pub const FLAGS: &[(&str, &str)] = &[
     ("height", "--height"),
     ("max_interval_m", "--max-interval"),
     ("exposure", "--exposure"),
+    ("latitude", "--latitude"),
+    ("longitude", "--longitude"),
+    ("time", "--time"),
 ];
 
 #[derive(Args)]
@@ -66,7 +69,13 @@ pub struct SkyArgs {
 
 pub fn run(args: SkyArgs) -> Result<()> {
     // Everything is validated before any work or any file is written.
-    let picture = args.picture.params();
+    let picture = args.picture.params()?;
+    if let Some(p) = args.picture.place.sun_position(picture.altitude_m)? {
+        eprintln!(
+            "atmo: the sun at {:.3} deg elevation ({:.3} deg refracted), {:.3} deg azimuth (SPA)",
+            p.elevation_deg, p.refracted_elevation_deg, p.azimuth_deg
+        );
+    }
     picture.validate()?;
     let sun = picture.sun()?;
     let probe = args

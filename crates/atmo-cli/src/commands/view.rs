@@ -72,7 +72,7 @@ struct WindowArgs {
 pub fn run(args: ViewArgs) -> Result<()> {
     let ViewMode::Sky(args) = args.mode;
     // Everything is checked before the window opens.
-    let params = args.picture.params();
+    let params = args.picture.params()?;
     if args.window.frames == Some(0) {
         return Err(Error::out_of_range("frames", 0.0, "[1, inf)").into());
     }

@@ -396,6 +396,21 @@ impl Atmosphere {
         self.ozone.as_ref().filter(|o| o.enabled)
     }
 
+    /// The sunlight reaching `altitude_m` from a sun at `elevation` rad: spectral
+    /// irradiance on a surface facing the sun, W m^-2 nm^-1 per wavelength (the solar
+    /// irradiance through the transmittance along the sun's ray, times the part of the
+    /// disc above the horizon).
+    pub fn direct_sunlight(&self, altitude_m: f64, elevation: f64) -> Vec<f64> {
+        let mut t = vec![0.0f32; self.channels()];
+        let r = self.bottom_radius_m + altitude_m;
+        optical_depth::transmittance_to_sun(self, r, elevation.sin(), &mut t);
+        self.solar_irradiance
+            .iter()
+            .zip(&t)
+            .map(|(e, &t)| e * t as f64)
+            .collect()
+    }
+
     /// Number of wavelengths.
     pub fn channels(&self) -> usize {
         self.wavelengths_nm.len()

@@ -23,6 +23,8 @@
 //! ```
 
 mod camera;
+#[cfg(feature = "place")]
+pub mod place;
 
 pub use camera::{Camera, Fov, Lens, PixelBasis};
 
