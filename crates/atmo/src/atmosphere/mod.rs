@@ -88,6 +88,10 @@ struct AtmosphereSpec {
     solar_irradiance: PerWavelength,
     #[serde(default)]
     ground_albedo: f64,
+    /// Meteorological visibility at the ground, km: sets the aerosols' extinction by
+    /// Koschmieder's law in place of `mie.scattering_per_m`.
+    #[serde(default)]
+    visibility_km: Option<f64>,
     rayleigh: SpeciesSpec,
     mie: SpeciesSpec,
     ozone: Option<OzoneSpec>,
@@ -97,7 +101,8 @@ struct AtmosphereSpec {
 #[serde(deny_unknown_fields)]
 struct SpeciesSpec {
     scale_height_m: f64,
-    scattering_per_m: PerWavelength,
+    #[serde(default)]
+    scattering_per_m: Option<PerWavelength>,
     #[serde(default = "one")]
     single_scattering_albedo: f64,
     phase: PhaseFunction,
@@ -119,6 +124,42 @@ struct OzoneSpec {
 
 fn yes() -> bool {
     true
+}
+
+/// Koschmieder's constant: a black target vanishes against the horizon sky where its
+/// contrast falls to 2 %, at `ln(50) = 3.912` extinction lengths.
+const KOSCHMIEDER: f64 = 3.912;
+
+/// The aerosols' scattering per wavelength, 1/m, that make the meteorological
+/// visibility at the ground `visibility_km`: total extinction at 550 nm `3.912 / V`
+/// (Koschmieder), less the air's (Rayleigh, interpolated log-log at 550 nm), taken as
+/// the same at every wavelength (Angstrom exponent 0, as in the `earth` preset), times
+/// the aerosols' single-scattering albedo.
+fn aerosols_for_visibility(
+    visibility_km: f64,
+    rayleigh: &Species,
+    wavelengths_nm: &[f64],
+    albedo: f64,
+) -> Result<Vec<f64>> {
+    let k = wavelengths_nm
+        .partition_point(|&w| w < 550.0)
+        .clamp(1, wavelengths_nm.len() - 1);
+    let (l0, l1) = (wavelengths_nm[k - 1].ln(), wavelengths_nm[k].ln());
+    let (e0, e1) = (
+        rayleigh.extinction_per_m[k - 1].max(1e-30).ln(),
+        rayleigh.extinction_per_m[k].max(1e-30).ln(),
+    );
+    let air = (e0 + (550f64.ln() - l0) / (l1 - l0) * (e1 - e0)).exp();
+    // The clearest air allowed still has some aerosol: 1 % of the air's extinction.
+    let longest = KOSCHMIEDER / (1.01 * air) / 1000.0;
+    check_range(
+        "visibility_km",
+        visibility_km,
+        0.01,
+        (longest * 10.0).floor() / 10.0,
+    )?;
+    let aerosol = KOSCHMIEDER / (visibility_km * 1000.0) - air;
+    Ok(vec![aerosol * albedo; wavelengths_nm.len()])
 }
 
 /// A scattering constituent whose density falls off exponentially with altitude,
@@ -274,7 +315,7 @@ impl Atmosphere {
         }
         check_range("ground_albedo", s.ground_albedo, 0.0, 1.0)?;
         let solar_irradiance = s.solar_irradiance.resolve("solar_irradiance", l, 1e6)?;
-        let species = |name: &str, sp: &SpeciesSpec| -> Result<Species> {
+        let species = |name: &str, sp: &SpeciesSpec, given: Option<Vec<f64>>| -> Result<Species> {
             check_range(
                 &format!("{name}.scale_height_m"),
                 sp.scale_height_m,
@@ -288,9 +329,26 @@ impl Atmosphere {
                 1.0,
             )?;
             sp.phase.validate(&format!("{name}.phase"))?;
-            let scattering =
-                sp.scattering_per_m
-                    .resolve(&format!("{name}.scattering_per_m"), l, 1.0)?;
+            let field = format!("{name}.scattering_per_m");
+            let scattering = match (&sp.scattering_per_m, given) {
+                (Some(per), None) => per.resolve(&field, l, 1.0)?,
+                (None, Some(values)) => values,
+                (Some(_), Some(_)) => {
+                    return Err(Error::Invalid(format!(
+                        "{field} and visibility_km both set the aerosols: give one"
+                    )))
+                }
+                (None, None) => {
+                    return Err(Error::Invalid(format!(
+                        "{field} is missing{}",
+                        if name == "mie" {
+                            " (or give visibility_km)"
+                        } else {
+                            ""
+                        }
+                    )))
+                }
+            };
             let extinction = scattering
                 .iter()
                 .map(|b| b / sp.single_scattering_albedo)
@@ -320,9 +378,19 @@ impl Atmosphere {
                 })
             }
         };
+        let rayleigh = species("rayleigh", &s.rayleigh, None)?;
+        let from_visibility = match s.visibility_km {
+            None => None,
+            Some(v) => Some(aerosols_for_visibility(
+                v,
+                &rayleigh,
+                l,
+                s.mie.single_scattering_albedo,
+            )?),
+        };
         Ok(Atmosphere {
-            rayleigh: species("rayleigh", &s.rayleigh)?,
-            mie: species("mie", &s.mie)?,
+            rayleigh,
+            mie: species("mie", &s.mie, from_visibility)?,
             name: s.name,
             description: s.description,
             bottom_radius_m: s.bottom_radius_m,
@@ -454,6 +522,58 @@ impl Atmosphere {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `visibility_km = 20` sets the aerosols so that the total extinction at 550 nm
+    /// at the ground is Koschmieder's 3.912 / 20 km; the ends of its range are named.
+    #[test]
+    fn visibility_sets_the_aerosols_by_koschmieder() {
+        let earth = include_str!("../../presets/earth.toml");
+        let with = |v: &str| {
+            let text = earth.replace("scattering_per_m = 3.996e-6\n", "").replace(
+                "ground_albedo = 0.0",
+                &format!("ground_albedo = 0.0\nvisibility_km = {v}"),
+            );
+            Atmosphere::from_toml_str(&text, "visible")
+        };
+        let a = with("20").unwrap();
+        // The air's extinction at 550 nm, log-log between 520 and 570 nm.
+        let (e0, e1) = (
+            a.rayleigh.extinction_per_m[2],
+            a.rayleigh.extinction_per_m[3],
+        );
+        let f = (550f64 / 520.0).ln() / (570f64 / 520.0).ln();
+        let air = (e0.ln() + f * (e1.ln() - e0.ln())).exp();
+        let total = air + a.mie.extinction_per_m[3];
+        assert!((total - 3.912 / 20_000.0).abs() < 1e-12, "{total}");
+        assert!(a
+            .mie
+            .extinction_per_m
+            .iter()
+            .all(|&e| e == a.mie.extinction_per_m[0]));
+        // Hazier means more aerosol; past what pure air allows is refused by name.
+        assert!(with("5").unwrap().mie.extinction_per_m[0] > a.mie.extinction_per_m[0]);
+        for bad in ["400", "0", "nan"] {
+            let e = with(bad).unwrap_err().to_string();
+            assert!(e.starts_with("visibility_km = "), "{bad}: {e}");
+        }
+        // Both ways of giving the aerosols at once is refused; so is neither.
+        let both = earth.replace(
+            "ground_albedo = 0.0",
+            "ground_albedo = 0.0\nvisibility_km = 20",
+        );
+        let e = Atmosphere::from_toml_str(&both, "both")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("give one"), "{e}");
+        let neither = earth.replace("scattering_per_m = 3.996e-6\n", "");
+        let e = Atmosphere::from_toml_str(&neither, "neither")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("mie.scattering_per_m is missing (or give visibility_km)"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn to_toml_reads_back_to_the_same_atmosphere() {
