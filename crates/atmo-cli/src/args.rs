@@ -7,6 +7,7 @@ use atmo::sky::SkySettings;
 use atmo::view::place::{parse_time, Place, SunPosition};
 use atmo::Atmosphere;
 use atmo_view::sky::SkyParams;
+use chrono::{DateTime, FixedOffset};
 use clap::{Args, ValueEnum};
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -87,9 +88,11 @@ pub struct PlaceArgs {
 }
 
 impl PlaceArgs {
-    /// The sun's position at the place and time, seen from `altitude_m` above sea
-    /// level, if they are given.
-    pub fn sun_position(&self, altitude_m: f64) -> atmo::Result<Option<SunPosition>> {
+    /// The place (at `altitude_m` above sea level) and the time, if they are given.
+    pub fn place_and_time(
+        &self,
+        altitude_m: f64,
+    ) -> atmo::Result<Option<(Place, DateTime<FixedOffset>)>> {
         let (Some(latitude_deg), Some(longitude_deg), Some(time)) =
             (self.latitude, self.longitude, &self.time)
         else {
@@ -100,7 +103,16 @@ impl PlaceArgs {
             longitude_deg,
             altitude_m,
         };
-        place.sun_at(parse_time(time)?).map(Some)
+        place.validate()?;
+        Ok(Some((place, parse_time(time)?)))
+    }
+
+    /// The sun's position at the place and time, seen from `altitude_m` above sea
+    /// level, if they are given.
+    pub fn sun_position(&self, altitude_m: f64) -> atmo::Result<Option<SunPosition>> {
+        self.place_and_time(altitude_m)?
+            .map(|(place, time)| place.sun_at(time))
+            .transpose()
     }
 }
 

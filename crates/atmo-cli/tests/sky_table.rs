@@ -269,3 +269,46 @@ fn interrupted_animations_leave_no_partial_frames() {
     assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// `--animate day`: a day at a place, sunrise to sunset past the table's lowest sun;
+/// noon is brighter than the ends, and without a place the run is refused.
+#[test]
+fn a_day_is_animated_from_a_place_and_a_date() {
+    let dir = scratch("day");
+    let table = tiny_table(&dir);
+    let folder = dir.join("day");
+    let mut args = vec![
+        "sky",
+        "--table",
+        table.to_str().unwrap(),
+        "--animate",
+        "day",
+    ];
+    args.extend([
+        "--frames",
+        "3",
+        "--fisheye",
+        "--width",
+        "32",
+        "--height",
+        "32",
+    ]);
+    args.extend(["-o", folder.to_str().unwrap()]);
+    let o = atmo(&args);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("needs --latitude, --longitude and --time"));
+    assert!(!folder.exists());
+    args.extend(["--latitude", "48.85", "--longitude", "2.35"]);
+    args.extend(["--time", "2026-06-21T12:00:00+02:00"]);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mean = |k: usize| {
+        let png = image::open(folder.join(format!("frame-{k:04}.png")))
+            .unwrap()
+            .to_rgb8();
+        png.pixels().map(|p| p.0[2] as f64).sum::<f64>() / png.pixels().len() as f64
+    };
+    assert!(mean(1) > 4.0 * mean(0).max(1.0) && mean(1) > 4.0 * mean(2).max(1.0));
+    assert!(folder.join("animation.png").exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -120,6 +120,7 @@ pub fn run(args: SkyArgs) -> Result<()> {
                     frames: args.frames,
                     sun,
                     altitude_m: picture.altitude_m,
+                    day: args.picture.place.place_and_time(picture.altitude_m)?,
                 };
                 sky_table::animate(&drawer, &table, &frames, view, display, path)
             }

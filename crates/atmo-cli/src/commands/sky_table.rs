@@ -7,10 +7,12 @@ use anyhow::Result;
 use atmo::error::check_range;
 use atmo::image::{Display, Frame};
 use atmo::sky::{SkyPicture, SkylightTable, View};
+use atmo::view::place::Place;
 use atmo::view::Sun;
 use atmo::Error;
 use atmo_gpu::sky::{GpuSkyTable, SkyPass, SkyTarget};
 use atmo_gpu::Gpu;
+use chrono::{DateTime, FixedOffset};
 use clap::ValueEnum;
 use std::cell::RefCell;
 
@@ -24,6 +26,9 @@ pub enum Animate {
     Sun,
     /// The viewpoint climbs: altitude from --altitude up to the table's highest.
     Altitude,
+    /// A day at --latitude/--longitude on --time's date: from the sun rising past the
+    /// table's lowest elevation to its setting below it, evenly in time.
+    Day,
 }
 
 /// Draws pictures from a table, on the CPU or on the GPU.
@@ -89,7 +94,7 @@ pub fn draw(
 
 /// What a sequence moves, from where, over how many frames.
 pub struct Animation {
-    /// The sun or the altitude.
+    /// The sun, the altitude, or the day.
     pub what: Animate,
     /// Frames, at least 2.
     pub frames: usize,
@@ -97,22 +102,47 @@ pub struct Animation {
     pub sun: Sun,
     /// The altitude of the first frame (and of all when the sun moves), m.
     pub altitude_m: f64,
+    /// With [`Animate::Day`], the place and the time whose date is the day.
+    pub day: Option<(Place, DateTime<FixedOffset>)>,
 }
 
 impl Animation {
-    /// (sun elevation rad, altitude m) of frame `k`; the last is exactly at the end.
-    fn at(&self, table: &SkylightTable, k: usize) -> (f64, f64) {
-        let u = k as f64 / (self.frames - 1) as f64;
-        match self.what {
+    /// The sun of every frame and its altitude, m; the last frame is exactly at the end.
+    fn frames(&self, table: &SkylightTable) -> atmo::Result<Vec<(Sun, f64)>> {
+        let n = self.frames;
+        let u = |k: usize| k as f64 / (n - 1) as f64;
+        Ok(match self.what {
             Animate::Sun => {
                 let end = table.sun_axis().min();
-                (self.sun.elevation() * (1.0 - u) + end * u, self.altitude_m)
+                (0..n)
+                    .map(|k| {
+                        let e = self.sun.elevation() * (1.0 - u(k)) + end * u(k);
+                        (self.sun.with_elevation(e), self.altitude_m)
+                    })
+                    .collect()
             }
             Animate::Altitude => {
                 let end = table.altitude_axis().max();
-                (self.sun.elevation(), self.altitude_m * (1.0 - u) + end * u)
+                (0..n)
+                    .map(|k| (self.sun, self.altitude_m * (1.0 - u(k)) + end * u(k)))
+                    .collect()
             }
-        }
+            Animate::Day => {
+                let (place, time) = self.day.ok_or_else(|| {
+                    Error::Invalid("--animate day needs --latitude, --longitude and --time".into())
+                })?;
+                // Just inside the table's lowest sun, so the first frame can be drawn.
+                let lowest = table.sun_axis().min().to_degrees() + 1e-3;
+                let (rise, set) = place.daylight(time, lowest)?;
+                let span = (set - rise).num_seconds() as f64;
+                (0..n)
+                    .map(|k| {
+                        let at = rise + chrono::Duration::milliseconds((span * u(k) * 1e3) as i64);
+                        Ok((place.sun_at(at)?.sun(), self.altitude_m))
+                    })
+                    .collect::<atmo::Result<_>>()?
+            }
+        })
     }
 }
 
@@ -134,15 +164,14 @@ pub fn animate(
         ))
         .into());
     }
-    for k in [0, animation.frames - 1] {
-        let (sun, altitude) = animation.at(table, k);
-        table.map(sun, altitude)?;
+    let frames = animation.frames(table)?;
+    for (sun, altitude) in &frames {
+        table.map(sun.elevation(), *altitude)?;
     }
     let start = Instant::now();
     let size = (view.camera.width, view.camera.height);
     let apng = write_animation(folder, animation.frames, size, display, |k, frame| {
-        let (elevation, altitude) = animation.at(table, k);
-        let sun = animation.sun.with_elevation(elevation);
+        let (sun, altitude) = frames[k];
         *frame = drawer.frame(sun, altitude, view)?;
         Ok(())
     })?;

@@ -91,6 +91,39 @@ impl Place {
     }
 }
 
+impl Place {
+    /// The span of the local day of `time` (midnight to midnight in its offset) when the
+    /// sun's centre is at least `above_deg` high, to the minute: sunrise and sunset for
+    /// about -0.83 deg (refraction and the disc's radius). Refused when the sun stays
+    /// below all day; the whole day when it never goes below.
+    pub fn daylight(
+        &self,
+        time: DateTime<FixedOffset>,
+        above_deg: f64,
+    ) -> Result<(DateTime<FixedOffset>, DateTime<FixedOffset>)> {
+        let midnight = time
+            .date_naive()
+            .and_hms_opt(0, 0, 0)
+            .and_then(|t| t.and_local_timezone(*time.offset()).single())
+            .ok_or_else(|| Error::Invalid(format!("time {time}: no local midnight")))?;
+        let mut up = Vec::new();
+        for minute in 0..=24 * 60 {
+            let t = midnight + chrono::Duration::minutes(minute);
+            if self.sun_at(t)?.elevation_deg >= above_deg {
+                up.push(t);
+            }
+        }
+        match (up.first(), up.last()) {
+            (Some(&rise), Some(&set)) => Ok((rise, set)),
+            _ => Err(Error::Invalid(format!(
+                "on {} the sun stays below {above_deg} deg at latitude {}",
+                time.date_naive(),
+                self.latitude_deg
+            ))),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,6 +173,34 @@ mod tests {
             .unwrap_err()
             .to_string()
             .starts_with("latitude = 91"));
+    }
+
+    /// Paris on the June solstice: sunrise 05:47, sunset 21:58 local time (the published
+    /// times, for the disc's top edge with refraction: -0.833 deg); polar night refused.
+    #[test]
+    fn the_day_runs_from_sunrise_to_sunset() {
+        let paris = Place {
+            latitude_deg: 48.8566,
+            longitude_deg: 2.3522,
+            altitude_m: 0.0,
+        };
+        let (rise, set) = paris
+            .daylight(parse_time("2026-06-21T12:00:00+02:00").unwrap(), -0.833)
+            .unwrap();
+        let minutes = |t: DateTime<FixedOffset>| {
+            use chrono::Timelike;
+            t.hour() * 60 + t.minute()
+        };
+        assert!(minutes(rise).abs_diff(5 * 60 + 47) <= 2, "{rise}");
+        assert!(minutes(set).abs_diff(21 * 60 + 58) <= 2, "{set}");
+        let north = Place {
+            latitude_deg: 80.0,
+            ..paris
+        };
+        let e = north
+            .daylight(parse_time("2026-12-21T12:00:00Z").unwrap(), -0.833)
+            .unwrap_err();
+        assert!(e.to_string().contains("stays below"), "{e}");
     }
 
     /// Solstice noon at the equator and at the Arctic circle, and the sun setting in the
