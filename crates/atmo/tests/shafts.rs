@@ -462,3 +462,46 @@ fn a_gobo_claiming_a_huge_image_is_refused_before_decoding() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// OBJ indices out of range (found by fuzzing: tobj overflowed on them, a panic in
+/// debug builds) are refused naming the line; relative indices in range still read.
+#[test]
+fn obj_indices_out_of_range_are_refused_by_line() {
+    use atmo::shafts::scene::mesh_from_obj;
+    // The fuzzer's input, as found.
+    let found = b"o tt\nv 0 0 0\nv 1 0 0\n 0vv 1 0 0\nv 0 1 0\nv 0 0 1 0 0 1\nf 1/1/1 2/-4 2\nvv 1 0 0\nv 0 1 0\nv 0 0 1 4 0 1\nvt 0 0 0 1\nf 1/1/1 2/-4 2\n";
+    let e = mesh_from_obj(found, "crash.obj", |p| p)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("line 7: texture coordinate index 1 is out of range"),
+        "{e}"
+    );
+    let e = mesh_from_obj(b"v 0 0 0\nvt 0 0\nf 1/1 1/-4 1/1\n", "neg.obj", |p| p)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("line 3: texture coordinate index -4 is out of range: 1 given"),
+        "{e}"
+    );
+    for (face, wanted) in [
+        ("f 1 2 0", "vertex index 0"),
+        ("f 1 2 -5", "vertex index -5"),
+        (
+            "f 1 2 9223372036854775807",
+            "vertex index 9223372036854775807",
+        ),
+        ("f 1 2 3//7", "normal index 7"),
+    ] {
+        let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n{face}\n");
+        let e = mesh_from_obj(text.as_bytes(), "bad.obj", |p| p)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("line 5: {wanted} is out of range")),
+            "{face}: {e}"
+        );
+    }
+    let relative = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n";
+    assert_eq!(mesh_from_obj(relative, "ok.obj", |p| p).unwrap().len(), 1);
+}

@@ -126,6 +126,29 @@ fn yes() -> bool {
     true
 }
 
+/// `s` as a TOML basic string: quotes, backslashes and control characters escaped the
+/// way TOML reads them (Rust's `{:?}` writes `\u{c}`, which TOML refuses: a name with a
+/// form feed made table files that could not be read back, found by fuzzing).
+fn toml_string(s: &str) -> String {
+    use std::fmt::Write;
+    let mut out = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            '\r' => out.push_str("\\r"),
+            c if c.is_control() => {
+                let _ = write!(out, "\\u{:04X}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
 /// Koschmieder's constant: a black target vanishes against the horizon sky where its
 /// contrast falls to 2 %, at `ln(50) = 3.912` extinction lengths.
 const KOSCHMIEDER: f64 = 3.912;
@@ -412,8 +435,8 @@ impl Atmosphere {
             format!("[{}]", items.join(", "))
         };
         let mut t = String::new();
-        let _ = writeln!(t, "name = {:?}", self.name);
-        let _ = writeln!(t, "description = {:?}", self.description);
+        let _ = writeln!(t, "name = {}", toml_string(&self.name));
+        let _ = writeln!(t, "description = {}", toml_string(&self.description));
         let _ = writeln!(t, "bottom_radius_m = {:?}", self.bottom_radius_m);
         let _ = writeln!(t, "top_radius_m = {:?}", self.top_radius_m);
         let _ = writeln!(
@@ -522,6 +545,17 @@ impl Atmosphere {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Names and descriptions with quotes, backslashes and control characters survive
+    /// the trip through `to_toml` (table files embed it).
+    #[test]
+    fn strings_are_written_as_toml_reads_them() {
+        let mut a = Atmosphere::earth();
+        a.name = "a \"quoted\" name\\".into();
+        a.description = "form\u{c}feed, tab\t, bell\u{7}, del\u{7f}, é, \u{85}".into();
+        let back = Atmosphere::from_toml_str(&a.to_toml(), "written").unwrap();
+        assert_eq!((back.name, back.description), (a.name, a.description));
+    }
 
     /// `visibility_km = 20` sets the aerosols so that the total extinction at 550 nm
     /// at the ground is Koschmieder's 3.912 / 20 km; the ends of its range are named.

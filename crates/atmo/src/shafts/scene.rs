@@ -714,6 +714,8 @@ pub fn mesh_from_obj(bytes: &[u8], origin: &str, place: impl Fn(Vec3) -> Vec3) -
         4 * bytes.len() as u64,
         "the mesh's size",
     )?;
+    let text = std::str::from_utf8(bytes).map_err(|e| fail(format!("not UTF-8 text ({e})")))?;
+    check_obj_indices(text).map_err(fail)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         ..Default::default()
@@ -751,6 +753,46 @@ pub fn mesh_from_obj(bytes: &[u8], origin: &str, place: impl Fn(Vec3) -> Vec3) -
         return Err(fail("no triangles".into()));
     }
     Ok(Mesh::new(triangles))
+}
+
+/// Checks every index of the face and line elements (`f`, `l`) against the vertices,
+/// texture coordinates and normals given before it, as OBJ counts them (from 1, or
+/// back from the last with a minus sign): tobj turns an index out of range into an
+/// arithmetic overflow (found by fuzzing: a panic in debug builds, a wrapped index in
+/// release ones), so none reaches it. The message names the line.
+#[cfg(feature = "obj")]
+fn check_obj_indices(text: &str) -> std::result::Result<(), String> {
+    let mut counts = [0i64; 3]; // positions, texture coordinates, normals
+    for (k, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some("f") | Some("l") => {
+                for word in words {
+                    for (kind, index) in word.split('/').enumerate().take(3) {
+                        if index.is_empty() {
+                            continue;
+                        }
+                        let n = counts[kind];
+                        let ok = index
+                            .parse::<i64>()
+                            .is_ok_and(|i| (1..=n).contains(&i) || (-n..=-1).contains(&i));
+                        if !ok {
+                            let what = ["vertex", "texture coordinate", "normal"][kind];
+                            return Err(format!(
+                                "line {}: {what} index {index} is out of range: {n} given before it",
+                                k + 1
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// Without atmo's `obj` feature, OBJ meshes are refused with a message saying so.
