@@ -4,7 +4,9 @@
 # a core), with a 256 MiB budget inside and libFuzzer's limits outside: any single
 # allocation of 512 MB or more, or 2 GB resident, is a failure. New inputs go to
 # work/TARGET (not committed); a failing input to artifacts/TARGET, and the run fails.
-# Needs the nightly toolchain and cargo-fuzz (installed if missing).
+# FUZZ_SEED fixes libFuzzer's random seed (CI: 1, so a run repeats its mutations;
+# unset: a new seed each run). Needs the nightly toolchain and cargo-fuzz (installed if
+# missing).
 set -euo pipefail
 cd "$(dirname "$0")"
 seconds=${1:-60}
@@ -21,7 +23,7 @@ fuzz_one() {
   mkdir -p "work/$target" "artifacts/$target"
   log="work/$target.log"
   cargo +nightly fuzz run "$target" "work/$target" "corpus/$target" -- \
-    -max_total_time="$seconds" -rss_limit_mb=2048 -malloc_limit_mb=512 \
+    -max_total_time="$seconds" -rss_limit_mb=2048 -malloc_limit_mb=512 -seed="${FUZZ_SEED:-0}" \
     -print_final_stats=1 >"$log" 2>&1 || true
   # The closing lines: executions, coverage, corpus, peak memory, any failure.
   echo "== $target ($seconds s): $(grep -E "DONE|SUMMARY|panicked" "$log" | tail -n 2 | tr -s ' \t' ' ')"
