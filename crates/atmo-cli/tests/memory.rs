@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{atmo, scratch};
+use common::{atmo, scratch, COARSE_SHELLS};
 
 /// The largest peak resident size of the children run so far, bytes.
 #[cfg(target_os = "linux")]
@@ -29,17 +29,13 @@ fn probe_directions_stream_in_bounded_memory() {
         text.push_str(&format!("{},{}\n", (k * 7) % 360, (k % 179) as f64 - 89.0));
     }
     std::fs::write(&file, text).unwrap();
-    let o = atmo(&[
-        "sky",
-        "--probe",
-        file.to_str().unwrap(),
-        "--shells",
-        "12",
-        "--directions",
-        "16",
-        "--scattering-directions",
-        "16",
-    ]);
+    let o = atmo(
+        &[
+            &["sky", "--probe", file.to_str().unwrap()][..],
+            &COARSE_SHELLS,
+        ]
+        .concat(),
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(o.stdout.iter().filter(|&&b| b == b'\n').count(), 50_001);
     // Holding every direction's maps took 150 MB; one block of them is a tenth of it.

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 use atmo::image::{Display, Frame, ToneMap};
-use common::{atmo, has_gpu, scratch, tiny_table};
+use common::{atmo, has_gpu, scratch, tiny_table, COARSE_SHELLS};
 
 /// Runs `atmo` under a fresh Xvfb display; `None` (the test skipped) where xvfb-run is
 /// missing, outside CI.
@@ -123,14 +123,7 @@ fn scripted_windows_give_the_pictures_of_their_still_commands() {
         }
         // By the shell method: a climb rebuilds the model at the new altitude.
         let name = format!("shells-{backend}");
-        let coarse = [
-            "--shells",
-            "12",
-            "--directions",
-            "16",
-            "--scattering-directions",
-            "16",
-        ];
+        let coarse = COARSE_SHELLS;
         let mut args = vec!["--backend", backend, "--sun-elevation", "8"];
         args.extend(coarse);
         let still = shot_and_still(&dir, &name, &args, "1 key r\n2 key r\n").unwrap();

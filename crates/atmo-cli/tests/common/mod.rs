@@ -26,6 +26,16 @@ pub fn files_in(dir: &Path) -> usize {
     std::fs::read_dir(dir).unwrap().count()
 }
 
+/// Coarse shell-method settings: a model in a fraction of a second.
+pub const COARSE_SHELLS: [&str; 6] = [
+    "--shells",
+    "12",
+    "--directions",
+    "16",
+    "--scattering-directions",
+    "16",
+];
+
 /// A small picture.
 pub const SMALL: [&str; 4] = ["--width", "48", "--height", "32"];
 
