@@ -32,13 +32,13 @@ impl From<ToneMapArg> for ToneMap {
 #[derive(Args)]
 pub struct SkyPictureArgs {
     /// Sun elevation above the horizontal, degrees, in [-90, 90].
-    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 30.0)]
     pub sun_elevation: f64,
     /// Sun azimuth, degrees clockwise from north.
-    #[arg(long, default_value_t = 180.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 180.0)]
     pub sun_azimuth: f64,
     /// Viewpoint altitude above the ground, metres, below the top of the atmosphere.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0)]
     pub altitude: f64,
     /// Image width, pixels.
     #[arg(long, default_value_t = 960)]
@@ -47,10 +47,10 @@ pub struct SkyPictureArgs {
     #[arg(long, default_value_t = 540)]
     pub height: u32,
     /// Camera azimuth, degrees clockwise from north (default: toward the sun).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long)]
     pub yaw: Option<f64>,
     /// Camera elevation, degrees.
-    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 15.0)]
     pub pitch: f64,
     /// Vertical field of view, degrees.
     #[arg(long, default_value_t = 70.0)]
@@ -60,7 +60,7 @@ pub struct SkyPictureArgs {
     pub fisheye: bool,
     /// Multiplies radiance before the tone map (PNG only); 0.15 suits a day sky,
     /// raise it for twilight.
-    #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.15)]
     pub exposure: f32,
     /// Tone map for PNG output.
     #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]
@@ -120,11 +120,22 @@ impl SkyPictureArgs {
     /// The parameters (the camera toward the sun unless `--yaw`; the sun from the place
     /// and time where they are given), not yet validated.
     pub fn params(&self) -> atmo::Result<SkyParams> {
-        let (sun_elevation, sun_azimuth) = match self.place.sun_position(self.altitude)? {
+        Ok(self.params_at(self.sun_position()?.as_ref()))
+    }
+
+    /// The sun's position at the place and time, seen from `--altitude`, if given.
+    pub fn sun_position(&self) -> atmo::Result<Option<SunPosition>> {
+        self.place.sun_position(self.altitude)
+    }
+
+    /// The parameters with the sun at `position` where there is one (from
+    /// [`SkyPictureArgs::sun_position`]), else at `--sun-elevation`/`--sun-azimuth`.
+    pub fn params_at(&self, position: Option<&SunPosition>) -> SkyParams {
+        let (sun_elevation, sun_azimuth) = match position {
             Some(p) => (p.elevation_deg, p.azimuth_deg),
             None => (self.sun_elevation, self.sun_azimuth),
         };
-        Ok(SkyParams {
+        SkyParams {
             sun_elevation_deg: sun_elevation,
             sun_azimuth_deg: sun_azimuth,
             altitude_m: self.altitude,
@@ -135,7 +146,7 @@ impl SkyPictureArgs {
             sun_disc: !self.no_sun_disc,
             exposure: self.exposure,
             tone: self.tone_map.into(),
-        })
+        }
     }
 }
 

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{atmo, scratch, COARSE_SHELLS};
+use common::{atmo, probe_file, scratch, COARSE_SHELLS};
 
 /// The largest peak resident size of the children run so far, bytes.
 #[cfg(target_os = "linux")]
@@ -23,12 +23,7 @@ fn children_peak_bytes() -> u64 {
 #[test]
 fn probe_directions_stream_in_bounded_memory() {
     let dir = scratch("probe-memory");
-    let file = dir.join("many.csv");
-    let mut text = String::from("azimuth_deg,elevation_deg\n");
-    for k in 0..50_000 {
-        text.push_str(&format!("{},{}\n", (k * 7) % 360, (k % 179) as f64 - 89.0));
-    }
-    std::fs::write(&file, text).unwrap();
+    let file = probe_file(&dir, 50_000);
     let o = atmo(
         &[
             &["sky", "--probe", file.to_str().unwrap()][..],

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{atmo, files_in, scratch, SMALL};
+use common::{atmo, files_in, probe_file, scratch, SMALL};
 
 #[test]
 fn renders_png_and_exr_of_the_requested_size() {
@@ -224,12 +224,7 @@ fn a_closed_pipe_ends_the_run_quietly() {
     use std::io::Read;
     use std::os::unix::process::ExitStatusExt;
     let dir = scratch("pipe");
-    let file = dir.join("many.csv");
-    let mut text = String::from("azimuth_deg,elevation_deg\n");
-    for k in 0..20_000 {
-        text.push_str(&format!("{},{}\n", k % 360, (k % 90) as f64));
-    }
-    std::fs::write(&file, text).unwrap();
+    let file = probe_file(&dir, 20_000);
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_atmo"))
         .args(["sky", "--probe", file.to_str().unwrap(), "--shells", "8"])
         .args(["--directions", "8", "--scattering-directions", "8"])

@@ -153,9 +153,14 @@ pub fn interrupt() {
             std::thread::sleep(std::time::Duration::from_millis(50));
         }
         for tmp in open.iter().rev() {
-            let _ = std::fs::remove_file(tmp).or_else(|_| std::fs::remove_dir_all(tmp));
+            remove_temporary(tmp);
         }
     }
+}
+
+/// Removes a temporary, a file or a folder with what it holds, if it is there.
+fn remove_temporary(path: &Path) {
+    let _ = std::fs::remove_file(path).or_else(|_| std::fs::remove_dir_all(path));
 }
 
 /// Whether the run was [`interrupt`]ed (its writes then fail; the signal, not their
@@ -185,11 +190,7 @@ pub fn remove_stale_temporaries(folder: &Path) {
             continue;
         };
         if pid != std::process::id() && !process_alive(pid, &entry.path()) {
-            let path = entry.path();
-            let _ = match entry.file_type() {
-                Ok(t) if t.is_dir() => std::fs::remove_dir_all(&path),
-                _ => std::fs::remove_file(&path),
-            };
+            remove_temporary(&entry.path());
         }
     }
 }
@@ -234,7 +235,7 @@ fn through_temporary<T>(
     let tmp = temporary_beside(&target)?;
     let result = write(&tmp, &target);
     if result.is_err() {
-        let _ = std::fs::remove_file(&tmp).or_else(|_| std::fs::remove_dir_all(&tmp));
+        remove_temporary(&tmp);
     }
     release(&tmp);
     result

@@ -64,10 +64,10 @@ pub struct CloudsArgs {
     #[arg(long, value_name = "FILE")]
     save_particles: Option<PathBuf>,
     /// Sun elevation above the horizon, degrees, in (0, 90].
-    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 20.0)]
     sun_elevation: f32,
     /// Sun azimuth, degrees clockwise from north.
-    #[arg(long, default_value_t = 40.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 40.0)]
     sun_azimuth: f32,
     #[command(flatten)]
     place: PlaceArgs,
@@ -86,16 +86,16 @@ pub struct CloudsArgs {
     #[arg(long, value_enum, default_value_t = PhaseArg::Mie)]
     phase: PhaseArg,
     /// Henyey-Greenstein asymmetry for --phase hg.
-    #[arg(long, default_value_t = 0.8, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.8)]
     g: f32,
     /// Camera distance from the cloud's centre, in cloud widths.
     #[arg(long, default_value_t = 2.2)]
     distance: f32,
     /// Where the camera stands, degrees clockwise from north seen from the cloud.
-    #[arg(long, default_value_t = 200.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 200.0)]
     view_azimuth: f32,
     /// Camera height above the ground, m.
-    #[arg(long, default_value_t = 900.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 900.0)]
     view_height: f32,
     /// Vertical field of view, degrees.
     #[arg(long, default_value_t = 40.0)]

@@ -21,10 +21,10 @@ pub struct InspectArgs {
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
     /// Sun elevation of the direct, table and error maps, degrees.
-    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 30.0)]
     sun_elevation: f64,
     /// Viewpoint altitude of those maps, metres.
-    #[arg(long, default_value_t = 7000.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 7000.0)]
     altitude: f64,
 }
 

@@ -37,7 +37,7 @@ pub struct SkyTableArgs {
     #[arg(long, default_value_t = 128)]
     sun_steps: usize,
     /// Lowest sun elevation, degrees (the paper: 0; below 0 covers dusk and dawn).
-    #[arg(long, default_value_t = -10.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = -10.0)]
     min_sun_elevation: f64,
     /// How many times denser sun elevations are at the horizon than far from it (1:
     /// even, as the paper); the sky changes fastest there.
@@ -47,17 +47,17 @@ pub struct SkyTableArgs {
     #[arg(long, default_value_t = 32)]
     altitude_steps: usize,
     /// Highest viewpoint altitude h0, metres (paper: 13000).
-    #[arg(long, default_value_t = 13_000.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 13_000.0)]
     max_altitude: f64,
     /// Spacing of the altitude grid: h_i = h0 (i / (N - 1))^power (1: even).
     #[arg(long, default_value_t = TableSettings::default().altitude_power)]
     altitude_power: f64,
     /// Largest error per view direction over all suns and altitudes, in displayed sRGB
     /// values (1/255 is one 8-bit step) at --exposure and --tone-map; a number or a/b.
-    #[arg(long, default_value = "1/255", value_parser = parse_fraction, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1/255", value_parser = parse_fraction)]
     epsilon: f32,
     /// The exposure the error is measured at (as `atmo sky --exposure`).
-    #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.15)]
     exposure: f32,
     /// The tone map the error is measured through.
     #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]

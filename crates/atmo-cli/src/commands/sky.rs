@@ -1,6 +1,6 @@
 //! `atmo sky`: a picture of the sky, or its radiance along given directions.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
@@ -69,13 +69,14 @@ pub struct SkyArgs {
 
 pub fn run(args: SkyArgs) -> Result<()> {
     // Everything is validated before any work or any file is written.
-    let picture = args.picture.params()?;
-    if let Some(p) = args.picture.place.sun_position(picture.altitude_m)? {
+    let position = args.picture.sun_position()?;
+    if let Some(p) = &position {
         eprintln!(
             "atmo: the sun at {:.3} deg elevation ({:.3} deg refracted), {:.3} deg azimuth (SPA)",
             p.elevation_deg, p.refracted_elevation_deg, p.azimuth_deg
         );
     }
+    let picture = args.picture.params_at(position.as_ref());
     picture.validate()?;
     let sun = picture.sun()?;
     let probe = args
@@ -89,15 +90,14 @@ pub fn run(args: SkyArgs) -> Result<()> {
                 ImageKind::of(path)?;
                 // Checked before the work, not after it.
                 atmo::files::check_folder(path)?;
-                let inputs = [
+                let inputs: Vec<(&str, &Path)> = [
                     ("--table", &args.table),
                     ("--atmosphere", &args.medium.atmosphere),
-                ];
-                for (flag, input) in inputs {
-                    if let Some(input) = input {
-                        atmo::files::check_distinct(path, &[(flag, input)])?;
-                    }
-                }
+                ]
+                .into_iter()
+                .filter_map(|(flag, input)| Some((flag, input.as_deref()?)))
+                .collect();
+                atmo::files::check_distinct(path, &inputs)?;
             }
             // The sky's pictures are seen from the model's altitude; the camera turns.
             Some(picture.view((args.picture.width, args.picture.height))?)

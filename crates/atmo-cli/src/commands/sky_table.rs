@@ -164,9 +164,10 @@ pub fn animate(
         ))
         .into());
     }
+    // Every frame inside the table's ranges (its coefficients, not its whole map).
     let frames = animation.frames(table)?;
     for (sun, altitude) in &frames {
-        table.map(sun.elevation(), *altitude)?;
+        table.coefficients(sun.elevation(), *altitude)?;
     }
     let start = Instant::now();
     let size = (view.camera.width, view.camera.height);

@@ -2,7 +2,7 @@
 //! that reaches that point through an atmosphere, as one JSON object.
 
 use anyhow::Result;
-use atmo::atmosphere::spectrum::SpectrumToRgb;
+use atmo::atmosphere::spectrum::{srgb_luminance, SpectrumToRgb};
 use atmo::Error;
 use clap::Args;
 use serde_json::json;
@@ -14,7 +14,7 @@ pub struct SunArgs {
     #[command(flatten)]
     place: PlaceArgs,
     /// Altitude of the point above the ground (taken as sea level), metres.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0)]
     altitude: f64,
     #[command(flatten)]
     medium: AtmosphereArgs,
@@ -37,12 +37,13 @@ pub fn run(args: SunArgs) -> Result<()> {
     let spectrum = atmosphere.direct_sunlight(args.altitude, position.elevation_deg.to_radians());
     let rgb = SpectrumToRgb::new(&atmosphere.wavelengths_nm)
         .rgb(&spectrum.iter().map(|&e| e as f32).collect::<Vec<_>>());
-    // sRGB's luminance row: Y of linear sRGB (the converter integrates the CIE curves).
-    let y = 0.2126 * rgb[0] as f64 + 0.7152 * rgb[1] as f64 + 0.0722 * rgb[2] as f64;
+    // Y of the spectrum (the converter integrates the CIE curves into linear sRGB).
+    let rgb = rgb.map(f64::from);
+    let y = srgb_luminance(rgb);
     let normal_lux = LUMENS_PER_WATT * y;
     let horizontal_lux = normal_lux * position.elevation_deg.to_radians().sin().max(0.0);
     let colour = if y > 0.0 {
-        rgb.map(|c| c as f64 / y)
+        rgb.map(|c| c / y)
     } else {
         [0.0; 3]
     };

@@ -36,6 +36,17 @@ pub const COARSE_SHELLS: [&str; 6] = [
     "16",
 ];
 
+/// A probe file of `n` directions spread over the sphere, in `dir`.
+pub fn probe_file(dir: &Path, n: usize) -> PathBuf {
+    let file = dir.join("many.csv");
+    let mut text = String::from("azimuth_deg,elevation_deg\n");
+    for k in 0..n {
+        text.push_str(&format!("{},{}\n", (k * 7) % 360, (k % 179) as f64 - 89.0));
+    }
+    std::fs::write(&file, text).unwrap();
+    file
+}
+
 /// A small picture.
 pub const SMALL: [&str; 4] = ["--width", "48", "--height", "32"];
 

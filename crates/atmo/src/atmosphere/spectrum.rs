@@ -51,8 +51,14 @@ pub fn blackbody_srgb(kelvin: f64) -> [f64; 3] {
             .sum::<f64>()
             .max(0.0)
     });
-    let luminance = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    let luminance = srgb_luminance(rgb);
     rgb.map(|v| v / luminance)
+}
+
+/// The luminance `Y` of a linear-sRGB colour (the Y row of sRGB's matrix to XYZ).
+#[inline]
+pub fn srgb_luminance(rgb: [f64; 3]) -> f64 {
+    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
 }
 
 /// A linear map from radiance at the atmosphere's wavelengths to linear sRGB.
@@ -139,7 +145,7 @@ mod tests {
             assert!((c - 1.0).abs() < 0.06, "{daylight:?}");
         }
         for rgb in [tungsten, daylight, sky] {
-            let y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+            let y = srgb_luminance(rgb);
             assert!((y - 1.0).abs() < 1e-9);
         }
     }

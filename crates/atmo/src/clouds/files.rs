@@ -19,7 +19,6 @@ use crate::files::write_atomically;
 
 const MAGIC: &[u8; 8] = b"ATMOPART";
 
-/// Checks one particle's numbers, naming `at` (file and line, or index) on error.
 /// Largest distance of a particle from the origin, m.
 pub const MAX_POSITION_M: f32 = 1e7;
 /// Largest particle radius, m.
@@ -27,6 +26,7 @@ pub const MAX_RADIUS_M: f32 = 1e5;
 /// Largest peak density times radius: an optical depth of 0.84 x this through the centre.
 pub const MAX_DENSITY_RADIUS: f32 = 100.0;
 
+/// Checks one particle's numbers, naming `at` (file and line, or index) on error.
 fn check(p: &Particle, at: &str) -> Result<()> {
     let fields = [
         ("x", p.position.x),
