@@ -82,13 +82,13 @@ pub fn srgb_decode(v: f32) -> f32 {
     }
 }
 
-/// The linear value of an 8-bit sRGB value, from a table made once (as
-/// `srgb_decode(v / 255)`).
-#[inline]
-pub fn srgb8_decode(v: u8) -> f32 {
+/// The linear value of every 8-bit sRGB value, `srgb_decode(v / 255)`, made once. A
+/// caller decoding many values takes the table once (each access to it checks that
+/// it is made).
+pub fn srgb8_table() -> &'static [f32; 256] {
     static TABLE: std::sync::LazyLock<[f32; 256]> =
         std::sync::LazyLock::new(|| std::array::from_fn(|v| srgb_decode(v as f32 / 255.0)));
-    TABLE[v as usize]
+    &TABLE
 }
 
 /// The sRGB transfer function of a linear value in [0, 1].

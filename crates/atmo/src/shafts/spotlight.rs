@@ -51,7 +51,12 @@ impl Gobo {
     /// The linear transmittance of texel `k` (row-major).
     #[inline]
     pub fn texel(&self, k: usize) -> Vec3 {
-        Vec3::from(self.srgb[k].map(crate::image::srgb8_decode))
+        Self::linear(crate::image::srgb8_table(), self.srgb[k])
+    }
+
+    #[inline(always)]
+    fn linear(table: &[f32; 256], [r, g, b]: [u8; 3]) -> Vec3 {
+        Vec3::new(table[r as usize], table[g as usize], table[b as usize])
     }
 
     /// The transmittance at `(u, v)` in `[-1, 1]^2` (`v = 1` at the image's top).
@@ -60,8 +65,14 @@ impl Gobo {
         let x = (0.5 * (u + 1.0)) * self.width as f32;
         let y = (0.5 * (1.0 - v)) * self.height as f32;
         let (w, h) = (self.width as isize, self.height as isize);
-        let at =
-            |i: isize, j: isize| self.texel((j.clamp(0, h - 1) * w + i.clamp(0, w - 1)) as usize);
+        // The decoding table once a lookup, not once a channel (a per-sample hot path).
+        let table = crate::image::srgb8_table();
+        let at = |i: isize, j: isize| {
+            Self::linear(
+                table,
+                self.srgb[(j.clamp(0, h - 1) * w + i.clamp(0, w - 1)) as usize],
+            )
+        };
         match self.sampling {
             Sampling::Nearest => at(x.floor() as isize, y.floor() as isize),
             Sampling::Bilinear => {
