@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use atmo::image::ToneMap;
-use atmo::sky::SkySettings;
+use atmo::sky::{Order, SkySettings};
 use atmo::view::place::{parse_time, Place, SunPosition};
 use atmo::Atmosphere;
 use atmo_view::sky::SkyParams;
@@ -167,9 +167,10 @@ pub struct AtmosphereArgs {
 /// The shell method's settings (sky 3).
 #[derive(Args)]
 pub struct ShellArgs {
-    /// Highest scattering order: 1, 2 (the paper) or 3.
-    #[arg(long, default_value_t = 2)]
-    order: u32,
+    /// Highest scattering order: 1 to 60 (the paper: 2), or "all" (orders are added
+    /// until the next adds under 0.1 % anywhere; aerosols then scatter every order too).
+    #[arg(long, value_name = "N|all", default_value = "2")]
+    order: Order,
     /// Sampling shells (paper: 40).
     #[arg(long, default_value_t = SkySettings::default().shells)]
     shells: usize,
@@ -211,7 +212,7 @@ impl ShellArgs {
             directions: self.directions,
             scattering_directions: self.scattering_directions,
             order: self.order,
-            multiple_mie: self.multiple_mie,
+            multiple_mie: self.multiple_mie || self.order == Order::All,
             max_interval_m: self.max_interval,
             ..SkySettings::default()
         }

@@ -121,7 +121,8 @@ fn bad_input_exits_2_with_a_message_and_no_file() {
         &["--width", "16384", "--height", "16384"],
         "budget",
     );
-    refused("order", &["--order", "4"], "order");
+    refused("order", &["--order", "61"], "order");
+    refused("order-word", &["--order", "most"], "order");
     refused("shells", &["--shells", "1"], "shells");
     refused("fov", &["--fov", "0"], "fov");
     refused(

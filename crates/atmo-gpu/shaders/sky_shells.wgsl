@@ -16,7 +16,8 @@ struct ShellParams {
     sun_radius: f32,
     ground_albedo: f32,
     lanes: u32,
-    order: u32,
+    // 1 with orders above the first.
+    multiple: u32,
     shells: u32,
     light_entries: u32,
     mu_size: u32,
@@ -39,7 +40,12 @@ struct ShellParams {
     transmittance_at: u32,
     moments_at: u32,
     rgb_at: u32,
-    pad: u32,
+    aerosol_at: u32,
+    ground_light_at: u32,
+    // 1 if aerosols scatter the higher orders (their table is present).
+    aerosols: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: ShellParams;
@@ -47,13 +53,15 @@ struct ShellParams {
 // bits, between, altitude, distance; mu), the Rayleigh and aerosol maps [sample][lane],
 // the ground [ray][lane], shells (radius, mu_low, scale), the light map
 // [shell][entry][lane], the irradiance [lane], the transmittance [r][mu][lane], the
-// moments [order][shell][bin][moment][lane] and the colour matrix [lane][rgb].
+// higher orders' moments [shell][bin][moment][lane], the colour matrix [lane][rgb], the
+// aerosols' in-scattering [bin][shell][cell][lane] and the ground's irradiance
+// [bin][lane].
 @group(0) @binding(1) var<storage, read> data: array<vec4<f32>>;
 // Out: linear sRGB, [elevation][azimuth][rgb].
 @group(0) @binding(2) var<storage, read_write> map: array<f32>;
 
-// MOMENTS (the moments a Rayleigh in-scattering needs) and MAX_LANES come from the
-// prelude (atmo::sky::shells::export).
+// MOMENTS (the moments a Rayleigh in-scattering needs), TABLE_MU, TABLE_PHI and
+// MAX_LANES come from the prelude (atmo::sky::shells::export).
 
 // The light map of sunlight at shell `shell`, lane `l` (LightMap::sample).
 fn light_map(shell: u32, mu_s: f32, l: u32) -> vec4<f32> {
@@ -122,19 +130,26 @@ fn local_direction(mu: f32, mu_s: f32, nu: f32) -> vec3<f32> {
     return vec3<f32>(sin_d * cos_phi, sin_d * sin_phi, mu);
 }
 
-// Rayleigh in-scattering of the scattered light map of order `o` + 2 at `shell`
-// toward local direction d, from its five moments (ScatteredLightMap::inscatter).
-fn inscatter(o: u32, shell: u32, mu_s: f32, d: vec3<f32>, l: u32) -> vec4<f32> {
+// The sun bin below mu_s and the fraction toward the next (SunBins::lerp).
+fn sun_bin(mu_s: f32) -> vec2<f32> {
     let a = params.sun_bins_a;
     let m = min(abs(mu_s), 1.0);
     let x = (-a + sqrt(a * a + 4.0 * (1.0 - a) * m)) / (2.0 * (1.0 - a));
     let coordinate = 0.5 * (select(-x, x, mu_s >= 0.0) + 1.0) * f32(params.sun_bins - 1u);
     let b = min(u32(coordinate), params.sun_bins - 2u);
-    let f = coordinate - f32(b);
+    return vec2<f32>(f32(b), coordinate - f32(b));
+}
+
+// Rayleigh in-scattering of the higher orders' light at `shell` toward local direction
+// d, from its five moments (ScatteredLightMap::inscatter).
+fn inscatter(shell: u32, mu_s: f32, d: vec3<f32>, l: u32) -> vec4<f32> {
+    let bin = sun_bin(mu_s);
+    let b = u32(bin.x);
+    let f = bin.y;
     let k = 3.0 / (16.0 * PI);
     let g = array<f32, 5>(k, k * d.x * d.x, k * d.y * d.y, k * d.z * d.z, 2.0 * k * d.x * d.z);
     let n = params.lanes;
-    let at = params.moments_at + ((o * params.shells + shell) * params.sun_bins + b) * MOMENTS * n;
+    let at = params.moments_at + (shell * params.sun_bins + b) * MOMENTS * n;
     var out = vec4<f32>(0.0);
     for (var i = 0u; i < MOMENTS; i++) {
         let m0 = data[at + i * n + l];
@@ -142,6 +157,40 @@ fn inscatter(o: u32, shell: u32, mu_s: f32, d: vec3<f32>, l: u32) -> vec4<f32> {
         out += g[i] * (m0 + (m1 - m0) * f);
     }
     return out;
+}
+
+// The aerosols' in-scattering of the higher orders' light at `shell` toward local
+// direction d: trilinear in the table (ScatteredLightMap::inscatter).
+fn aerosol_inscatter(shell: u32, mu_s: f32, d: vec3<f32>, l: u32) -> vec4<f32> {
+    let bin = sun_bin(mu_s);
+    let b = u32(bin.x);
+    let f = bin.y;
+    let x = clamp(d.z + 1.0, 0.0, 2.0) * 0.5 * f32(TABLE_MU - 1u);
+    let i = min(u32(x), TABLE_MU - 2u);
+    let fx = x - f32(i);
+    let y = clamp(atan2(d.y, d.x), 0.0, PI) / PI * f32(TABLE_PHI - 1u);
+    let j = min(u32(y), TABLE_PHI - 2u);
+    let fy = y - f32(j);
+    let cells = array<u32, 4>(i * TABLE_PHI + j, i * TABLE_PHI + j + 1u, (i + 1u) * TABLE_PHI + j, (i + 1u) * TABLE_PHI + j + 1u);
+    let weights = array<f32, 4>((1.0 - fx) * (1.0 - fy), (1.0 - fx) * fy, fx * (1.0 - fy), fx * fy);
+    let n = params.lanes;
+    var out = vec4<f32>(0.0);
+    let cells_n = TABLE_MU * TABLE_PHI;
+    for (var c = 0u; c < 4u; c++) {
+        let at = params.aerosol_at + ((b * params.shells + shell) * cells_n + cells[c]) * n + l;
+        let v0 = data[at];
+        let v1 = data[at + params.shells * cells_n * n];
+        out += weights[c] * (v0 + (v1 - v0) * f);
+    }
+    return out;
+}
+
+// The irradiance the higher orders' light puts on the ground, sun at mu_s there.
+fn ground_light(mu_s: f32, l: u32) -> vec4<f32> {
+    let bin = sun_bin(mu_s);
+    let at = params.ground_light_at + u32(bin.x) * params.lanes + l;
+    let e0 = data[at];
+    return e0 + (data[at + params.lanes] - e0) * bin.y;
 }
 
 @compute @workgroup_size(8, 8)
@@ -170,7 +219,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let r = params.bottom + a.z;
         let mu_s = clamp((r0_mu_s + a.w * nu) / r, -1.0, 1.0);
         var d = vec3<f32>(0.0);
-        if params.order >= 2u {
+        if params.multiple == 1u {
             d = local_direction(mu, mu_s, nu);
         }
         for (var l = 0u; l < n; l++) {
@@ -183,22 +232,35 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 light = sunlight(a.z, mu_s, l);
             }
             total[l] += light * (ray_r * phase_r + ray_m * phase_m);
-            for (var o = 0u; o + 2u <= params.order; o++) {
-                var scattered = inscatter(o, shell, mu_s, d, l);
+            if params.multiple == 1u {
+                var scattered = inscatter(shell, mu_s, d, l);
                 if between > 0.0 {
-                    scattered += (inscatter(o, shell + 1u, mu_s, d, l) - scattered) * between;
+                    scattered += (inscatter(shell + 1u, mu_s, d, l) - scattered) * between;
                 }
                 total[l] += ray_r * scattered;
+                if params.aerosols == 1u {
+                    var aerosol = aerosol_inscatter(shell, mu_s, d, l);
+                    if between > 0.0 {
+                        aerosol += (aerosol_inscatter(shell + 1u, mu_s, d, l) - aerosol) * between;
+                    }
+                    total[l] += ray_m * aerosol;
+                }
             }
         }
     }
-    // Sunlight reflected by a Lambertian ground at the end of the ray.
+    // A Lambertian ground at the end of the ray reflects the sunlight and the higher
+    // orders' light coming down on it.
     if ray.w >= 0.0 && params.ground_albedo > 0.0 {
         let mu_s = clamp((r0_mu_s + ray.w * nu) / data[params.shells_at].x, -1.0, 1.0);
-        if mu_s > 0.0 {
-            for (var l = 0u; l < n; l++) {
-                total[l] += light_map(0u, mu_s, l) * data[params.ground_at + j * n + l] * mu_s;
+        for (var l = 0u; l < n; l++) {
+            var irradiance = vec4<f32>(0.0);
+            if mu_s > 0.0 {
+                irradiance = light_map(0u, mu_s, l) * mu_s;
             }
+            if params.multiple == 1u {
+                irradiance += ground_light(mu_s, l);
+            }
+            total[l] += irradiance * data[params.ground_at + j * n + l];
         }
     }
     var rgb = vec3<f32>(0.0);

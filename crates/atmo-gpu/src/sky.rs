@@ -76,7 +76,7 @@ gpu_struct! {
         sun_radius: f32,
         ground_albedo: f32,
         lanes: u32,
-        order: u32,
+        multiple: u32,
         shells: u32,
         light_entries: u32,
         mu_size: u32,
@@ -98,7 +98,11 @@ gpu_struct! {
         transmittance_at: u32,
         moments_at: u32,
         rgb_at: u32,
-        pad: u32,
+        aerosol_at: u32,
+        ground_light_at: u32,
+        aerosols: u32,
+        pad0: u32,
+        pad1: u32,
     }
 }
 
@@ -479,8 +483,8 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
     pub fn new(gpu: &Gpu, model: M) -> Result<Self, GpuError> {
         let arrays = model.borrow().arrays().ok_or_else(|| {
             atmo::Error::Invalid(
-                "aerosols in the higher orders (multiple_mie) are drawn on the CPU only; \
-                 render this model on the CPU"
+                "molecules with a phase other than Rayleigh's in the higher orders are \
+                 drawn on the CPU only; render this model on the CPU"
                     .into(),
             )
         })?;
@@ -509,7 +513,7 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
             sun_radius: arrays.sun_radius,
             ground_albedo: arrays.ground_albedo,
             lanes: arrays.lanes as u32,
-            order: arrays.order,
+            multiple: arrays.multiple as u32,
             shells: shells.len() as u32,
             light_entries: arrays.light_map_entries as u32,
             mu_size: arrays.mu_size as u32,
@@ -531,7 +535,11 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
             transmittance_at: at(&arrays.transmittance),
             moments_at: at(&arrays.moments),
             rgb_at: at(&rgb),
-            pad: 0,
+            aerosol_at: at(&arrays.aerosol_table),
+            ground_light_at: at(&arrays.ground_irradiance),
+            aerosols: !arrays.aerosol_table.is_empty() as u32,
+            pad0: 0,
+            pad1: 0,
         };
         let mut of = |rays: &RayArrays| {
             let records: Vec<[f32; 4]> = (0..rays.origin_r.len())

@@ -120,13 +120,15 @@ const FILES: &[(&str, &str)] = &[
 
 /// The constants WGSL shares with the Rust, generated: `const PHASE_RAYLEIGH: u32 = 0u;`
 /// and the rest of [`PhaseFunction::CODES`], this module's codes, the sky model's
-/// `MOMENTS` and `MAX_LANES`, and the clouds' `FOOTPRINT`.
+/// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, and the clouds' `FOOTPRINT`.
 pub fn prelude() -> String {
     let phases = PhaseFunction::CODES
         .iter()
         .map(|(name, code)| (format!("PHASE_{name}"), *code));
     let sizes = [
         ("MOMENTS", export::MOMENTS as u32),
+        ("TABLE_MU", export::TABLE_MU as u32),
+        ("TABLE_PHI", export::TABLE_PHI as u32),
         ("MAX_LANES", export::MAX_LANES as u32),
     ];
     let shared = SHARED.iter().chain(&sizes);

@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 
 use atmo::atmosphere::spectrum::SpectrumToRgb;
 use atmo::sky::table::{SkylightTable, TableSettings};
-use atmo::sky::{SkyModel, SkySettings};
+use atmo::sky::{Order, SkyModel, SkySettings};
 use atmo::sky::{SkyPicture, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
@@ -221,14 +221,21 @@ fn the_sky_draws_into_a_callers_target_only_where_the_depth_is_at_the_far_plane(
     }
 }
 
-/// A model with coarse settings (a fraction of a second to build).
+/// A model with coarse settings (a fraction of a second to build); `all` for every
+/// order of both species, else orders 1 to `order` of the molecules.
 fn model(atmosphere: &Atmosphere, order: u32, altitude: f64) -> SkyModel {
+    let all = order == 0;
     let settings = SkySettings {
         directions: 24,
         shells: 24,
         scattering_directions: 32,
         sun_bins: 32,
-        order,
+        order: if all {
+            Order::All
+        } else {
+            Order::Through(order)
+        },
+        multiple_mie: all,
         ..SkySettings::default()
     };
     SkyModel::new(atmosphere, &settings, altitude).unwrap()
@@ -239,10 +246,15 @@ fn the_shell_method_maps_equal_the_cpu_maps() {
     let Some(gpu) = gpu() else { return };
     let earth = Atmosphere::earth();
     let paper = Atmosphere::preset("paper").unwrap();
+    let mut bright = Atmosphere::earth();
+    bright.ground_albedo = 0.3;
+    // Order 0: all orders, aerosols too.
     for (atmosphere, order, altitude, sun_deg) in [
         (&earth, 2, 0.0, 30.0f64),
         (&earth, 2, 9000.0, -2.0),
         (&earth, 3, 2000.0, 4.0),
+        (&bright, 0, 3000.0, 8.0),
+        (&bright, 0, 0.0, -3.0),
         (&paper, 1, 500.0, 60.0),
     ] {
         let model = model(atmosphere, order, altitude);
@@ -304,19 +316,18 @@ fn the_shell_method_picture_matches_the_cpu_picture() {
 }
 
 #[test]
-fn aerosols_in_the_higher_orders_are_refused_with_a_way_out() {
+fn molecules_with_another_phase_in_the_higher_orders_are_refused_with_a_way_out() {
     let Some(gpu) = gpu() else { return };
-    let settings = SkySettings {
-        directions: 8,
-        shells: 8,
-        scattering_directions: 8,
-        multiple_mie: true,
-        ..SkySettings::default()
-    };
-    let model = SkyModel::new(&Atmosphere::earth(), &settings, 0.0).unwrap();
-    let err = GpuSkyModel::new(&gpu, &model).err().unwrap().to_string();
+    let mut atmosphere = Atmosphere::earth();
+    atmosphere.rayleigh.phase = atmo::atmosphere::PhaseFunction::HenyeyGreenstein { g: 0.2 };
+    let err = GpuSkyModel::new(&gpu, model(&atmosphere, 2, 0.0))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(
-        err.contains("multiple_mie") && err.contains("on the CPU"),
+        err.contains("Rayleigh's") && err.contains("on the CPU"),
         "{err}"
     );
+    // Single scattering needs no table: drawn.
+    assert!(GpuSkyModel::new(&gpu, model(&atmosphere, 1, 0.0)).is_ok());
 }

@@ -3,6 +3,11 @@
 //! every point, and for the second order the nested integral of sky (10) over the
 //! whole sphere of directions at every point along the ray.
 //!
+//! For every order, [`ReferenceSky::multiple_scattering`] is a Monte Carlo path tracer
+//! of orders 2 and above (molecules and aerosols at every event, a Lambertian ground,
+//! next-event estimation toward the sun), independent of the shell method: it shares
+//! only the atmosphere's coefficients and densities with it.
+//!
 //! Geometry is plain Cartesian: the planet's centre at the origin, the viewpoint on the
 //! z axis, the sun in the xz plane.
 
@@ -11,7 +16,8 @@ use glam::DVec3;
 use crate::atmosphere::geometry::{
     distance_to_ground, distance_to_sphere_exit, sun_visible_fraction,
 };
-use crate::atmosphere::{Atmosphere, CONSTITUENTS};
+use crate::atmosphere::{Atmosphere, PhaseFunction, CONSTITUENTS};
+use crate::clouds::generator::SplitMix64;
 use crate::quadrature::{fibonacci_sphere, gauss_legendre};
 use crate::sky::shells::maps::MAX_CHANNELS;
 
@@ -235,6 +241,235 @@ impl<'a> ReferenceSky<'a> {
             }
         });
     }
+}
+
+/// Steps of the march that finds where a path's next collision is.
+const FREE_FLIGHT_STEPS: usize = 96;
+
+/// The most events along one path; the Russian roulette ends nearly all before.
+const MAX_EVENTS: usize = 200;
+
+impl ReferenceSky<'_> {
+    /// Orders 2 and above arriving at the viewpoint from the direction at `azimuth`
+    /// from the sun and `elevation` (rad), per channel: the mean over `paths` paths per
+    /// channel and its standard error. The paths start at the eye; at each event
+    /// (scattering by molecules or aerosols, or reflection by a Lambertian ground of
+    /// the atmosphere's albedo) from the first on, the sunlight scattered toward the
+    /// eye is added from the second on (next-event estimation, the disc's visible
+    /// fraction as in single scattering); directions are sampled from the phase
+    /// function of the species that scatters (or the cosine), distances by free flight
+    /// (the first forced into the atmosphere), and a Russian roulette ends the paths
+    /// without bias. The same `seed` gives the same numbers.
+    pub fn multiple_scattering(
+        &self,
+        azimuth: f64,
+        elevation: f64,
+        paths: usize,
+        seed: u64,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let d = DVec3::new(
+            elevation.cos() * azimuth.cos(),
+            elevation.cos() * azimuth.sin(),
+            elevation.sin(),
+        );
+        let n = self.atmosphere.channels();
+        let a = self.atmosphere;
+        let bounds = [phase_bound(&a.rayleigh.phase), phase_bound(&a.mie.phase)];
+        let (mut mean, mut error) = (vec![0.0; n], vec![0.0; n]);
+        for c in 0..n {
+            let mut rng = SplitMix64::new(seed ^ (c as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+            let (mut sum, mut squares) = (0.0, 0.0);
+            for _ in 0..paths {
+                let v = self.path(d, c, bounds, &mut rng);
+                sum += v;
+                squares += v * v;
+            }
+            let m = sum / paths as f64;
+            mean[c] = m;
+            error[c] = ((squares / paths as f64 - m * m).max(0.0) / paths as f64).sqrt();
+        }
+        (mean, error)
+    }
+
+    /// One path's estimate of orders >= 2 in channel `c`, leaving the eye along `d`.
+    fn path(&self, d: DVec3, c: usize, bounds: [f64; 2], rng: &mut SplitMix64) -> f64 {
+        let a = self.atmosphere;
+        let mut sun = [0.0; MAX_CHANNELS];
+        let (mut p, mut w) = (self.viewpoint, d);
+        let (mut weight, mut total) = (1.0, 0.0);
+        for event in 1..=MAX_EVENTS {
+            let (length, ground) = self.ray_end(p, w);
+            // The first flight is forced to collide in the air (weight 1 - T): light
+            // that leaves along the view ray adds nothing to orders >= 2 ... unless the
+            // ray ends on the ground, which is then a possible event like any other.
+            let force = event == 1 && !ground;
+            let (hit, t_end) = self.free_flight(p, w, length, c, force, rng);
+            if force {
+                weight *= 1.0 - t_end;
+            }
+            match hit {
+                Some(t) => {
+                    let q = p + t * w;
+                    let rho = self.densities_at(q);
+                    let scatter_r = a.rayleigh.scattering_per_m[c] * rho[0];
+                    let scatter_m = a.mie.scattering_per_m[c] * rho[1];
+                    let extinction = a.optical_depth(&rho, c);
+                    weight *= (scatter_r + scatter_m) / extinction;
+                    if event >= 2 {
+                        self.sunlight(q, &mut sun[..a.channels()]);
+                        let nu = w.dot(self.sun);
+                        let phase = (scatter_r * a.rayleigh.phase.eval(nu)
+                            + scatter_m * a.mie.phase.eval(nu))
+                            / (scatter_r + scatter_m);
+                        total += weight * phase * sun[c];
+                    }
+                    let (species, bound) = if rng.unit_f64() * (scatter_r + scatter_m) < scatter_r {
+                        (&a.rayleigh.phase, bounds[0])
+                    } else {
+                        (&a.mie.phase, bounds[1])
+                    };
+                    w = sample_phase(species, bound, w, rng);
+                    p = q;
+                }
+                None if ground => {
+                    let q = p + length * w;
+                    let normal = q.normalize();
+                    weight *= a.ground_albedo;
+                    if weight == 0.0 {
+                        break;
+                    }
+                    if event >= 2 {
+                        let mu_s = normal.dot(self.sun);
+                        if mu_s > 0.0 {
+                            self.sunlight(q, &mut sun[..a.channels()]);
+                            total += weight * mu_s / std::f64::consts::PI * sun[c];
+                        }
+                    }
+                    w = sample_cosine(normal, rng);
+                    // Step off the ground so that the next flight starts above it.
+                    p = q + normal * 1e-3;
+                }
+                None => break,
+            }
+            // Russian roulette once the weight is small.
+            if event >= 3 {
+                let survive = weight.min(0.95);
+                if rng.unit_f64() >= survive {
+                    break;
+                }
+                weight /= survive;
+            }
+        }
+        total
+    }
+
+    /// The distance to the next collision from `p` along `w` in channel `c`, or `None`
+    /// if the path reaches `length` (the ground or space) first; with `force`, always a
+    /// collision, drawn given that there is one. Also returns the transmittance over
+    /// the whole `length`. The optical depth is marched in steps (two Gauss nodes
+    /// each) and inverted linearly within the step that crosses the drawn depth.
+    fn free_flight(
+        &self,
+        p: DVec3,
+        w: DVec3,
+        length: f64,
+        c: usize,
+        force: bool,
+        rng: &mut SplitMix64,
+    ) -> (Option<f64>, f64) {
+        let a = self.atmosphere;
+        let h = length / FREE_FLIGHT_STEPS as f64;
+        let mut depth = [0.0; FREE_FLIGHT_STEPS + 1];
+        for s in 0..FREE_FLIGHT_STEPS {
+            let columns = self.columns(p + (s as f64 * h) * w, w, h, 1);
+            depth[s + 1] = depth[s] + a.optical_depth(&columns, c);
+        }
+        let total = depth[FREE_FLIGHT_STEPS];
+        let t_end = (-total).exp();
+        let u = rng.unit_f64();
+        let target = if force {
+            -(1.0 - u * (1.0 - t_end)).ln()
+        } else {
+            -(1.0 - u).ln()
+        };
+        if target >= total {
+            return (None, t_end);
+        }
+        let s = depth
+            .partition_point(|&x| x <= target)
+            .clamp(1, FREE_FLIGHT_STEPS)
+            - 1;
+        let f = (target - depth[s]) / (depth[s + 1] - depth[s]).max(1e-300);
+        (Some((s as f64 + f.clamp(0.0, 1.0)) * h), t_end)
+    }
+}
+
+/// The Henyey-Greenstein of the same asymmetry that proposes directions for `phase`
+/// (isotropic for phases without one), and the largest ratio of `phase` to it over the
+/// sphere (found on a fine grid, plus 1 %).
+fn proposal(phase: &PhaseFunction) -> PhaseFunction {
+    let g = match phase {
+        PhaseFunction::HenyeyGreenstein { g } | PhaseFunction::CornetteShanks { g } => *g,
+        _ => 0.0,
+    };
+    PhaseFunction::HenyeyGreenstein { g }
+}
+
+fn phase_bound(phase: &PhaseFunction) -> f64 {
+    let hg = proposal(phase);
+    (0..=2000)
+        .map(|k| {
+            let x = -1.0 + k as f64 / 1000.0;
+            phase.eval(x) / hg.eval(x)
+        })
+        .fold(0.0, f64::max)
+        * 1.01
+}
+
+/// A direction scattered from `w` by `phase`: Rayleigh's exactly (inverting its
+/// cumulative distribution in closed form), the others by Henyey-Greenstein proposals
+/// accepted in proportion to the phase's ratio to it (at most `bound`).
+fn sample_phase(phase: &PhaseFunction, bound: f64, w: DVec3, rng: &mut SplitMix64) -> DVec3 {
+    let cos = if phase.is_rayleigh() {
+        // CDF of 3/8 (1 + x^2) over [-1, 1]: (x^3 + 3x + 4) / 8 = u.
+        let q = 4.0 * rng.unit_f64() - 2.0;
+        let root = (q * q + 1.0).sqrt();
+        (q + root).cbrt() + (q - root).cbrt()
+    } else {
+        let hg = proposal(phase);
+        let PhaseFunction::HenyeyGreenstein { g } = hg else {
+            unreachable!("proposal is Henyey-Greenstein")
+        };
+        loop {
+            let x = sample_henyey_greenstein(g, rng.unit_f64());
+            if rng.unit_f64() * bound * hg.eval(x) <= phase.eval(x) {
+                break x;
+            }
+        }
+    };
+    around(w, cos.clamp(-1.0, 1.0), rng)
+}
+
+/// The cosine of a Henyey-Greenstein scattering angle for the uniform number `u`.
+fn sample_henyey_greenstein(g: f64, u: f64) -> f64 {
+    if g.abs() < 1e-6 {
+        return 2.0 * u - 1.0;
+    }
+    let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
+    (1.0 + g * g - s * s) / (2.0 * g)
+}
+
+/// A unit vector at cosine `cos` from `w`, uniform in azimuth around it.
+fn around(w: DVec3, cos: f64, rng: &mut SplitMix64) -> DVec3 {
+    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let phi = 2.0 * std::f64::consts::PI * rng.unit_f64();
+    let (u, v) = w.any_orthonormal_pair();
+    (w * cos + (u * phi.cos() + v * phi.sin()) * sin).normalize()
+}
+
+/// A cosine-distributed direction over the hemisphere about `normal`.
+fn sample_cosine(normal: DVec3, rng: &mut SplitMix64) -> DVec3 {
+    around(normal, rng.unit_f64().sqrt(), rng)
 }
 
 #[cfg(test)]

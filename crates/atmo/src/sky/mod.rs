@@ -39,6 +39,6 @@ pub mod table;
 pub use daylight::Daylight;
 pub use frame::{SkyPicture, View};
 pub use grid::DirectionGrid;
-pub use shells::{SkyModel, SkySettings, SkylightMap};
+pub use shells::{Order, SkyModel, SkySettings, SkylightMap};
 #[cfg(feature = "table")]
 pub use table::{SkylightTable, TableSettings};

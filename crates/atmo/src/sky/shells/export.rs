@@ -2,7 +2,9 @@
 //! (or any other renderer) to evaluate sky (3) and (11) per sun the way
 //! [`SkyModel::skylight_map`] does: the samples of each view ray with their density x
 //! attenuation maps, the light map of sunlight per shell, the transmittance table for
-//! samples between shells, the scattered light maps' moments, and the colour matrix.
+//! samples between shells, the scattered light of the higher orders (moments for the
+//! molecules, an in-scattering table for the aerosols, the ground's irradiance), and
+//! the colour matrix.
 //! Spectra are packed four wavelengths to a `[f32; 4]` lane, as the CPU packs them.
 
 use super::light_map::{SunBins, LIGHT_MAP_SIZE};
@@ -14,6 +16,11 @@ use crate::atmosphere::PhaseFunction;
 /// Moments of the scattered light a Rayleigh in-scattering needs, per shell and sun bin
 /// (`sky::shells::light_map`); the GPU's shaders read it as `MOMENTS`.
 pub const MOMENTS: usize = super::light_map::MOMENTS;
+
+/// Zenith cosines and azimuths of the aerosols' in-scattering table; the shaders'
+/// `TABLE_MU` and `TABLE_PHI`.
+pub const TABLE_MU: usize = super::light_map::TABLE_MU;
+pub const TABLE_PHI: usize = super::light_map::TABLE_PHI;
 
 /// The most lanes of four spectral channels a model has; the shaders' `MAX_LANES`.
 pub const MAX_LANES: usize = super::maps::MAX_CHANNELS / 4;
@@ -59,8 +66,8 @@ pub struct ModelArrays {
     /// Wavelengths, and the lanes of four that hold them.
     pub channels: usize,
     pub lanes: usize,
-    /// Highest scattering order (1 to 3).
-    pub order: u32,
+    /// Whether the model has orders above the first.
+    pub multiple: bool,
     /// Ground radius and top radius, m; the sun's angular radius, rad.
     pub bottom_m: f32,
     pub top_m: f32,
@@ -85,10 +92,15 @@ pub struct ModelArrays {
     pub transmittance: Vec<[f32; 4]>,
     pub mu_size: usize,
     pub r_size: usize,
-    /// The scattered light maps' moments, order 2 then 3: `[order][shell][bin][moment]
-    /// [lane]`, `sun_bins` bins over `mu_s` spaced `x (a + (1 - a)|x|)` with `a` =
-    /// `sun_bins_a`.
+    /// The moments of the scattered light of the orders below the highest, summed:
+    /// `[shell][bin][moment][lane]`, `sun_bins` bins over `mu_s` spaced
+    /// `x (a + (1 - a)|x|)` with `a` = `sun_bins_a`.
     pub moments: Vec<[f32; 4]>,
+    /// The aerosols' in-scattering of that light, `[bin][shell][cell][lane]` with cell
+    /// `mu_index * TABLE_PHI + phi_index`; empty if aerosols scatter once only.
+    pub aerosol_table: Vec<[f32; 4]>,
+    /// The irradiance that light puts on the ground, `[bin][lane]`.
+    pub ground_irradiance: Vec<[f32; 4]>,
     pub sun_bins: usize,
     pub sun_bins_a: f32,
     /// `[lane][channel in lane][rgb]`: linear sRGB of each wavelength.
@@ -96,11 +108,11 @@ pub struct ModelArrays {
 }
 
 impl SkyModel {
-    /// The model's maps as flat arrays; `None` with aerosols in the higher orders
-    /// (`multiple_mie`), whose non-Rayleigh phase needs the full scattered maps rather
-    /// than their five moments.
+    /// The model's maps as flat arrays; `None` for an atmosphere whose molecules
+    /// scatter the higher orders with a phase other than Rayleigh's (the arrays carry
+    /// their moments only).
     pub fn arrays(&self) -> Option<ModelArrays> {
-        if self.settings.multiple_mie && self.settings.order >= 2 {
+        if self.higher.as_ref().is_some_and(|h| h.tables[0].is_some()) {
             return None;
         }
         let a = &self.atmosphere;
@@ -124,14 +136,12 @@ impl SkyModel {
                 to_rgb[c / 4][c % 4][rgb] = weights[c];
             }
         }
-        let bins = self
-            .scattered
-            .first()
-            .map_or(SunBins { count: 2 }, |m| m.bins);
+        let higher = self.higher.as_ref();
+        let bins = higher.map_or(SunBins { count: 2 }, |m| m.bins);
         Some(ModelArrays {
             channels: n,
             lanes: l,
-            order: self.settings.order,
+            multiple: higher.is_some(),
             bottom_m: a.bottom_radius_m as f32,
             top_m: a.top_radius_m as f32,
             sun_radius: a.sun_angular_radius as f32,
@@ -154,11 +164,11 @@ impl SkyModel {
             transmittance: pad(&table.values),
             mu_size: table.mu_size,
             r_size: table.r_size,
-            moments: self
-                .scattered
-                .iter()
-                .flat_map(|m| m.moments.iter().map(|x| x.to_array()))
-                .collect(),
+            moments: higher.map_or(Vec::new(), |m| lanes_of(&m.moments)),
+            aerosol_table: higher
+                .and_then(|m| m.tables[1].as_deref())
+                .map_or(Vec::new(), lanes_of),
+            ground_irradiance: higher.map_or(Vec::new(), |m| pad(&m.ground_irradiance)),
             sun_bins: bins.count,
             sun_bins_a: SunBins::A as f32,
             to_rgb,

@@ -159,20 +159,51 @@ impl SunBins {
 /// itself and of `x^2`, `y^2`, `z^2` and `xz` times it.
 pub(crate) const MOMENTS: usize = 5;
 
-/// The light map of scattered light of one order, `I_t(P_k, omega_i)` of sky (10)-(11):
-/// radiance arriving at each shell, for each sun zenith bin, from each of `N_omega`
-/// directions of a [`SymmetricSphereRule`] in the local frame.
+/// Cells of the in-scattering tables of non-Rayleigh phases: local directions at
+/// `TABLE_MU` zenith cosines uniform over [-1, 1] times `TABLE_PHI` azimuths from the
+/// sun's vertical plane uniform over [0, pi] (the light is mirror-symmetric about it):
+/// 20 MB for 40 shells and 64 sun bins. The sky it gives is held to the path tracer
+/// (tests/sky.rs, `every_order_agrees_with_the_path_tracer`).
+pub(crate) const TABLE_MU: usize = 25;
+pub(crate) const TABLE_PHI: usize = 13;
+const TABLE_CELLS: usize = TABLE_MU * TABLE_PHI;
+
+/// The local direction of table cell `g`.
+fn table_direction(g: usize) -> DVec3 {
+    let mu = -1.0 + 2.0 * (g / TABLE_PHI) as f64 / (TABLE_MU - 1) as f64;
+    let phi = std::f64::consts::PI * (g % TABLE_PHI) as f64 / (TABLE_PHI - 1) as f64;
+    let sin = (1.0 - mu * mu).max(0.0).sqrt();
+    DVec3::new(sin * phi.cos(), sin * phi.sin(), mu)
+}
+
+/// The species that scatter: 0 the molecules, 1 the aerosols.
+pub(crate) const SPECIES: usize = 2;
+
+/// Scattered light arriving at the shells, `I_t(P_k, omega_i)` of sky (10)-(11), for
+/// one scattering order or the sum of several: radiance arriving at each shell, for
+/// each sun zenith bin, from each of `N_omega` directions of a [`SymmetricSphereRule`]
+/// in the local frame, and what the view rays read of it: the in-scattering of each
+/// species toward any direction, and the irradiance it puts on the ground.
 #[derive(Debug, Clone)]
 pub struct ScatteredLightMap {
     channels: usize,
     pub(crate) bins: SunBins,
-    /// The directions of each shell, split at its horizon.
-    rules: Vec<SymmetricSphereRule>,
-    /// `[shell][bin][direction][channel]`, radiance.
+    /// Which species scatter this light (the paper: the molecules only).
+    pub(crate) scatters: [bool; SPECIES],
+    /// `[shell][bin][direction][channel]`, radiance; kept while orders are built.
     values: Vec<f32>,
     /// `[shell][bin][moment][lane]`: the quadrature of sky (11) reduced to moments,
-    /// radiance x sr, packed.
+    /// radiance x sr, packed; serves Rayleigh's phase.
     pub(crate) moments: Vec<Lane>,
+    /// Per species that scatters with another phase: `[bin][shell][cell][lane]`, the
+    /// in-scattering `integral of phase(omega . d) I_t(omega) d omega` toward the
+    /// table's cells `d`, radiance, packed. The sun bin is outermost: the samples of
+    /// one light ray read a few bins, all shells (a third of the time the light
+    /// maps took with the bin innermost, from cache misses).
+    pub(crate) tables: [Option<Vec<Lane>>; SPECIES],
+    /// `[bin][channel]`: irradiance on the ground (shell 0) from the light coming down,
+    /// what a Lambertian ground reflects into the next order.
+    pub(crate) ground_irradiance: Vec<f32>,
 }
 
 impl ScatteredLightMap {
@@ -204,16 +235,19 @@ impl ScatteredLightMap {
         (rules, maps)
     }
 
-    /// The light map of scattering order `order`, integrating along `rays` the light
-    /// that `sources` provide for that order.
+    /// The light of the orders `orders` arriving at the shells, integrating along `rays`
+    /// the light that `sources` provide; `scatters` says which species scatter it in
+    /// turn (into the next order, or toward the eye).
     pub fn new(
-        order: u32,
         rules: &[SymmetricSphereRule],
         rays: &ScatteringMaps,
         sources: &Sources,
+        orders: Orders,
         sun_bins: usize,
+        scatters: [bool; SPECIES],
     ) -> Self {
-        let n = sources.atmosphere.channels();
+        let atmosphere = sources.atmosphere;
+        let n = atmosphere.channels();
         let bins = SunBins { count: sun_bins };
         let nd = rules[0].directions.len();
         let per_shell = sun_bins * nd * n;
@@ -231,65 +265,176 @@ impl ScatteredLightMap {
                             mu_s,
                             nu: d.dot(sun),
                         };
-                        let orders = Orders {
-                            first: order,
-                            last: order,
-                        };
                         rays.radiance(j * nd + i, geometry, sources, orders, out);
                     }
                 }
             });
+        Self::from_values(rules, atmosphere, values, bins, scatters)
+    }
+
+    /// The map of the radiance `values` (`[shell][bin][direction][channel]`).
+    fn from_values(
+        rules: &[SymmetricSphereRule],
+        atmosphere: &Atmosphere,
+        values: Vec<f32>,
+        bins: SunBins,
+        scatters: [bool; SPECIES],
+    ) -> Self {
+        let n = atmosphere.channels();
+        let sun_bins = bins.count;
+        let nd = rules[0].directions.len();
+        let per_shell = sun_bins * nd * n;
         let l = lanes(n);
-        let mut moments = vec![Lane::ZERO; sources.shells.len() * sun_bins * MOMENTS * l];
-        for (k, (cell, m)) in values
-            .chunks(nd * n)
-            .zip(moments.chunks_mut(MOMENTS * l))
-            .enumerate()
-        {
-            let rule = &rules[k / sun_bins];
-            let mut sums = vec![0.0f32; MOMENTS * n];
-            for ((d, weight), light) in rule
-                .directions
-                .iter()
-                .zip(&rule.weights)
-                .zip(cell.chunks(n))
-            {
-                let f = [1.0, d.x * d.x, d.y * d.y, d.z * d.z, d.x * d.z];
-                for (fk, sum) in f.iter().zip(sums.chunks_mut(n)) {
-                    for (s, v) in sum.iter_mut().zip(light) {
-                        *s += (weight * fk) as f32 * v;
+        let mut moments = vec![Lane::ZERO; rules.len() * sun_bins * MOMENTS * l];
+        moments
+            .par_chunks_mut(sun_bins * MOMENTS * l)
+            .zip(values.par_chunks(per_shell))
+            .zip(rules.par_iter())
+            .for_each(|((shell, cells), rule)| {
+                for (m, cell) in shell.chunks_mut(MOMENTS * l).zip(cells.chunks(nd * n)) {
+                    let mut sums = [0.0f32; MOMENTS * MAX_CHANNELS];
+                    for ((d, weight), light) in rule
+                        .directions
+                        .iter()
+                        .zip(&rule.weights)
+                        .zip(cell.chunks(n))
+                    {
+                        let f = [1.0, d.x * d.x, d.y * d.y, d.z * d.z, d.x * d.z];
+                        for (fk, sum) in f.iter().zip(sums.chunks_mut(n)) {
+                            for (s, v) in sum.iter_mut().zip(light) {
+                                *s += (weight * fk) as f32 * v;
+                            }
+                        }
+                    }
+                    for (sum, out) in sums.chunks(n).zip(m.chunks_mut(l)) {
+                        pack(sum, out);
                     }
                 }
-            }
-            for (sum, out) in sums.chunks(n).zip(m.chunks_mut(l)) {
-                pack(sum, out);
+            });
+        let species = [&atmosphere.rayleigh.phase, &atmosphere.mie.phase];
+        let tables = std::array::from_fn(|k| {
+            (scatters[k] && !species[k].is_rayleigh())
+                .then(|| phase_tables(rules, &values, sun_bins, n, species[k]))
+        });
+        // Light coming down onto the ground, cosine-weighted.
+        let mut ground_irradiance = vec![0.0f32; sun_bins * n];
+        for (b, e) in ground_irradiance.chunks_mut(n).enumerate() {
+            let cell = &values[b * nd * n..(b + 1) * nd * n];
+            for ((d, weight), light) in rules[0]
+                .directions
+                .iter()
+                .zip(&rules[0].weights)
+                .zip(cell.chunks(n))
+            {
+                if d.z > 0.0 {
+                    for (e, v) in e.iter_mut().zip(light) {
+                        *e += (weight * d.z) as f32 * v;
+                    }
+                }
             }
         }
         ScatteredLightMap {
             channels: n,
             bins,
-            rules: rules.to_vec(),
+            scatters,
             values,
             moments,
+            tables,
+            ground_irradiance,
         }
     }
 
+    /// Adds the light of `other` (other orders, same shells and directions) to this.
+    pub fn add(&mut self, other: &ScatteredLightMap) {
+        fn sum<T: Copy + std::ops::AddAssign>(a: &mut [T], b: &[T]) {
+            a.iter_mut().zip(b).for_each(|(a, b)| *a += *b);
+        }
+        sum(&mut self.values, &other.values);
+        sum(&mut self.moments, &other.moments);
+        sum(&mut self.ground_irradiance, &other.ground_irradiance);
+        for (a, b) in self.tables.iter_mut().zip(&other.tables) {
+            if let (Some(a), Some(b)) = (a, b) {
+                sum(a, b);
+            }
+        }
+    }
+
+    /// The largest share `other`'s light would add to this sum anywhere (any shell, sun
+    /// bin, direction and wavelength), each wavelength's values floored at 1e-3 of
+    /// this sum's brightest: light a million times fainter than the sky's brightest
+    /// does not decide convergence.
+    pub fn largest_share(&self, other: &ScatteredLightMap) -> f64 {
+        let n = self.channels;
+        let mut floor = vec![0.0f32; n];
+        for v in self.values.chunks(n) {
+            for (f, v) in floor.iter_mut().zip(v) {
+                *f = f.max(*v);
+            }
+        }
+        floor.iter_mut().for_each(|f| *f *= 1e-3);
+        self.values
+            .par_chunks(n)
+            .zip(other.values.par_chunks(n))
+            .map(|(a, b)| {
+                a.iter()
+                    .zip(b)
+                    .zip(&floor)
+                    .map(|((a, b), f)| (b / (a + b).max(*f).max(f32::MIN_POSITIVE)) as f64)
+                    .fold(0.0, f64::max)
+            })
+            .reduce(|| 0.0, f64::max)
+    }
+
+    /// The light of all the orders after `self`, estimated as a geometric series from
+    /// `self` and the order before it, `previous`: where each order is a fixed
+    /// fraction `q` of the one before (as they become once the light has forgotten the
+    /// sun's direction), the rest is `self q / (1 - q)`. `q` is taken per entry, at
+    /// most 0.9.
+    pub fn geometric_tail(
+        &self,
+        previous: &ScatteredLightMap,
+        rules: &[SymmetricSphereRule],
+        atmosphere: &Atmosphere,
+    ) -> Self {
+        let values = self
+            .values
+            .par_iter()
+            .zip(&previous.values)
+            .map(|(&v, &p)| {
+                let q = if p > 0.0 {
+                    (v / p).clamp(0.0, 0.9)
+                } else {
+                    0.0
+                };
+                v * q / (1.0 - q)
+            })
+            .collect();
+        Self::from_values(rules, atmosphere, values, self.bins, self.scatters)
+    }
+
+    /// Frees the per-direction radiance once no further order is built from it.
+    pub fn drop_values(&mut self) {
+        self.values = Vec::new();
+    }
+
     /// `integral of phase(omega . d) I_t(omega) d omega` over the sphere, sky (11), per
-    /// channel, at shell `shell` with the sun at `mu_s`, toward the local direction `d`
-    /// (the direction the light leaves in, reversed). For the Rayleigh phase, which is
-    /// `a + b (omega . d)^2`, the sum over the directions is exactly a sum of five moments.
+    /// channel, for species `k` with phase `phase`, at shell `shell` with the sun at
+    /// `mu_s`, toward the local direction `d` (the direction the light leaves in,
+    /// reversed). For the Rayleigh phase, which is `a + b (omega . d)^2`, the sum over
+    /// the directions is exactly a sum of five moments; other phases read the table.
     pub fn inscatter(
         &self,
+        k: usize,
+        phase: &PhaseFunction,
         shell: usize,
         mu_s: f64,
         d: DVec3,
-        phase: &PhaseFunction,
         out: &mut [Lane],
     ) {
-        let n = self.channels;
         let l = out.len();
         let (b, f) = self.bins.lerp(mu_s);
-        if phase.is_rayleigh() {
+        let Some(table) = &self.tables[k] else {
+            debug_assert!(phase.is_rayleigh());
             let k = RAYLEIGH_NORM;
             let g = [
                 k,
@@ -308,31 +453,98 @@ impl ScatteredLightMap {
                 }
             }
             return;
-        }
-        // Any other phase: the direct sum, each direction paired with its mirror image
-        // across the sun's vertical plane (the light there is the same).
-        let rule = &self.rules[shell];
-        let nd = rule.directions.len();
-        let at = |b: usize| (shell * self.bins.count + b) * nd * n;
-        let (v0, v1) = (
-            &self.values[at(b)..at(b) + nd * n],
-            &self.values[at(b + 1)..at(b + 1) + nd * n],
-        );
-        let mut sum = [0.0f32; MAX_CHANNELS];
-        for ((w, weight), (a, b)) in rule
-            .directions
-            .iter()
-            .zip(&rule.weights)
-            .zip(v0.chunks_exact(n).zip(v1.chunks_exact(n)))
-        {
-            let mirrored = DVec3::new(w.x, -w.y, w.z);
-            let p = (0.5 * weight * (phase.eval(w.dot(d)) + phase.eval(mirrored.dot(d)))) as f32;
-            for ((s, a), b) in sum.iter_mut().zip(a).zip(b) {
-                *s += p * (a + (b - a) * f);
+        };
+        // Trilinear in the sun bin, the zenith cosine and the azimuth of `d`.
+        let x = (d.z + 1.0).clamp(0.0, 2.0) * 0.5 * (TABLE_MU - 1) as f64;
+        let i = (x as usize).min(TABLE_MU - 2);
+        let fx = (x - i as f64) as f32;
+        let y = d.y.atan2(d.x).clamp(0.0, std::f64::consts::PI) / std::f64::consts::PI
+            * (TABLE_PHI - 1) as f64;
+        let j = (y as usize).min(TABLE_PHI - 2);
+        let fy = (y - j as f64) as f32;
+        let shells = table.len() / (self.bins.count * TABLE_CELLS * l);
+        out.fill(Lane::ZERO);
+        for (g, w) in [
+            (i * TABLE_PHI + j, (1.0 - fx) * (1.0 - fy)),
+            (i * TABLE_PHI + j + 1, (1.0 - fx) * fy),
+            ((i + 1) * TABLE_PHI + j, fx * (1.0 - fy)),
+            ((i + 1) * TABLE_PHI + j + 1, fx * fy),
+        ] {
+            let at = ((b * shells + shell) * TABLE_CELLS + g) * l;
+            let next = at + shells * TABLE_CELLS * l;
+            let (v0, v1) = (&table[at..at + l], &table[next..next + l]);
+            for ((o, a), b) in out.iter_mut().zip(v0).zip(v1) {
+                *o += (*a + (*b - *a) * f) * w;
             }
         }
-        pack(&sum[..n], out);
     }
+
+    /// Irradiance per channel on the ground from this light with the sun at `mu_s`
+    /// there, packed.
+    pub fn ground_irradiance(&self, mu_s: f64, out: &mut [Lane]) {
+        let n = self.channels;
+        let (b, f) = self.bins.lerp(mu_s);
+        let (e0, e1) = self.ground_irradiance[b * n..(b + 2) * n].split_at(n);
+        let mut e = [0.0f32; MAX_CHANNELS];
+        for ((e, a), b) in e.iter_mut().zip(e0).zip(e1) {
+            *e = a + (b - a) * f;
+        }
+        pack(&e[..n], out);
+    }
+}
+
+/// The in-scattering tables of `phase` for every shell from the radiance `values`
+/// (`[shell][bin][direction][channel]`): per shell a product of the phase matrix
+/// (cell x direction, each direction paired with its mirror image) and the radiance,
+/// laid out `[bin][shell][cell][lane]`.
+fn phase_tables(
+    rules: &[SymmetricSphereRule],
+    values: &[f32],
+    bins: usize,
+    n: usize,
+    phase: &PhaseFunction,
+) -> Vec<Lane> {
+    let nd = rules[0].directions.len();
+    let row = bins * n;
+    let mut out = vec![0.0f32; rules.len() * TABLE_CELLS * row];
+    out.par_chunks_mut(TABLE_CELLS * row)
+        .zip(values.par_chunks(nd * row))
+        .zip(rules.par_iter())
+        .for_each(|((out, values), rule)| {
+            // The radiance by direction, all bins and channels of one in a row.
+            let mut by_direction = vec![0.0f32; nd * row];
+            for b in 0..bins {
+                for i in 0..nd {
+                    by_direction[i * row + b * n..i * row + (b + 1) * n]
+                        .copy_from_slice(&values[(b * nd + i) * n..(b * nd + i + 1) * n]);
+                }
+            }
+            for (g, cell) in out.chunks_mut(row).enumerate() {
+                let d = table_direction(g);
+                for ((w, weight), light) in rule
+                    .directions
+                    .iter()
+                    .zip(&rule.weights)
+                    .zip(by_direction.chunks(row))
+                {
+                    let mirrored = DVec3::new(w.x, -w.y, w.z);
+                    let p = (0.5 * weight * (phase.eval(w.dot(d)) + phase.eval(mirrored.dot(d))))
+                        as f32;
+                    for (o, v) in cell.iter_mut().zip(light) {
+                        *o += p * v;
+                    }
+                }
+            }
+        });
+    let l = lanes(n);
+    let shells = rules.len();
+    let mut packed = vec![Lane::ZERO; out.len() / n * l];
+    for (k, values) in out.chunks(n).enumerate() {
+        let (shell, g, b) = (k / (TABLE_CELLS * bins), k / bins % TABLE_CELLS, k % bins);
+        let at = ((b * shells + shell) * TABLE_CELLS + g) * l;
+        pack(values, &mut packed[at..at + l]);
+    }
+    packed
 }
 
 #[cfg(test)]

@@ -58,6 +58,9 @@ pub fn unpack_add(lanes: &[Lane], out: &mut [f32]) {
     }
 }
 
+/// A sample's scattering weight below which its higher orders are not evaluated.
+const NEGLIGIBLE_WEIGHT: f32 = 1e-8;
+
 /// Gauss-Legendre segments (of 4 nodes) per interval between crossings.
 const INTERVAL_SEGMENTS: usize = 2;
 
@@ -102,25 +105,26 @@ pub struct SunGeometry {
     pub nu: f64,
 }
 
-/// Which scattering orders to sum, inclusive (1 = single scattering).
+/// Which parts of the light to sum: single scattering of sunlight (with the sunlit
+/// ground), and the light of the higher orders (scattered light scattered again, and
+/// skylight reflected by the ground).
 #[derive(Debug, Clone, Copy)]
 pub struct Orders {
-    /// Lowest order included.
-    pub first: u32,
-    /// Highest order included.
-    pub last: u32,
+    /// Order 1.
+    pub single: bool,
+    /// The orders above 1 that [`Sources::higher`] holds the light for.
+    pub multiple: bool,
 }
 
 /// What lights the points on the shells: the sun through the light map, and the
-/// scattered light of the orders below through the scattered light maps.
+/// scattered light of the orders below through a scattered light map.
 pub struct Sources<'a> {
     pub atmosphere: &'a Atmosphere,
     pub shells: &'a SamplingShells,
     pub sunlight: &'a LightMap,
-    /// `scattered[n - 1]` holds the radiance of order `n` arriving at the shells.
-    pub scattered: &'a [ScatteredLightMap],
-    /// Whether aerosols scatter the orders above the first (the paper: no).
-    pub multiple_mie: bool,
+    /// The scattered light (of one order or the sum of several) whose scattering gives
+    /// the higher orders, with the species that scatter it.
+    pub higher: Option<&'a ScatteredLightMap>,
 }
 
 impl ScatteringMaps {
@@ -300,6 +304,7 @@ impl ScatteringMaps {
         let light = &mut light[..l];
         let mut upper = [Lane::ZERO; MAX_LANES];
         let upper = &mut upper[..l];
+        let higher = sources.higher.filter(|_| orders.multiple);
         let range = self.ray_start[ray] as usize..self.ray_start[ray + 1] as usize;
         for s in range {
             let (j, between, r) = (self.shell[s] as usize, self.between[s], self.radius[s]);
@@ -308,7 +313,7 @@ impl ScatteringMaps {
                 &self.rayleigh[s * l..(s + 1) * l],
                 &self.mie[s * l..(s + 1) * l],
             );
-            if orders.first <= 1 {
+            if orders.single {
                 // The light map, sky (6): sunlight reaching the sample.
                 if between == 0.0 {
                     sources.sunlight.sample(j, mu_s, light);
@@ -320,46 +325,58 @@ impl ScatteringMaps {
                     *t += *li * (*r * phase_r + *m * phase_m);
                 }
             }
-            if orders.last < 2 {
+            let Some(map) = higher else {
                 continue;
-            }
+            };
+            // Scattered light arriving from every direction, scattered again toward the
+            // ray, sky (10)-(11), interpolated in radius between two shells.
             let d = local_direction(self.mu[s], mu_s, nu);
-            for order in orders.first.max(2)..=orders.last {
-                // Light of the order below arriving from every direction, sky (10)-(11),
-                // interpolated in radius for a sample between two shells.
-                let map = &sources.scattered[order as usize - 2];
-                let species = [
-                    (&atmosphere.rayleigh, ray_r, true),
-                    (&atmosphere.mie, ray_m, sources.multiple_mie),
-                ];
-                for (sp, weights, on) in species {
-                    if !on {
-                        continue;
+            let species = [
+                (&atmosphere.rayleigh.phase, ray_r),
+                (&atmosphere.mie.phase, ray_m),
+            ];
+            for (k, (phase, weights)) in species.into_iter().enumerate() {
+                // Above about 16 km the aerosols' weight is below 1e-8 (a hundred
+                // thousandth of the molecules'): skipping it changes nothing visible and
+                // halves the cost of the aerosols' higher orders.
+                if !map.scatters[k] || weights.iter().all(|w| w.max_element() < NEGLIGIBLE_WEIGHT) {
+                    continue;
+                }
+                map.inscatter(k, phase, j, mu_s, d, light);
+                if between > 0.0 {
+                    map.inscatter(k, phase, j + 1, mu_s, d, upper);
+                    for (li, u) in light.iter_mut().zip(&*upper) {
+                        *li += (*u - *li) * between;
                     }
-                    map.inscatter(j, mu_s, d, &sp.phase, light);
-                    if between > 0.0 {
-                        map.inscatter(j + 1, mu_s, d, &sp.phase, upper);
-                        for (li, u) in light.iter_mut().zip(&*upper) {
-                            *li += (*u - *li) * between;
-                        }
-                    }
-                    for ((t, w), li) in total.iter_mut().zip(weights).zip(&*light) {
-                        *t += *w * *li;
-                    }
+                }
+                for ((t, w), li) in total.iter_mut().zip(weights).zip(&*light) {
+                    *t += *w * *li;
                 }
             }
         }
-        // Sunlight reflected by a Lambertian ground at the end of the ray (order 1).
+        // A Lambertian ground at the end of the ray reflects the sunlight (order 1) and
+        // the scattered light coming down on it (the higher orders).
         let t_ground = self.ground_distance[ray];
-        if orders.first <= 1 && t_ground >= 0.0 && atmosphere.ground_albedo > 0.0 {
+        if t_ground >= 0.0 && atmosphere.ground_albedo > 0.0 {
             let mu_s = ((r0_mu_s + t_ground * nu) / radii[0]).clamp(-1.0, 1.0);
-            if mu_s > 0.0 {
+            let mut irradiance = [Lane::ZERO; MAX_LANES];
+            let irradiance = &mut irradiance[..l];
+            if orders.single && mu_s > 0.0 {
                 sources.sunlight.sample(0, mu_s, light);
-                let mut g = [Lane::ZERO; MAX_LANES];
-                pack(&self.ground[ray * n..(ray + 1) * n], &mut g[..l]);
-                for ((t, li), g) in total.iter_mut().zip(&*light).zip(&g) {
-                    *t += *li * *g * mu_s as f32;
+                for (e, li) in irradiance.iter_mut().zip(&*light) {
+                    *e += *li * mu_s as f32;
                 }
+            }
+            if let Some(map) = higher {
+                map.ground_irradiance(mu_s, light);
+                for (e, li) in irradiance.iter_mut().zip(&*light) {
+                    *e += *li;
+                }
+            }
+            let mut g = [Lane::ZERO; MAX_LANES];
+            pack(&self.ground[ray * n..(ray + 1) * n], &mut g[..l]);
+            for ((t, e), g) in total.iter_mut().zip(&*irradiance).zip(&g) {
+                *t += *e * *g;
             }
         }
         unpack_add(total, out);

@@ -18,14 +18,14 @@ pub(crate) mod sampling_shells;
 use std::sync::Arc;
 
 use rayon::prelude::*;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use super::DirectionGrid;
 use crate::atmosphere::geometry::horizon_dip;
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::{Atmosphere, TransmittanceTable};
 use crate::error::{check_range, Error, Result};
-use light_map::{LightMap, ScatteredLightMap};
+use light_map::{LightMap, ScatteredLightMap, SPECIES};
 use maps::{Orders, ScatteringMaps, Sources, SunGeometry};
 use sampling_shells::SamplingShells;
 
@@ -37,6 +37,92 @@ fn cos_to_sun(azimuth: f64, elevation: f64, sun_elevation: f64) -> f64 {
 
 /// How far below the horizon's dip the ground map starts, rad (0.006 deg).
 const GROUND_EDGE_RAD: f64 = 1e-4;
+
+/// The highest scattering order the sky carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(try_from = "OrderSpec", into = "OrderSpec")]
+pub enum Order {
+    /// Orders 1 to n (the paper: 2).
+    Through(u32),
+    /// Every order: orders are added until the next one adds less than
+    /// [`ALL_ORDERS_TOLERANCE`] of the scattered light anywhere (at most [`MAX_ORDER`]).
+    All,
+}
+
+/// The most orders a model computes.
+pub const MAX_ORDER: u32 = 60;
+
+/// With [`Order::All`], the share of the light arriving at any shell, from any
+/// direction, at any sun and wavelength, below which the next order is not added.
+pub const ALL_ORDERS_TOLERANCE: f64 = 1e-3;
+
+/// With [`Order::All`], the share of the light the latest order adds anywhere below
+/// which the remaining orders are summed as a geometric series
+/// (`ScatteredLightMap::geometric_tail`) instead of one by one: by then each order
+/// is within 2 % of the same fraction of the one before (Earth: 0.38 to 0.37 from the
+/// fourth order on), and the sky differs from twenty orders summed one by one by under
+/// 0.1 % (`every_order_equals_twenty_orders`).
+pub const GEOMETRIC_TAIL_SHARE: f64 = 0.05;
+
+/// How an order is written in settings files and JSON: a number or "all".
+#[derive(Deserialize, Serialize)]
+#[serde(untagged)]
+enum OrderSpec {
+    Number(u32),
+    Word(String),
+}
+
+impl TryFrom<OrderSpec> for Order {
+    type Error = String;
+    fn try_from(spec: OrderSpec) -> std::result::Result<Self, String> {
+        match spec {
+            OrderSpec::Number(n) => Ok(Order::Through(n)),
+            OrderSpec::Word(w) => w.parse().map_err(|e: Error| e.to_string()),
+        }
+    }
+}
+
+impl From<Order> for OrderSpec {
+    fn from(order: Order) -> Self {
+        match order {
+            Order::Through(n) => OrderSpec::Number(n),
+            Order::All => OrderSpec::Word("all".into()),
+        }
+    }
+}
+
+impl std::str::FromStr for Order {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        if s == "all" {
+            return Ok(Order::All);
+        }
+        s.parse::<u32>().map(Order::Through).map_err(|_| {
+            Error::Invalid(format!(
+                "order = {s:?} is not an order: allowed 1 to {MAX_ORDER}, or \"all\""
+            ))
+        })
+    }
+}
+
+impl std::fmt::Display for Order {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Order::Through(n) => write!(f, "{n}"),
+            Order::All => f.write_str("all"),
+        }
+    }
+}
+
+impl Order {
+    /// The most orders this asks for.
+    pub fn most(&self) -> u32 {
+        match self {
+            Order::Through(n) => *n,
+            Order::All => MAX_ORDER,
+        }
+    }
+}
 
 /// Quality settings of the shell method, with the paper's values as defaults.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -53,8 +139,8 @@ pub struct SkySettings {
     pub scattering_directions: usize,
     /// Sun zenith bins of the scattered light maps.
     pub sun_bins: usize,
-    /// Highest scattering order, 1 to 3 (paper: 2).
-    pub order: u32,
+    /// Highest scattering order, 1 to [`MAX_ORDER`] or all (paper: 2).
+    pub order: Order,
     /// Whether aerosols scatter the orders above the first (paper: no, Rayleigh only).
     pub multiple_mie: bool,
     /// Longest interval between samples along a ray, m: longer ones (near-horizontal
@@ -70,7 +156,7 @@ impl Default for SkySettings {
             directions: 64,
             scattering_directions: 128,
             sun_bins: 64,
-            order: 2,
+            order: Order::Through(2),
             multiple_mie: false,
             max_interval_m: 10_000.0,
         }
@@ -90,7 +176,7 @@ impl SkySettings {
             4096.0,
         )?;
         check_range("sun_bins", self.sun_bins as f64, 4.0, 4096.0)?;
-        check_range("order", self.order as f64, 1.0, 3.0)?;
+        check_range("order", self.order.most() as f64, 1.0, MAX_ORDER as f64)?;
         check_range("max_interval_m", self.max_interval_m, 100.0, 1e7)?;
         crate::budget::check(
             &format!("the sky maps of {}", atmosphere.name),
@@ -122,7 +208,18 @@ impl SkySettings {
         let samples = (view_rays + light_rays)
             .saturating_mul(per_ray)
             .saturating_mul(2 * sample);
-        let light_maps = (self.order as u64 - 1) * k * b * (nd + 5) * n * 4;
+        // While orders are built: the sum, the last order and the next, each with its
+        // radiance, moments and an aerosol table.
+        let tables = if self.multiple_mie {
+            (light_map::TABLE_MU * light_map::TABLE_PHI) as u64
+        } else {
+            0
+        };
+        let light_maps = if self.order.most() >= 2 {
+            3 * k * b * (nd + 8 + tables) * n * 4
+        } else {
+            0
+        };
         let skylight = 2 * l * l * n * 4;
         samples
             .saturating_add(light_maps)
@@ -165,8 +262,11 @@ pub struct SkyModel {
     transmittance: Arc<TransmittanceTable>,
     shells: SamplingShells,
     sunlight: LightMap,
-    /// `scattered[n - 1]`: light of order `n` arriving at the shells, n < order.
-    scattered: Vec<ScatteredLightMap>,
+    /// The scattered light of orders 1 to `orders - 1` arriving at the shells, whose
+    /// scattering makes orders 2 to `orders`; none for single scattering.
+    higher: Option<ScatteredLightMap>,
+    /// The highest order computed.
+    orders: u32,
     /// The sky grid (elevation from the horizon's dip to the zenith) and its view rays,
     /// one per elevation: the maps do not depend on the azimuth.
     sky_grid: DirectionGrid,
@@ -206,26 +306,12 @@ impl SkyModel {
         }
         let shells = SamplingShells::new(atmosphere, settings.shells, altitude_m);
         let sunlight = LightMap::new(atmosphere, transmittance.clone(), &shells);
-        let mut scattered: Vec<ScatteredLightMap> = Vec::new();
-        if settings.order >= 2 {
-            let (rules, rays) = ScatteredLightMap::rays(
-                atmosphere,
-                &shells,
-                settings.scattering_directions,
-                settings.max_interval_m,
-            );
-            for order in 1..settings.order {
-                let sources = Sources {
-                    atmosphere,
-                    shells: &shells,
-                    sunlight: &sunlight,
-                    scattered: &scattered,
-                    multiple_mie: settings.multiple_mie,
-                };
-                let map = ScatteredLightMap::new(order, &rules, &rays, &sources, settings.sun_bins);
-                scattered.push(map);
-            }
-        }
+        let (higher, orders) = if settings.order.most() >= 2 {
+            let (map, orders) = higher_orders(atmosphere, settings, &shells, &sunlight);
+            (Some(map), orders)
+        } else {
+            (None, 1)
+        };
         let l = settings.directions;
         let dip = horizon_dip(atmosphere.bottom_radius_m, altitude_m);
         let sky_grid = DirectionGrid::new(l, l, min_elevation, std::f64::consts::FRAC_PI_2);
@@ -250,7 +336,8 @@ impl SkyModel {
             transmittance,
             shells,
             sunlight,
-            scattered,
+            higher,
+            orders,
             sky_grid,
             sky_rays,
             ground_grid,
@@ -290,15 +377,26 @@ impl SkyModel {
         )
     }
 
-    /// The skylight map of the orders `first..=last` only.
-    pub fn skylight_map_orders(&self, sun_elevation: f64, first: u32, last: u32) -> SkylightMap {
-        let last = last.min(self.settings.order);
+    /// The skylight map of single scattering only (`multiple` false), or of the higher
+    /// orders only (`single` false).
+    pub fn skylight_map_parts(
+        &self,
+        sun_elevation: f64,
+        single: bool,
+        multiple: bool,
+    ) -> SkylightMap {
         self.map(
             &self.sky_grid,
             &self.sky_rays,
             sun_elevation,
-            Orders { first, last },
+            Orders { single, multiple },
         )
+    }
+
+    /// The highest scattering order the model carries (with [`Order::All`], where the
+    /// orders converged).
+    pub fn orders(&self) -> u32 {
+        self.orders
     }
 
     /// The map of the directions below the horizon, which end on the ground.
@@ -313,8 +411,8 @@ impl SkyModel {
 
     fn all_orders(&self) -> Orders {
         Orders {
-            first: 1,
-            last: self.settings.order,
+            single: true,
+            multiple: true,
         }
     }
 
@@ -384,8 +482,7 @@ impl SkyModel {
             atmosphere: &self.atmosphere,
             shells: &self.shells,
             sunlight: &self.sunlight,
-            scattered: &self.scattered,
-            multiple_mie: self.settings.multiple_mie,
+            higher: self.higher.as_ref(),
         }
     }
 
@@ -396,6 +493,66 @@ impl SkyModel {
         self.transmittance.to_sun(r, sun_elevation.sin(), out);
         sun_disc_radiance(&self.atmosphere, out);
     }
+}
+
+/// The scattered light of orders 1 to N - 1 arriving at the shells, summed, and N:
+/// each order's light is integrated along the light rays from the order below it
+/// (sky (10)-(11) repeated), until `settings.order` or, for [`Order::All`], until an
+/// order adds less than [`ALL_ORDERS_TOLERANCE`] anywhere, or less than
+/// [`GEOMETRIC_TAIL_SHARE`] and the rest is a geometric series (N then counts the
+/// orders computed one by one). The molecules scatter every
+/// order, the aerosols too with `multiple_mie`; a bright ground reflects every order.
+fn higher_orders(
+    atmosphere: &Atmosphere,
+    settings: &SkySettings,
+    shells: &SamplingShells,
+    sunlight: &LightMap,
+) -> (ScatteredLightMap, u32) {
+    let (rules, rays) = ScatteredLightMap::rays(
+        atmosphere,
+        shells,
+        settings.scattering_directions,
+        settings.max_interval_m,
+    );
+    let scatters: [bool; SPECIES] = [true, settings.multiple_mie];
+    let build = |orders, higher: Option<&ScatteredLightMap>| {
+        let sources = Sources {
+            atmosphere,
+            shells,
+            sunlight,
+            higher,
+        };
+        ScatteredLightMap::new(&rules, &rays, &sources, orders, settings.sun_bins, scatters)
+    };
+    let single = Orders {
+        single: true,
+        multiple: false,
+    };
+    let multiple = Orders {
+        single: false,
+        multiple: true,
+    };
+    let mut last = build(single, None);
+    let mut sum = last.clone();
+    let mut order = 2;
+    while order < settings.order.most() {
+        let next = build(multiple, Some(&last));
+        let share = sum.largest_share(&next);
+        sum.add(&next);
+        order += 1;
+        if settings.order == Order::All {
+            if share < ALL_ORDERS_TOLERANCE {
+                break;
+            }
+            if share < GEOMETRIC_TAIL_SHARE {
+                sum.add(&next.geometric_tail(&last, &rules, atmosphere));
+                break;
+            }
+        }
+        last = next;
+    }
+    sum.drop_values();
+    (sum, order)
 }
 
 /// Turns the transmittance to the sun `out` into the radiance of the sun's disc:

@@ -2,14 +2,14 @@
 //! full validation (a truncated, altered or foreign file is an error naming the
 //! problem, never a panic or a wrong sky).
 //!
-//! Layout, version 1 (`u32`, `f64` ... little-endian; `f16` IEEE half):
+//! Layout, version 2 (`u32`, `f64` ... little-endian; `f16` IEEE half):
 //!
 //! | field | type |
 //! | --- | --- |
 //! | magic | 8 bytes `atmo-sky` |
-//! | version | `u32` = 1 |
+//! | version | `u32` = 2 (1: the same layout; its order is never 0) |
 //! | atmosphere | `u32` length + UTF-8 TOML (as `Atmosphere::to_toml`) |
-//! | shells, directions L, scattering directions, sun bins, order | 5 x `u32` |
+//! | shells, directions L, scattering directions, sun bins, order (0: all) | 5 x `u32` |
 //! | multiple Mie | `u8` 0 or 1 |
 //! | longest interval, m | `f64` |
 //! | sun steps M, lowest sun elevation (rad), density at the horizon | `u32`, `f64`, `f64` |
@@ -40,13 +40,15 @@ use crate::atmosphere::Atmosphere;
 use crate::error::{Error, Result};
 use crate::files::write_atomically;
 use crate::image::{Display, ToneMap};
+use crate::sky::shells::Order;
 use crate::sky::SkySettings;
 
 /// The first bytes of every table file.
 pub const MAGIC: &[u8; 8] = b"atmo-sky";
 
-/// The version this build writes and reads.
-pub const VERSION: u32 = 1;
+/// The version this build writes; it reads it and version 1, which differs only in
+/// that its order is never 0 ("all").
+pub const VERSION: u32 = 2;
 
 impl SkylightTable {
     /// The file's bytes.
@@ -63,7 +65,11 @@ impl SkylightTable {
             sky.directions,
             sky.scattering_directions,
             sky.sun_bins,
-            sky.order as usize,
+            // 0 for every order (version 2).
+            match sky.order {
+                Order::Through(n) => n as usize,
+                Order::All => 0,
+            },
         ] {
             put_u32(&mut w, v as u32);
         }
@@ -157,9 +163,9 @@ impl SkylightTable {
             .filter(|&n| n >= 12)
             .ok_or_else(|| fail("truncated: too short to hold a header and a checksum".into()))?;
         let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-        if version != VERSION {
+        if !(1..=VERSION).contains(&version) {
             return Err(fail(format!(
-                "table file version {version}; this atmo reads version {VERSION}"
+                "table file version {version}; this atmo reads versions 1 to {VERSION}"
             )));
         }
         let stored = u32::from_le_bytes(bytes[body..].try_into().expect("4 bytes"));
@@ -188,7 +194,10 @@ impl SkylightTable {
             directions: r.u32("directions")? as usize,
             scattering_directions: r.u32("scattering directions")? as usize,
             sun_bins: r.u32("sun bins")? as usize,
-            order: r.u32("order")?,
+            order: match r.u32("order")? {
+                0 => Order::All,
+                n => Order::Through(n),
+            },
             ..SkySettings::default()
         };
         sky.multiple_mie = match r.take(1, "multiple Mie")?[0] {
