@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{atmo, files_in, probe_file, scratch, SMALL};
+use common::{atmo, files_in, probe_file, scratch, COARSE_SHELLS, SMALL};
 
 #[test]
 fn renders_png_and_exr_of_the_requested_size() {
@@ -120,6 +120,12 @@ fn bad_input_exits_2_with_a_message_and_no_file() {
         "budget",
         &["--width", "16384", "--height", "16384"],
         "budget",
+    );
+    refused("envmap-kind", &["--envmap", "sphere"], "envmap");
+    refused(
+        "envmap-size",
+        &["--envmap", "equirect", "--envmap-size", "2"],
+        "envmap size",
     );
     refused("order", &["--order", "61"], "order");
     refused("order-word", &["--order", "most"], "order");
@@ -313,5 +319,60 @@ fn the_sun_comes_from_a_place_and_a_time() {
         assert!(stderr.contains(wanted), "{stderr}");
         assert!(!c.exists());
     }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn envmaps_and_lighting_for_engines() {
+    let dir = scratch("envmap");
+    let (out, light) = (dir.join("env.exr"), dir.join("light.json"));
+    let mut args = vec![
+        "sky",
+        "--sun-elevation",
+        "30",
+        "--sun-azimuth",
+        "90",
+        "--envmap",
+        "cubemap",
+        "--envmap-size",
+        "16",
+        "-o",
+        out.to_str().unwrap(),
+        "--lighting",
+        light.to_str().unwrap(),
+    ];
+    args.extend(COARSE_SHELLS);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Six faces and the lighting, nothing else.
+    assert_eq!(files_in(&dir), 7);
+    for face in ["px", "nx", "py", "ny", "pz", "nz"] {
+        let img = image::open(dir.join(format!("env_{face}.exr"))).unwrap();
+        assert_eq!((img.width(), img.height()), (16, 16), "{face}");
+    }
+    // The sun due east: the +X face is the brightest, the ground (-Y) the darkest.
+    let mean = |face: &str| {
+        let img = image::open(dir.join(format!("env_{face}.exr")))
+            .unwrap()
+            .to_rgb32f();
+        img.pixels().map(|p| p.0[2] as f64).sum::<f64>() / 256.0
+    };
+    assert!(mean("px") > mean("nx") && mean("py") > mean("ny"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&light).unwrap()).unwrap();
+    let direction: Vec<f64> = serde_json::from_value(json["sun"]["direction"].clone()).unwrap();
+    // Toward the sun: east (x) and up (y), 30 deg elevation.
+    assert!(
+        (direction[0] - 30f64.to_radians().cos()).abs() < 1e-4,
+        "{direction:?}"
+    );
+    assert!((direction[1] - 0.5).abs() < 1e-4 && direction[2].abs() < 1e-4);
+    let sh: Vec<Vec<f64>> =
+        serde_json::from_value(json["sky"]["sh9_radiance_linear_srgb"].clone()).unwrap();
+    assert_eq!((sh.len(), sh[0].len()), (9, 3));
+    // A blue sky: more blue than red in the first coefficient; the east brighter (x).
+    assert!(sh[0][2] > sh[0][0] && sh[3][2] > 0.0, "{sh:?}");
+    let lux = json["sky"]["illuminance_up_lux"].as_f64().unwrap();
+    assert!((1000.0..100_000.0).contains(&lux), "{lux}");
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 use atmo::image::Frame;
+use atmo::sky::lighting::Lighting;
 use atmo::sky::{SkyModel, SkyPicture, SkylightTable, TableSettings};
 use atmo::view::Sun;
 use atmo::Atmosphere;
@@ -231,6 +232,44 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
         format!(
             "sky-table.frame      {frame_ms:>9.2} ms   shell method {direct_ms:.0} ms (ratio {:.1}), 1920x1080",
             direct_ms / frame_ms
+        ),
+    );
+
+    // An engine's environment: the table's map for a new sun, the 1024 x 512
+    // equirectangular map and the lighting (harmonics and irradiance, from its own 256
+    // x 128 map), against the same from the shell method's maps.
+    let envmap = |picture: &SkyPicture| {
+        let map = picture.equirect(512, true);
+        let lighting = Lighting::new(picture, table.atmosphere(), 7000.0, sun);
+        std::hint::black_box((map, lighting));
+    };
+    let envmap_ms = median(
+        (0..frame_runs)
+            .map(|k| {
+                time_ms(|| {
+                    let moved = Sun::from_degrees(30.0 + 1e-3 * k as f64, 0.0).expect("in range");
+                    let picture = SkyPicture::from_table(&table, moved, 7000.0).expect("in range");
+                    envmap(&picture);
+                })
+            })
+            .collect(),
+    );
+    let shell_ms = median(
+        (0..3)
+            .map(|_| time_ms(|| envmap(&SkyPicture::new(&model, sun))))
+            .collect(),
+    );
+    emit(
+        json,
+        json!({
+            "bench": "sky.envmap", "params": {"table": params, "width": 1024, "height": 512,
+            "lighting": true}, "median_ms": envmap_ms, "runs": frame_runs,
+            "baseline": "the same from the shell method's maps (warm model)",
+            "baseline_median_ms": shell_ms, "ratio": shell_ms / envmap_ms,
+        }),
+        format!(
+            "sky.envmap           {envmap_ms:>9.2} ms   shell method {shell_ms:.0} ms (ratio {:.1}), 1024x512 + lighting",
+            shell_ms / envmap_ms
         ),
     );
     Ok(())

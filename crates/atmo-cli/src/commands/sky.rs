@@ -5,12 +5,15 @@ use std::time::Instant;
 
 use anyhow::Result;
 use atmo::image::{Display, ImageKind};
+use atmo::sky::envmap::{self, EnvmapKind, CUBE_FACES};
+use atmo::sky::lighting::Lighting;
 use atmo::sky::{SkyModel, SkyPicture, SkylightTable};
 use atmo::view::Sun;
 use atmo::Atmosphere;
 use atmo_gpu::sky::{GpuSkyModel, SkyPass, SkyTarget};
-use clap::Args;
+use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
+use serde_json::json;
 
 use super::sky_table::{self, Animate, Animation, TableDrawer};
 use crate::args::{AtmosphereArgs, ShellArgs, SkyPictureArgs};
@@ -31,7 +34,17 @@ pub const FLAGS: &[(&str, &str)] = &[
     ("latitude", "--latitude"),
     ("longitude", "--longitude"),
     ("time", "--time"),
+    ("envmap size", "--envmap-size"),
 ];
+
+/// The kinds of `--envmap`.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum EnvmapArg {
+    /// One 2N x N latitude-longitude EXR.
+    Equirect,
+    /// Six N x N EXR faces.
+    Cubemap,
+}
 
 #[derive(Args)]
 pub struct SkyArgs {
@@ -61,10 +74,38 @@ pub struct SkyArgs {
     #[arg(long, default_value_t = 120, requires = "animate")]
     frames: usize,
     /// Output picture: .png (8-bit sRGB) or .exr (linear radiance); with --animate, a folder.
-    #[arg(short, long, value_name = "FILE", required_unless_present = "probe")]
+    #[arg(short, long, value_name = "FILE", required_unless_present_any = ["probe", "lighting"])]
     output: Option<PathBuf>,
+    /// Write the whole sphere of directions to -o instead of a picture, as linear
+    /// radiance in an .exr (a .png is a tone-mapped preview): `equirect`, 2N x N (azimuth from north clockwise left to right,
+    /// zenith on top), or `cubemap`, six N x N faces FILE_px.exr, _nx, _py, _ny, _pz,
+    /// _nz (OpenGL's order and orientation, world x east, y up, z south). Drawn on the
+    /// CPU from the model's or the table's maps; the sun's disc unless --no-sun-disc.
+    #[arg(long, value_enum, conflicts_with_all = ["probe", "animate"])]
+    envmap: Option<EnvmapArg>,
+    /// N of --envmap: rows of the equirectangular map, or a cube face's side.
+    #[arg(long, value_name = "N", default_value_t = 512, requires = "envmap")]
+    envmap_size: u32,
+    /// Write the light at the viewpoint as JSON: the sun (direction, colour,
+    /// illuminance) and the sky's radiance as 9 spherical harmonics per linear-sRGB
+    /// channel (docs/sky.md).
+    #[arg(long, value_name = "FILE.json", conflicts_with_all = ["probe", "animate"])]
+    lighting: Option<PathBuf>,
     #[command(flatten)]
     device: BackendArgs,
+}
+
+impl SkyArgs {
+    /// The files this command reads, with their flags: no output may be one of them.
+    fn inputs(&self) -> Vec<(&str, &Path)> {
+        [
+            ("--table", &self.table),
+            ("--atmosphere", &self.medium.atmosphere),
+        ]
+        .into_iter()
+        .filter_map(|(flag, input)| Some((flag, input.as_deref()?)))
+        .collect()
+    }
 }
 
 pub fn run(args: SkyArgs) -> Result<()> {
@@ -84,20 +125,16 @@ pub fn run(args: SkyArgs) -> Result<()> {
         .as_deref()
         .map(atmo::sky::probe::read_directions)
         .transpose()?;
+    if args.envmap.is_some() || args.lighting.is_some() {
+        return environment(&args, &picture, sun);
+    }
     let view = match &args.output {
         Some(path) => {
             if args.animate.is_none() {
                 ImageKind::of(path)?;
                 // Checked before the work, not after it.
                 atmo::files::check_folder(path)?;
-                let inputs: Vec<(&str, &Path)> = [
-                    ("--table", &args.table),
-                    ("--atmosphere", &args.medium.atmosphere),
-                ]
-                .into_iter()
-                .filter_map(|(flag, input)| Some((flag, input.as_deref()?)))
-                .collect();
-                atmo::files::check_distinct(path, &inputs)?;
+                atmo::files::check_distinct(path, &args.inputs())?;
             }
             // The sky's pictures are seen from the model's altitude; the camera turns.
             Some(picture.view((args.picture.width, args.picture.height))?)
@@ -161,6 +198,108 @@ pub fn run(args: SkyArgs) -> Result<()> {
         view.camera.height,
         atmosphere.name,
         settings.order,
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    Ok(())
+}
+
+/// `--envmap` and `--lighting`: the sky of `sun` around the viewpoint, from the table
+/// or the shell method, as environment maps and as an engine's lights.
+fn environment(args: &SkyArgs, picture: &atmo_view::sky::SkyParams, sun: Sun) -> Result<()> {
+    let kind = args.envmap.map(|k| match k {
+        EnvmapArg::Equirect => EnvmapKind::Equirect,
+        EnvmapArg::Cubemap => EnvmapKind::Cubemap,
+    });
+    // Every output named and checked before the work.
+    let mut outputs: Vec<PathBuf> = Vec::new();
+    if let (Some(kind), Some(path)) = (kind, &args.output) {
+        envmap::check_size(kind, args.envmap_size)?;
+        let extension = match ImageKind::of(path)? {
+            ImageKind::Exr => "exr",
+            ImageKind::Png => "png",
+        };
+        match kind {
+            EnvmapKind::Equirect => outputs.push(path.clone()),
+            EnvmapKind::Cubemap => {
+                let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+                outputs.extend(
+                    CUBE_FACES
+                        .iter()
+                        .map(|f| path.with_file_name(format!("{stem}_{f}.{extension}"))),
+                );
+            }
+        }
+    }
+    if kind.is_some() && args.output.is_none() {
+        return Err(atmo::Error::Invalid("--envmap writes to -o: name an .exr file".into()).into());
+    }
+    outputs.extend(args.lighting.clone());
+    let inputs = args.inputs();
+    for path in &outputs {
+        atmo::files::check_folder(path)?;
+        atmo::files::check_distinct(path, &inputs)?;
+    }
+    let start = Instant::now();
+    let (sky, atmosphere) = match &args.table {
+        Some(table) => {
+            let table = SkylightTable::read(table)?;
+            let sky = SkyPicture::from_table(&table, sun, picture.altitude_m)?;
+            (sky, table.atmosphere().clone())
+        }
+        None => {
+            let atmosphere = args.medium.load()?;
+            let settings = args.method.settings();
+            settings.validate(&atmosphere)?;
+            let model = SkyModel::new(&atmosphere, &settings, picture.altitude_m)?;
+            (SkyPicture::new(&model, sun), atmosphere)
+        }
+    };
+    let sun_disc = !args.picture.no_sun_disc;
+    let faces = match kind {
+        Some(EnvmapKind::Equirect) => vec![sky.equirect(args.envmap_size, sun_disc)],
+        Some(EnvmapKind::Cubemap) => sky.cubemap(args.envmap_size, sun_disc),
+        None => Vec::new(),
+    };
+    for (frame, path) in faces.iter().zip(&outputs) {
+        frame.write(path, picture.exposure, picture.tone)?;
+    }
+    if let Some(path) = &args.lighting {
+        let lighting = Lighting::new(&sky, &atmosphere, picture.altitude_m, sun);
+        let up = lighting.sky_irradiance_up;
+        let out = json!({
+            "atmosphere": atmosphere.name,
+            "altitude_m": picture.altitude_m,
+            "frame": "world: x east, y up, z south",
+            "sun": {
+                "direction": lighting.sun.direction,
+                "elevation_deg": sun.elevation().to_degrees(),
+                "azimuth_deg": sun.azimuth().to_degrees(),
+                "wavelengths_nm": atmosphere.wavelengths_nm,
+                "direct_normal_irradiance_w_m2_nm": lighting.sun.spectrum,
+                "illuminance_lux": {"normal": lighting.sun.normal_lux, "horizontal": lighting.sun.horizontal_lux},
+                "linear_srgb_colour": lighting.sun.colour,
+            },
+            "sky": {
+                "sh9_radiance_linear_srgb": lighting.sky_sh9,
+                "sh_basis": "real, (l,m) = (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0) (2,1) (2,2); Y_1-1 ~ y, Y_10 ~ z, Y_11 ~ x",
+                "irradiance_up_linear_srgb_w_m2": up,
+                "illuminance_up_lux": atmo::sky::lighting::LUMENS_PER_WATT * atmo::atmosphere::spectrum::srgb_luminance(up),
+            },
+        });
+        let text = serde_json::to_string_pretty(&out)? + "\n";
+        atmo::files::write_atomically(path, |w| {
+            use std::io::Write;
+            w.write_all(text.as_bytes())
+                .map_err(atmo::Error::io_at(path))
+        })?;
+    }
+    eprintln!(
+        "atmo: {} in {:.0} ms",
+        outputs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
         start.elapsed().as_secs_f64() * 1e3
     );
     Ok(())

@@ -2,7 +2,8 @@
 //! that reaches that point through an atmosphere, as one JSON object.
 
 use anyhow::Result;
-use atmo::atmosphere::spectrum::{srgb_luminance, SpectrumToRgb};
+use atmo::sky::lighting::Sunlight;
+use atmo::view::Sun;
 use atmo::Error;
 use clap::Args;
 use serde_json::json;
@@ -20,9 +21,6 @@ pub struct SunArgs {
     medium: AtmosphereArgs,
 }
 
-/// The luminous efficacy of radiation at 555 nm, lm/W: illuminance = 683 x Y.
-const LUMENS_PER_WATT: f64 = 683.0;
-
 pub fn run(args: SunArgs) -> Result<()> {
     let atmosphere = args.medium.load()?;
     let top = atmosphere.thickness_m();
@@ -34,19 +32,8 @@ pub fn run(args: SunArgs) -> Result<()> {
     let position = args.place.sun_position(args.altitude)?.ok_or_else(|| {
         Error::Invalid("atmo sun needs --latitude, --longitude and --time".into())
     })?;
-    let spectrum = atmosphere.direct_sunlight(args.altitude, position.elevation_deg.to_radians());
-    let rgb = SpectrumToRgb::new(&atmosphere.wavelengths_nm)
-        .rgb(&spectrum.iter().map(|&e| e as f32).collect::<Vec<_>>());
-    // Y of the spectrum (the converter integrates the CIE curves into linear sRGB).
-    let rgb = rgb.map(f64::from);
-    let y = srgb_luminance(rgb);
-    let normal_lux = LUMENS_PER_WATT * y;
-    let horizontal_lux = normal_lux * position.elevation_deg.to_radians().sin().max(0.0);
-    let colour = if y > 0.0 {
-        rgb.map(|c| c / y)
-    } else {
-        [0.0; 3]
-    };
+    let sun = Sun::from_degrees(position.elevation_deg, position.azimuth_deg)?;
+    let light = Sunlight::at(&atmosphere, args.altitude, sun);
     let out = json!({
         "latitude_deg": args.place.latitude,
         "longitude_deg": args.place.longitude,
@@ -58,9 +45,9 @@ pub fn run(args: SunArgs) -> Result<()> {
         "atmosphere": atmosphere.name,
         "sunlight": {
             "wavelengths_nm": atmosphere.wavelengths_nm,
-            "direct_normal_irradiance_w_m2_nm": spectrum,
-            "illuminance_lux": {"normal": normal_lux, "horizontal": horizontal_lux},
-            "linear_srgb_colour": colour,
+            "direct_normal_irradiance_w_m2_nm": light.spectrum,
+            "illuminance_lux": {"normal": light.normal_lux, "horizontal": light.horizontal_lux},
+            "linear_srgb_colour": light.colour,
         },
     });
     println!("{}", serde_json::to_string_pretty(&out)?);

@@ -285,19 +285,50 @@ impl SkyPicture {
     pub fn render_into(&self, view: &View, frame: &mut Frame) {
         let camera = view.camera.pixel_basis().rotated(sky_from_world);
         let pixel = camera.pixel_angle();
+        self.shade_rows(frame, pixel, view.sun_disc, |x, y| {
+            camera.direction(x, y).unwrap_or(Vec3::NAN)
+        });
+    }
+
+    /// A `width x height` picture whose pixel (x, y) looks along the world direction
+    /// `direction(x, y)` (any length), each pixel spanning `pixel` rad: environment
+    /// maps and other lenses than a camera's.
+    pub fn render_directions(
+        &self,
+        width: u32,
+        height: u32,
+        pixel: f32,
+        sun_disc: bool,
+        direction: impl Fn(u32, u32) -> Vec3 + Sync,
+    ) -> Frame {
+        let mut frame = Frame::new(width, height);
+        self.shade_rows(&mut frame, pixel, sun_disc, |x, y| {
+            sky_from_world(direction(x, y))
+        });
+        frame
+    }
+
+    /// Shades every pixel of `frame`, rows in parallel, along the sky-frame direction
+    /// `direction(x, y)` (NaN for none).
+    fn shade_rows(
+        &self,
+        frame: &mut Frame,
+        pixel: f32,
+        sun_disc: bool,
+        direction: impl Fn(u32, u32) -> Vec3 + Sync,
+    ) {
         let edges = Edges {
-            sun_disc: view.sun_disc,
+            sun_disc,
             pixel,
             sun_cos_outer: (self.sun_radius + pixel).cos(),
         };
+        let width = frame.width as usize;
         frame
             .pixels
-            .par_chunks_mut(view.camera.width as usize)
+            .par_chunks_mut(width)
             .enumerate()
             .for_each_init(Rays::default, |rays, (y, row)| {
-                rays.fill(row.len(), |x| {
-                    camera.direction(x as u32, y as u32).unwrap_or(Vec3::NAN)
-                });
+                rays.fill(row.len(), |x| direction(x as u32, y as u32));
                 self.shade(rays, edges, row);
             });
     }

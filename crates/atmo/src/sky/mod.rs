@@ -29,8 +29,10 @@
 //! ```
 
 pub mod daylight;
+pub mod envmap;
 pub mod frame;
 pub mod grid;
+pub mod lighting;
 pub mod probe;
 pub mod shells;
 #[cfg(feature = "table")]
