@@ -112,10 +112,15 @@ impl SkyModel {
     /// scatter the higher orders with a phase other than Rayleigh's (the arrays carry
     /// their moments only).
     pub fn arrays(&self) -> Option<ModelArrays> {
-        if self.higher.as_ref().is_some_and(|h| h.tables[0].is_some()) {
+        if self
+            .light
+            .higher
+            .as_ref()
+            .is_some_and(|h| h.tables[0].is_some())
+        {
             return None;
         }
-        let a = &self.atmosphere;
+        let (a, light) = (&self.light.atmosphere, &self.light);
         let n = a.channels();
         let l = lanes(n);
         let pad = |values: &[f32]| -> Vec<[f32; 4]> {
@@ -128,7 +133,7 @@ impl SkyModel {
         };
         let lanes_of =
             |v: &[crate::sky::shells::maps::Lane]| v.iter().map(|x| x.to_array()).collect();
-        let table = &self.sunlight.table;
+        let table = &light.sunlight.table;
         let colour = SpectrumToRgb::new(&a.wavelengths_nm);
         let mut to_rgb = vec![[[0.0f32; 3]; 4]; l];
         for c in 0..n {
@@ -136,7 +141,7 @@ impl SkyModel {
                 to_rgb[c / 4][c % 4][rgb] = weights[c];
             }
         }
-        let higher = self.higher.as_ref();
+        let higher = light.higher.as_ref();
         let bins = higher.map_or(SunBins { count: 2 }, |m| m.bins);
         Some(ModelArrays {
             channels: n,
@@ -145,7 +150,7 @@ impl SkyModel {
             bottom_m: a.bottom_radius_m as f32,
             top_m: a.top_radius_m as f32,
             sun_radius: a.sun_angular_radius as f32,
-            shell_radius: self.shells.radii().iter().map(|&r| r as f32).collect(),
+            shell_radius: light.shells.radii().iter().map(|&r| r as f32).collect(),
             ground_albedo: a.ground_albedo as f32,
             rayleigh_phase: phase(&a.rayleigh.phase),
             mie_phase: phase(&a.mie.phase),
@@ -156,11 +161,11 @@ impl SkyModel {
                 a.bottom_radius_m,
                 &pad,
             ),
-            light_map: lanes_of(&self.sunlight.values),
+            light_map: lanes_of(&light.sunlight.values),
             light_map_entries: LIGHT_MAP_SIZE,
-            light_mu_low: self.sunlight.mu_low.iter().map(|&m| m as f32).collect(),
-            light_scale: self.sunlight.scale.iter().map(|&s| s as f32).collect(),
-            irradiance: pad(&self.sunlight.irradiance),
+            light_mu_low: light.sunlight.mu_low.iter().map(|&m| m as f32).collect(),
+            light_scale: light.sunlight.scale.iter().map(|&s| s as f32).collect(),
+            irradiance: pad(&light.sunlight.irradiance),
             transmittance: pad(&table.values),
             mu_size: table.mu_size,
             r_size: table.r_size,

@@ -566,11 +566,11 @@ mod tests {
     fn light_map_matches_the_transmittance_table() {
         let a = Atmosphere::earth();
         let table = Arc::new(TransmittanceTable::new(&a));
-        let shells = SamplingShells::new(&a, 40, 1000.0);
+        let shells = SamplingShells::new(&a, 40, &[1000.0]);
         let map = LightMap::new(&a, table.clone(), &shells);
         let n = a.channels();
         let (mut lanes_out, mut want) = (vec![Lane::ZERO; lanes(n)], vec![0.0; n]);
-        for j in [0, 5, shells.viewpoint(), 39] {
+        for j in [0, 5, shells.index_of(&a, 1000.0).unwrap(), 39] {
             let r = shells.radii()[j];
             for k in 0..200 {
                 let mu_s = -0.2 + 1.2 * k as f64 / 199.0;

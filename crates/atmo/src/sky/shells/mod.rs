@@ -254,11 +254,14 @@ impl SkylightMap {
     }
 }
 
-/// Everything about the sky at one viewpoint altitude that does not depend on the sun.
-pub struct SkyModel {
+/// The light in the atmosphere that depends on neither the sun's position nor the
+/// viewpoint's direction: the sampling shells (with one through each viewpoint it
+/// serves), the light map of sunlight and the scattered light of the higher orders
+/// arriving at the shells. One serves the [`SkyModel`]s of many altitudes (a skylight
+/// table's), which then only add their view rays.
+pub struct SkyLight {
     atmosphere: Atmosphere,
     settings: SkySettings,
-    altitude_m: f64,
     transmittance: Arc<TransmittanceTable>,
     shells: SamplingShells,
     sunlight: LightMap,
@@ -267,6 +270,54 @@ pub struct SkyModel {
     higher: Option<ScatteredLightMap>,
     /// The highest order computed.
     orders: u32,
+}
+
+impl SkyLight {
+    /// The light for viewpoints at `altitudes_m` (each in [0, top)), with a given
+    /// transmittance table.
+    pub fn new(
+        atmosphere: &Atmosphere,
+        transmittance: Arc<TransmittanceTable>,
+        settings: &SkySettings,
+        altitudes_m: &[f64],
+    ) -> Result<Self> {
+        let extra = SkySettings {
+            shells: settings.shells + altitudes_m.len().saturating_sub(1),
+            ..settings.clone()
+        };
+        extra.validate(atmosphere)?;
+        let top = atmosphere.thickness_m();
+        for &h in altitudes_m {
+            if !(h.is_finite() && (0.0..top).contains(&h)) {
+                return Err(Error::out_of_range("altitude_m", h, &format!("[0, {top})")));
+            }
+        }
+        let shells = SamplingShells::new(atmosphere, settings.shells, altitudes_m);
+        let sunlight = LightMap::new(atmosphere, transmittance.clone(), &shells);
+        let (higher, orders) = if settings.order.most() >= 2 {
+            let (map, orders) = higher_orders(atmosphere, settings, &shells, &sunlight);
+            (Some(map), orders)
+        } else {
+            (None, 1)
+        };
+        Ok(SkyLight {
+            atmosphere: atmosphere.clone(),
+            settings: settings.clone(),
+            transmittance,
+            shells,
+            sunlight,
+            higher,
+            orders,
+        })
+    }
+}
+
+/// Everything about the sky at one viewpoint altitude that does not depend on the sun.
+pub struct SkyModel {
+    light: Arc<SkyLight>,
+    altitude_m: f64,
+    /// The shell through the viewpoint.
+    viewpoint: usize,
     /// The sky grid (elevation from the horizon's dip to the zenith) and its view rays,
     /// one per elevation: the maps do not depend on the azimuth.
     sky_grid: DirectionGrid,
@@ -295,24 +346,21 @@ impl SkyModel {
         altitude_m: f64,
         min_elevation: f64,
     ) -> Result<Self> {
-        settings.validate(atmosphere)?;
-        let top = atmosphere.thickness_m();
-        if !(altitude_m.is_finite() && (0.0..top).contains(&altitude_m)) {
-            return Err(Error::out_of_range(
-                "altitude_m",
-                altitude_m,
-                &format!("[0, {top})"),
-            ));
-        }
-        let shells = SamplingShells::new(atmosphere, settings.shells, altitude_m);
-        let sunlight = LightMap::new(atmosphere, transmittance.clone(), &shells);
-        let (higher, orders) = if settings.order.most() >= 2 {
-            let (map, orders) = higher_orders(atmosphere, settings, &shells, &sunlight);
-            (Some(map), orders)
-        } else {
-            (None, 1)
-        };
-        let l = settings.directions;
+        let light = SkyLight::new(atmosphere, transmittance, settings, &[altitude_m])?;
+        Self::with_light(Arc::new(light), altitude_m, min_elevation)
+    }
+
+    /// The model at `altitude_m`, one of `light`'s viewpoints, with a skylight grid
+    /// starting at `min_elevation` rad.
+    pub fn with_light(light: Arc<SkyLight>, altitude_m: f64, min_elevation: f64) -> Result<Self> {
+        let atmosphere = &light.atmosphere;
+        let shells = &light.shells;
+        let viewpoint = shells.index_of(atmosphere, altitude_m).ok_or_else(|| {
+            Error::Invalid(format!(
+                "altitude_m = {altitude_m} is not a viewpoint the sky's light was made for"
+            ))
+        })?;
+        let l = light.settings.directions;
         let dip = horizon_dip(atmosphere.bottom_radius_m, altitude_m);
         let sky_grid = DirectionGrid::new(l, l, min_elevation, std::f64::consts::FRAC_PI_2);
         // The ground grid's top row is the horizon approached from below: rays that hit
@@ -320,24 +368,18 @@ impl SkyModel {
         let ground_top = -dip - GROUND_EDGE_RAD;
         let ground_grid =
             DirectionGrid::new(l, l.div_ceil(2), -std::f64::consts::FRAC_PI_2, ground_top);
-        let view = shells.viewpoint();
         let rays_of = |grid: &DirectionGrid| -> Vec<(usize, f64)> {
             (0..grid.elevations)
-                .map(|j| (view, grid.elevation(j).sin()))
+                .map(|j| (viewpoint, grid.elevation(j).sin()))
                 .collect()
         };
-        let max = settings.max_interval_m;
-        let sky_rays = ScatteringMaps::new(atmosphere, &shells, &rays_of(&sky_grid), max);
-        let ground_rays = ScatteringMaps::new(atmosphere, &shells, &rays_of(&ground_grid), max);
+        let max = light.settings.max_interval_m;
+        let sky_rays = ScatteringMaps::new(atmosphere, shells, &rays_of(&sky_grid), max);
+        let ground_rays = ScatteringMaps::new(atmosphere, shells, &rays_of(&ground_grid), max);
         Ok(SkyModel {
-            atmosphere: atmosphere.clone(),
-            settings: settings.clone(),
+            light,
             altitude_m,
-            transmittance,
-            shells,
-            sunlight,
-            higher,
-            orders,
+            viewpoint,
             sky_grid,
             sky_rays,
             ground_grid,
@@ -352,12 +394,17 @@ impl SkyModel {
 
     /// The atmosphere the model was built for.
     pub fn atmosphere(&self) -> &Atmosphere {
-        &self.atmosphere
+        &self.light.atmosphere
     }
 
     /// The settings the model was built with.
     pub fn settings(&self) -> &SkySettings {
-        &self.settings
+        &self.light.settings
+    }
+
+    /// The light the model reads, shared with other altitudes' models.
+    pub fn light(&self) -> &Arc<SkyLight> {
+        &self.light
     }
 
     /// Samples (shell crossings and sub-samples) along the sky grid's view rays, one
@@ -396,7 +443,7 @@ impl SkyModel {
     /// The highest scattering order the model carries (with [`Order::All`], where the
     /// orders converged).
     pub fn orders(&self) -> u32 {
-        self.orders
+        self.light.orders
     }
 
     /// The map of the directions below the horizon, which end on the ground.
@@ -423,7 +470,7 @@ impl SkyModel {
         sun_elevation: f64,
         orders: Orders,
     ) -> SkylightMap {
-        let n = self.atmosphere.channels();
+        let n = self.atmosphere().channels();
         let sources = self.sources();
         let sin_s = sun_elevation.sin();
         let mut radiance = vec![0.0f32; grid.azimuths * grid.elevations * n];
@@ -449,13 +496,14 @@ impl SkyModel {
     /// interpolation between grid directions. Directions below the horizon end on the
     /// ground. Returns one spectrum per direction.
     pub fn radiance_along(&self, sun_elevation: f64, directions: &[(f64, f64)]) -> Vec<Vec<f32>> {
-        let view = self.shells.viewpoint();
+        let view = self.viewpoint;
         let rays: Vec<(usize, f64)> = directions.iter().map(|&(_, e)| (view, e.sin())).collect();
+        let light = &self.light;
         let maps = ScatteringMaps::new(
-            &self.atmosphere,
-            &self.shells,
+            &light.atmosphere,
+            &light.shells,
             &rays,
-            self.settings.max_interval_m,
+            light.settings.max_interval_m,
         );
         let sources = self.sources();
         let sin_s = sun_elevation.sin();
@@ -464,7 +512,7 @@ impl SkyModel {
             .enumerate()
             .map(|(k, &(azimuth, elevation))| {
                 let nu = cos_to_sun(azimuth, elevation, sun_elevation);
-                let mut out = vec![0.0f32; self.atmosphere.channels()];
+                let mut out = vec![0.0f32; light.atmosphere.channels()];
                 maps.radiance(
                     k,
                     SunGeometry { mu_s: sin_s, nu },
@@ -479,19 +527,19 @@ impl SkyModel {
 
     fn sources(&self) -> Sources<'_> {
         Sources {
-            atmosphere: &self.atmosphere,
-            shells: &self.shells,
-            sunlight: &self.sunlight,
-            higher: self.higher.as_ref(),
+            atmosphere: &self.light.atmosphere,
+            shells: &self.light.shells,
+            sunlight: &self.light.sunlight,
+            higher: self.light.higher.as_ref(),
         }
     }
 
     /// Radiance per wavelength of the sun's disc seen from the viewpoint (no limb
     /// darkening): irradiance / (pi alpha^2), through the atmosphere.
     pub fn sun_radiance(&self, sun_elevation: f64, out: &mut [f32]) {
-        let r = self.atmosphere.bottom_radius_m + self.altitude_m;
-        self.transmittance.to_sun(r, sun_elevation.sin(), out);
-        sun_disc_radiance(&self.atmosphere, out);
+        let r = self.light.atmosphere.bottom_radius_m + self.altitude_m;
+        self.light.transmittance.to_sun(r, sun_elevation.sin(), out);
+        sun_disc_radiance(&self.light.atmosphere, out);
     }
 }
 

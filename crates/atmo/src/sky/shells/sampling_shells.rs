@@ -13,17 +13,16 @@ use crate::atmosphere::Atmosphere;
 pub const SHELL_SPACING_EXPONENT: f64 = 2.0;
 
 /// The radii of the sampling shells, increasing, from the ground to the top of the
-/// atmosphere, plus one shell through the viewpoint so that the view rays start on one.
+/// atmosphere, plus one shell through each viewpoint so that view rays start on one.
 #[derive(Debug, Clone)]
 pub struct SamplingShells {
     radii: Vec<f64>,
-    /// Index of the shell through the viewpoint.
-    viewpoint: usize,
 }
 
 impl SamplingShells {
-    /// `count` shells (at least 2: the ground and the top) and the viewpoint's.
-    pub fn new(atmosphere: &Atmosphere, count: usize, viewpoint_altitude_m: f64) -> Self {
+    /// `count` shells (at least 2: the ground and the top) and the viewpoints'
+    /// (altitudes in m, each within the atmosphere).
+    pub fn new(atmosphere: &Atmosphere, count: usize, viewpoint_altitudes_m: &[f64]) -> Self {
         let thickness = atmosphere.thickness_m();
         let mut radii: Vec<f64> = (0..count)
             .map(|k| {
@@ -31,17 +30,25 @@ impl SamplingShells {
                 atmosphere.bottom_radius_m + thickness * u.powf(SHELL_SPACING_EXPONENT)
             })
             .collect();
-        let r_v = atmosphere.bottom_radius_m + viewpoint_altitude_m;
-        let at = radii.partition_point(|&r| r < r_v);
-        let viewpoint = if at < radii.len() && (radii[at] - r_v).abs() < 0.5 {
-            at
-        } else if at > 0 && (radii[at - 1] - r_v).abs() < 0.5 {
-            at - 1
-        } else {
-            radii.insert(at, r_v);
-            at
-        };
-        SamplingShells { radii, viewpoint }
+        for &h in viewpoint_altitudes_m {
+            let r_v = atmosphere.bottom_radius_m + h;
+            let at = radii.partition_point(|&r| r < r_v);
+            let near = |k: usize| k < radii.len() && (radii[k] - r_v).abs() < 0.5;
+            if !(near(at) || (at > 0 && near(at - 1))) {
+                radii.insert(at, r_v);
+            }
+        }
+        SamplingShells { radii }
+    }
+
+    /// Index of the shell through the viewpoint at `altitude_m` (one of those the
+    /// shells were made with), or `None`.
+    pub fn index_of(&self, atmosphere: &Atmosphere, altitude_m: f64) -> Option<usize> {
+        let r_v = atmosphere.bottom_radius_m + altitude_m;
+        let at = self.radii.partition_point(|&r| r < r_v);
+        [at, at.wrapping_sub(1)]
+            .into_iter()
+            .find(|&k| k < self.radii.len() && (self.radii[k] - r_v).abs() < 0.5)
     }
 
     /// Shell radii in metres, increasing; the first is the ground, the last the top.
@@ -52,11 +59,6 @@ impl SamplingShells {
     /// Number of shells, the viewpoint's included.
     pub fn len(&self) -> usize {
         self.radii.len()
-    }
-
-    /// Index of the shell through the viewpoint.
-    pub fn viewpoint(&self) -> usize {
-        self.viewpoint
     }
 
     /// The points where the ray from shell `origin` with zenith cosine `mu` crosses the
@@ -103,42 +105,52 @@ mod tests {
     use super::*;
     use crate::atmosphere::geometry::horizon_mu;
 
-    fn shells(h: f64) -> SamplingShells {
-        SamplingShells::new(&Atmosphere::earth(), 40, h)
+    fn shells(h: f64) -> (SamplingShells, usize) {
+        let a = Atmosphere::earth();
+        let s = SamplingShells::new(&a, 40, &[h]);
+        let v = s.index_of(&a, h).unwrap();
+        (s, v)
     }
 
     #[test]
     fn shells_are_denser_near_the_ground_and_include_the_viewpoint() {
-        let s = shells(7000.0);
+        let (s, v) = shells(7000.0);
         assert_eq!(s.len(), 41);
         let r = s.radii();
         assert!(r.windows(2).all(|w| w[1] > w[0]));
         assert!(r[1] - r[0] < 0.1 * (r[40] - r[39]));
-        assert_eq!(r[s.viewpoint()], 6_360_000.0 + 7000.0);
+        assert_eq!(r[v], 6_360_000.0 + 7000.0);
         // A viewpoint on the ground reuses the ground shell.
-        assert_eq!(shells(0.0).len(), 40);
+        assert_eq!(shells(0.0).0.len(), 40);
+        // Several viewpoints, each on its own shell, found again.
+        let a = Atmosphere::earth();
+        let many = SamplingShells::new(&a, 40, &[0.0, 500.0, 7000.0, 7000.0]);
+        assert_eq!(many.len(), 42);
+        assert_eq!(many.radii()[many.index_of(&a, 500.0).unwrap()], 6_360_500.0);
+        assert_eq!(many.index_of(&a, 0.0), Some(0));
+        assert_eq!(many.index_of(&a, 1234.0), None);
     }
 
     #[test]
     fn upward_ray_crosses_every_shell_above_once() {
-        let s = shells(7000.0);
+        let (s, v) = shells(7000.0);
         let mut out = Vec::new();
-        assert!(!s.crossings(s.viewpoint(), 0.3, &mut out));
-        assert_eq!(out.len(), s.len() - s.viewpoint());
+        assert!(!s.crossings(v, 0.3, &mut out));
+        assert_eq!(out.len(), s.len() - v);
         assert!(out.windows(2).all(|w| w[1].1 > w[0].1));
         assert_eq!(out.last().unwrap().0 as usize, s.len() - 1);
     }
 
     #[test]
     fn downward_rays_hit_the_ground_or_come_back_up() {
-        let s = shells(13000.0);
+        let (s, v) = shells(13000.0);
         let mut out = Vec::new();
-        let r0 = s.radii()[s.viewpoint()];
+        let r0 = s.radii()[v];
         let mu_h = horizon_mu(r0, s.radii()[0]);
-        assert!(s.crossings(s.viewpoint(), -0.5, &mut out));
+        assert!(s.crossings(v, -0.5, &mut out));
         assert_eq!(out.last().unwrap().0, 0);
         assert!((out.last().unwrap().1 - 13000.0 / 0.5).abs() < 100.0);
-        assert!(!s.crossings(s.viewpoint(), mu_h + 1e-4, &mut out));
+        assert!(!s.crossings(v, mu_h + 1e-4, &mut out));
         assert!(out.windows(2).all(|w| w[1].1 > w[0].1), "{out:?}");
         assert_eq!(out.last().unwrap().0 as usize, s.len() - 1);
         // Each crossing lies on its shell.

@@ -35,7 +35,7 @@ pub use error_bound::ErrorBound;
 pub use factors::TableFactors;
 
 use super::grid::DirectionGrid;
-use super::{SkyModel, SkySettings};
+use super::{SkyLight, SkyModel, SkySettings};
 use crate::atmosphere::geometry::horizon_dip;
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::{Atmosphere, TransmittanceTable};
@@ -209,16 +209,20 @@ impl SkylightTable {
         let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
         let total = sun.count() * altitude.count();
         let done = AtomicUsize::new(0);
+        // The light at the shells once, with a shell through every altitude: the
+        // altitudes' models share it (the higher orders would cost seconds each).
+        let altitudes: Vec<f64> = (0..altitude.count()).map(|a| altitude.value(a)).collect();
+        let light = Arc::new(SkyLight::new(
+            atmosphere,
+            transmittance,
+            &settings.sky,
+            &altitudes,
+        )?);
         // Per altitude, the maps of every sun: [sun][direction].
         let maps: Vec<Vec<[f32; 3]>> = (0..altitude.count())
             .into_par_iter()
             .map(|a| {
-                let model = shell_model(
-                    atmosphere,
-                    settings,
-                    transmittance.clone(),
-                    altitude.value(a),
-                )?;
+                let model = shared_model(atmosphere, settings, light.clone(), altitude.value(a))?;
                 let mut out = Vec::new();
                 for s in 0..sun.count() {
                     out.extend(model.skylight_map(sun.value(s)).to_rgb(&colour));
@@ -342,10 +346,26 @@ impl SkylightTable {
         self.factors.s.len() + self.factors.t.len()
     }
 
-    /// The shell-method model at `altitude_m` on this table's grid, to compare with.
-    pub fn direct_model(&self, altitude_m: f64) -> Result<SkyModel> {
+    /// The light of the shell method with the table's shells (one through each of its
+    /// altitudes) and one through each of `extra_altitudes_m`.
+    fn direct_light(&self, extra_altitudes_m: &[f64]) -> Result<Arc<SkyLight>> {
+        let axis = self.settings.altitude_axis();
+        let mut altitudes: Vec<f64> = (0..axis.count()).map(|a| axis.value(a)).collect();
+        altitudes.extend_from_slice(extra_altitudes_m);
         let transmittance = Arc::new(TransmittanceTable::new(&self.atmosphere));
-        shell_model(&self.atmosphere, &self.settings, transmittance, altitude_m)
+        Ok(Arc::new(SkyLight::new(
+            &self.atmosphere,
+            transmittance,
+            &self.settings.sky,
+            &altitudes,
+        )?))
+    }
+
+    /// The shell-method model at `altitude_m` on this table's grid, to compare with:
+    /// at the table's altitudes, exactly the model its maps came from.
+    pub fn direct_model(&self, altitude_m: f64) -> Result<SkyModel> {
+        let light = self.direct_light(&[altitude_m])?;
+        shared_model(&self.atmosphere, &self.settings, light, altitude_m)
     }
 
     /// The display errors (units of epsilon) of the table against the shell method at
@@ -355,12 +375,11 @@ impl SkylightTable {
         let mut altitudes: Vec<f64> = pairs.iter().map(|p| p.1).collect();
         altitudes.sort_by(f64::total_cmp);
         altitudes.dedup();
-        let transmittance = Arc::new(TransmittanceTable::new(&self.atmosphere));
+        let light = self.direct_light(&altitudes)?;
         let per_altitude = altitudes
             .par_iter()
             .map(|&h| {
-                let model =
-                    shell_model(&self.atmosphere, &self.settings, transmittance.clone(), h)?;
+                let model = shared_model(&self.atmosphere, &self.settings, light.clone(), h)?;
                 pairs
                     .iter()
                     .enumerate()
@@ -400,22 +419,15 @@ impl SkylightTable {
     }
 }
 
-/// The shell method at `altitude_m` on the table's grid, with a transmittance table
-/// shared between altitudes.
-fn shell_model(
+/// The model at `altitude_m` on the table's grid, reading the shared `light`.
+fn shared_model(
     atmosphere: &Atmosphere,
     settings: &TableSettings,
-    transmittance: Arc<TransmittanceTable>,
+    light: Arc<SkyLight>,
     altitude_m: f64,
 ) -> Result<SkyModel> {
     let min_elevation = direction_grid(atmosphere, settings, altitude_m).elevation_min;
-    SkyModel::with_grid(
-        atmosphere,
-        transmittance,
-        &settings.sky,
-        altitude_m,
-        min_elevation,
-    )
+    SkyModel::with_light(light, altitude_m, min_elevation)
 }
 
 /// The `L x L` view grid of a table at `altitude_m`: elevations from the horizon
