@@ -18,6 +18,9 @@ struct DrawParams {
     sun: vec4<f32>,
     // Sky light scattered by the droplets, RGB radiance.
     ambient: vec4<f32>,
+    // The air between the eye and the cloud: transmittance and in-scattered light, RGB.
+    haze_transmittance: vec4<f32>,
+    haze_inscatter: vec4<f32>,
     width: u32,
     height: u32,
     pad0: u32,
@@ -125,6 +128,9 @@ fn fragment(b: Billboard) -> @location(0) vec4<f32> {
     let world = params.position.xyz + ray * z;
     let g = (to_buffer(frame, world) - frame.min.xyz) / frame.voxel.xyz - vec3<f32>(0.5);
     let source = tau * (b.lit * gamma(g) + b.ambient);
-    // Premultiplied: colour + (1 - alpha) x what is behind, alpha = 1 - T_k.
-    return vec4<f32>(source, 1.0 - exp(-tau));
+    // Premultiplied: colour + (1 - alpha) x what is behind, alpha = 1 - T_k; hazed, the
+    // colour seen through the air plus the air's light where the particle hides what is
+    // behind (summed over the particles, the CPU's haze exactly).
+    let alpha = 1.0 - exp(-tau);
+    return vec4<f32>(params.haze_transmittance.xyz * source + alpha * params.haze_inscatter.xyz, alpha);
 }

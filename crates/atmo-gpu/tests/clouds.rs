@@ -7,7 +7,7 @@ use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{render, Lighting};
+use atmo::clouds::render::{render, Haze, Lighting};
 use atmo::image::Frame;
 use atmo::view::{Camera, Fov};
 use atmo_gpu::clouds::GpuClouds;
@@ -86,6 +86,11 @@ fn the_drawn_cloud_matches_the_cpu_picture() {
             sun: Vec3::ONE,
             ambient: Vec3::new(0.03, 0.04, 0.06),
             phase,
+            // Air in front of the cloud: the GPU hazes it as the CPU does.
+            haze: Haze {
+                transmittance: Vec3::new(0.8, 0.85, 0.9),
+                inscatter: Vec3::new(0.01, 0.02, 0.04),
+            },
         };
         let cpu = render(&particles, &buffer, &camera, &light, back).unwrap();
         let out = clouds.render(&gpu, &camera, &light, back).unwrap().frame;
@@ -115,6 +120,7 @@ fn drawing_before_the_light_pass_and_oversized_buffers_are_refused() {
         sun: Vec3::ONE,
         ambient: Vec3::ZERO,
         phase: PhaseFunction::CloudMie,
+        haze: Haze::CLEAR,
     };
     let err = clouds.render(&gpu, &camera, &light, None).err().unwrap();
     assert!(err.to_string().contains("light pass"), "{err}");

@@ -5,7 +5,7 @@
 //! `cargo run --release -p atmo --example cloud -- cloud.png`
 
 use atmo::atmosphere::PhaseFunction;
-use atmo::clouds::{render, Cumulus, IntensityBuffer, Lighting, Splat};
+use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Splat};
 use atmo::sky::{Daylight, SkySettings};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
@@ -35,6 +35,7 @@ fn main() -> atmo::Result<()> {
         sun: daylight.sunlight(sun),
         ambient: daylight.skylight(sun),
         phase: PhaseFunction::CloudMie,
+        haze: Haze::CLEAR,
     };
     let eye = centre + Vec3::new(-1500.0, -300.0, 2500.0);
     let camera = Camera::look_at(eye, centre, Vec3::Y, Fov::Vertical(40.0), (960, 540))?;

@@ -266,7 +266,7 @@ fn particle_files_round_trip_and_bad_ones_name_the_line() {
 #[test]
 fn billboards_composite_as_clouds_five_and_six() {
     use atmo::atmosphere::PhaseFunction;
-    use atmo::clouds::render::{render, Lighting};
+    use atmo::clouds::render::{render, Haze, Lighting};
     use atmo::image::Frame;
     use atmo::view::{Camera, Lens};
     // Two particles on the camera's axis, the pixel at the image centre looking through
@@ -297,6 +297,7 @@ fn billboards_composite_as_clouds_five_and_six() {
         sun: Vec3::ZERO,
         ambient: Vec3::new(1.0, 0.5, 0.25),
         phase: PhaseFunction::CloudMie,
+        haze: Haze::CLEAR,
     };
     let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.5, Splat::Pieces).unwrap();
     let mut background = Frame::new(65, 65);

@@ -8,7 +8,7 @@ use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::{Cumulus, SplitMix64};
 use atmo::clouds::harris::light_per_particle;
-use atmo::clouds::render::{render, Lighting};
+use atmo::clouds::render::{render, Haze, Lighting};
 use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::clouds::transmittance;
 use atmo::view::{Camera, Fov, Sun};
@@ -100,6 +100,7 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
         sun: Vec3::ONE,
         ambient: Vec3::splat(0.04),
         phase: PhaseFunction::CloudMie,
+        haze: Haze::CLEAR,
     };
     let frame_ms = median(
         (0..runs.min(5))
@@ -202,6 +203,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         sun: glam::Vec3::ONE,
         ambient: glam::Vec3::splat(0.04),
         phase: PhaseFunction::CloudMie,
+        haze: Haze::CLEAR,
     };
     let mut cpu = Frame::new(1, 1);
     let cpu_ms = median(

@@ -6,6 +6,7 @@ use std::time::Instant;
 use anyhow::Result;
 use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::sky::{ReferenceSettings, ReferenceSky};
+use atmo::sky::aerial::quadratic_slices;
 use atmo::sky::{Order, SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
@@ -221,6 +222,7 @@ pub fn all_orders(quick: bool, json: bool) -> Result<()> {
         "multiple_mie": true, "paths_per_channel": paths,
         "threads": rayon::current_num_threads(),
     });
+    aerial(&model, quick, json)?;
     for (name, ms) in [("sky.map", map_ms), ("sky.map-cold", cold_ms)] {
         let line = json!({
             "bench": name, "params": params, "median_ms": ms, "baseline": "sky.path-traced",
@@ -238,6 +240,58 @@ pub fn all_orders(quick: bool, json: bool) -> Result<()> {
             ),
         );
     }
+    Ok(())
+}
+
+/// `sky.aerial`: the 32 x 32 x 32 froxels of a camera (60 deg, slices out to 100 km)
+/// for a moving sun from `model`'s marked rays, against the aerial perspective of each
+/// column's own ray (`SkyModel::aerial`) on a few columns, scaled to all of them.
+fn aerial(model: &SkyModel, quick: bool, json: bool) -> Result<()> {
+    let (size, runs) = (32u32, if quick { 10 } else { 40 });
+    let slices = quadratic_slices(size as usize, 100_000.0);
+    let rays = model.aerial_rays(512, &slices)?;
+    let camera = Camera::yaw_pitch(Vec3::ZERO, 0.0, 5.0, Fov::Vertical(60.0), (size, size))?;
+    let sun = |k: usize| Sun::from_degrees(30.0 + 1e-3 * k as f64, 20.0).expect("in range");
+    let froxels_ms = median(
+        (0..runs)
+            .map(|k| {
+                time_ms(|| {
+                    std::hint::black_box(rays.froxels(model, sun(k), &camera));
+                })
+            })
+            .collect(),
+    );
+    let froxels = rays.froxels(model, sun(0), &camera);
+    let colour = atmo::atmosphere::spectrum::SpectrumToRgb::new(&model.atmosphere().wavelengths_nm);
+    let basis = camera.pixel_basis();
+    let columns: Vec<(u32, u32)> = (0..16).map(|k| ((k * 7) % size, (k * 13) % size)).collect();
+    let start = Instant::now();
+    let mut worst = 0.0f32;
+    for &(x, y) in &columns {
+        let d = basis.direction(x, y).expect("a pinhole sees every pixel");
+        let lights = model.aerial_along(sun(0), d, &slices)?;
+        for (k, light) in lights.iter().enumerate() {
+            let want = Vec3::from(colour.rgb(&light.inscatter));
+            let got = froxels.inscatter[(k as u32 * size * size + y * size + x) as usize];
+            worst = worst.max((got - want).abs().max_element() / want.max_element().max(1e-12));
+        }
+    }
+    let per_column_ms = start.elapsed().as_secs_f64() * 1e3 / columns.len() as f64;
+    let baseline_ms = per_column_ms * (size * size) as f64;
+    emit(
+        json,
+        json!({
+            "bench": "sky.aerial", "params": {"width": size, "height": size, "depth": size,
+            "far_m": 100_000.0, "rows": 512, "order": model.settings().order},
+            "median_ms": froxels_ms, "baseline": "a ray per froxel column (SkyModel::aerial)",
+            "baseline_median_ms": baseline_ms, "ratio": baseline_ms / froxels_ms,
+            "error": {"max_relative": worst},
+        }),
+        format!(
+            "sky.aerial     {froxels_ms:>9.2} ms   a ray per column {baseline_ms:>8.0} ms   ratio {:>6.0}   max rel. error {worst:.4} (32^3 froxels)",
+            baseline_ms / froxels_ms
+        ),
+    );
     Ok(())
 }
 

@@ -10,7 +10,7 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::files;
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{render, Lighting};
+use atmo::clouds::render::{render, Haze, Lighting};
 use atmo::error::check_range;
 use atmo::files::check_folder;
 use atmo::image::{Display, Frame, ImageKind};
@@ -308,28 +308,30 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
     let sun_at =
         |azimuth_deg: f32| Sun::from_degrees(args.sun_elevation as f64, azimuth_deg as f64);
     // Sunlight and sky light at the cloud, and what is behind it.
-    let lighting = |sun: Sun| -> (Lighting, Option<Frame>) {
-        match &sky {
+    let lighting = |sun: Sun| -> atmo::Result<(Lighting, Option<Frame>)> {
+        Ok(match &sky {
             None => (
                 Lighting {
                     to_sun: sun.toward(),
                     sun: Vec3::ONE,
                     ambient: Vec3::new(0.03, 0.04, 0.06),
                     phase,
+                    haze: Haze::CLEAR,
                 },
                 None,
             ),
             Some(sky) => {
-                let (sunlight, ambient, background) = sky.at(sun, &camera);
+                let (sunlight, ambient, haze, background) = sky.at(sun, &camera)?;
                 let light = Lighting {
                     to_sun: sun.toward(),
                     sun: sunlight,
                     ambient,
                     phase,
+                    haze,
                 };
                 (light, Some(background))
             }
-        }
+        })
     };
     let sun = sun_at(args.sun_azimuth)?;
     let mut renderer = match args.device.open()? {
@@ -349,7 +351,7 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
     match args.animate {
         None => {
             let start = Instant::now();
-            let (light, background) = lighting(sun);
+            let (light, background) = lighting(sun)?;
             let frame = renderer.draw(&particles, &camera, &light, background.as_ref())?;
             let draw_ms = start.elapsed().as_secs_f64() * 1e3;
             frame.write(&args.output, display.exposure, display.tone)?;
@@ -392,7 +394,7 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
                         }
                     };
                     renderer.light(&particles, sun.toward(), args.forward, splat)?;
-                    let (light, background) = lighting(sun);
+                    let (light, background) = lighting(sun)?;
                     *frame = renderer.draw(&particles, &camera, &light, background.as_ref())?;
                     Ok(())
                 },
@@ -409,10 +411,13 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
 }
 
 /// The sky around a cloud (Earth atmosphere, default settings): its light at the
-/// cloud's mean height, and the sky behind it from the camera's height.
+/// cloud's mean height, and the sky behind it and the air in front of it from the
+/// camera's height.
 struct SkyAround {
     at_cloud: Daylight,
     at_camera: SkyModel,
+    /// The cloud's centre, m, world frame.
+    centre: Vec3,
 }
 
 impl SkyAround {
@@ -423,25 +428,41 @@ impl SkyAround {
             particles.iter().map(|p| p.position.y as f64).sum::<f64>() / particles.len() as f64;
         let top = atmosphere.top_radius_m - atmosphere.bottom_radius_m - 1.0;
         let altitude = |h: f64| h.clamp(0.0, top);
+        let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
         Ok(SkyAround {
             at_cloud: Daylight::new(&atmosphere, &settings, altitude(height))?,
             at_camera: SkyModel::new(&atmosphere, &settings, altitude(camera.position.y as f64))?,
+            centre,
+        })
+    }
+
+    /// The air between `camera` and the cloud's centre for `sun`: the aerial
+    /// perspective at that distance and direction (every order the model carries).
+    fn haze(&self, sun: Sun, camera: &Camera) -> atmo::Result<Haze> {
+        let to_cloud = self.centre - camera.position;
+        let distance = to_cloud.length() as f64;
+        let light = self.at_camera.aerial_along(sun, to_cloud, &[distance])?;
+        let (transmittance, inscatter) = light[0].rgb(self.at_camera.atmosphere());
+        Ok(Haze {
+            transmittance,
+            inscatter,
         })
     }
 
     /// For `sun`: the sun's irradiance at the cloud (RGB, through the atmosphere), the
-    /// zenith sky's radiance there (the cloud's ambient light), and the sky behind the
-    /// cloud as `camera` sees it.
-    fn at(&self, sun: Sun, camera: &Camera) -> (Vec3, Vec3, Frame) {
+    /// zenith sky's radiance there (the cloud's ambient light), the air in front of the
+    /// cloud, and the sky behind it as `camera` sees it.
+    fn at(&self, sun: Sun, camera: &Camera) -> atmo::Result<(Vec3, Vec3, Haze, Frame)> {
         let view = View {
             camera: camera.clone(),
             sun_disc: true,
         };
         let background = SkyPicture::new(&self.at_camera, sun).render(&view);
-        (
+        Ok((
             self.at_cloud.sunlight(sun),
             self.at_cloud.skylight(sun),
+            self.haze(sun, camera)?,
             background,
-        )
+        ))
     }
 }

@@ -17,4 +17,4 @@ pub mod render;
 pub use buffer::{IntensityBuffer, Splat};
 pub use generator::Cumulus;
 pub use particles::Particle;
-pub use render::{render, Lighting};
+pub use render::{render, Haze, Lighting};

@@ -34,6 +34,26 @@ pub struct Lighting {
     /// The droplets' phase function (clouds (6)'s `p`), e.g.
     /// [`PhaseFunction::CloudMie`].
     pub phase: PhaseFunction,
+    /// The air between the eye and the cloud.
+    pub haze: Haze,
+}
+
+/// The atmosphere between the eye and the cloud (its aerial perspective,
+/// [`crate::sky::aerial`]), one value for the whole cloud at its distance: the cloud's
+/// light reaches the eye times `transmittance`, and the air in front of it adds
+/// `inscatter` where the cloud hides what is behind (RGB).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Haze {
+    pub transmittance: Vec3,
+    pub inscatter: Vec3,
+}
+
+impl Haze {
+    /// No air between the eye and the cloud.
+    pub const CLEAR: Haze = Haze {
+        transmittance: Vec3::ONE,
+        inscatter: Vec3::ZERO,
+    };
 }
 
 /// Rows drawn together by one thread.
@@ -152,6 +172,11 @@ pub fn render(
                         through[i] *= (-tau).exp();
                     }
                 }
+            }
+            // The haze in front of the cloud, then what shows through it.
+            let haze = light.haze;
+            for (e, t) in pixels.iter_mut().zip(&through) {
+                *e = haze.transmittance * *e + (1.0 - *t) * haze.inscatter;
             }
             if let Some(background) = background {
                 let behind = &background.pixels[band * BAND * w..band * BAND * w + pixels.len()];

@@ -101,6 +101,27 @@ impl<'a> ReferenceSky<'a> {
         out
     }
 
+    /// Single scattering (no ground) between the viewpoint and the point at `distance`
+    /// m along the direction at `azimuth` from the sun and `elevation` (rad), and the
+    /// transmittance to it, per channel: the aerial perspective of order 1.
+    pub fn aerial_single(
+        &self,
+        azimuth: f64,
+        elevation: f64,
+        distance: f64,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let d = DVec3::new(
+            elevation.cos() * azimuth.cos(),
+            elevation.cos() * azimuth.sin(),
+            elevation.sin(),
+        );
+        let mut inscatter = vec![0.0; self.atmosphere.channels()];
+        let segments = self.settings.view_segments;
+        let (_, _, transmittance) =
+            self.single_along(self.viewpoint, d, segments, distance, &mut inscatter);
+        (transmittance, inscatter)
+    }
+
     /// Distance from `p` along `d` to the end of the atmosphere or the ground, and
     /// whether it is the ground.
     fn ray_end(&self, p: DVec3, d: DVec3) -> (f64, bool) {
@@ -151,19 +172,21 @@ impl<'a> ReferenceSky<'a> {
         }
     }
 
-    /// Marches from `p` along `d`: calls `visit(point, transmittance from p, weight)` at
-    /// every node, and returns the end point, whether it is the ground, and the
-    /// transmittance to it.
+    /// Marches from `p` along `d` up to `limit` m: calls `visit(point, transmittance
+    /// from p, weight)` at every node, and returns the end point, whether it is the
+    /// ground, and the transmittance to it.
     fn march(
         &self,
         p: DVec3,
         d: DVec3,
         segments: usize,
+        limit: f64,
         mut visit: impl FnMut(DVec3, &[f64], f64),
     ) -> (DVec3, bool, Vec<f64>) {
         let a = self.atmosphere;
         let n = a.channels();
-        let (length, ground) = self.ray_end(p, d);
+        let (end, ground) = self.ray_end(p, d);
+        let (length, ground) = (end.min(limit), ground && end <= limit);
         let h = length / segments as f64;
         let mut columns = [0.0; CONSTITUENTS];
         let mut transmittance = vec![0.0; n];
@@ -194,10 +217,35 @@ impl<'a> ReferenceSky<'a> {
     fn single_scattering(&self, p: DVec3, d: DVec3, segments: usize, out: &mut [f64]) {
         let a = self.atmosphere;
         let n = a.channels();
+        let (end, ground, t_end) = self.single_along(p, d, segments, f64::INFINITY, out);
+        if ground && a.ground_albedo > 0.0 {
+            let mu_s = end.normalize().dot(self.sun);
+            if mu_s > 0.0 {
+                let mut sun = [0.0; MAX_CHANNELS];
+                self.sunlight(end, &mut sun[..n]);
+                for k in 0..n {
+                    out[k] += t_end[k] * a.ground_albedo / std::f64::consts::PI * sun[k] * mu_s;
+                }
+            }
+        }
+    }
+
+    /// Single scattering in the air arriving at `p` from direction `d` within `limit`
+    /// m, added to `out`; returns what [`Self::march`] does.
+    fn single_along(
+        &self,
+        p: DVec3,
+        d: DVec3,
+        segments: usize,
+        limit: f64,
+        out: &mut [f64],
+    ) -> (DVec3, bool, Vec<f64>) {
+        let a = self.atmosphere;
+        let n = a.channels();
         let nu = d.dot(self.sun);
         let (p_r, p_m) = (a.rayleigh.phase.eval(nu), a.mie.phase.eval(nu));
         let mut sun = [0.0; MAX_CHANNELS];
-        let (end, ground, t_end) = self.march(p, d, segments, |q, tr, w| {
+        self.march(p, d, segments, limit, |q, tr, w| {
             self.sunlight(q, &mut sun[..n]);
             let rho = self.densities_at(q);
             for k in 0..n {
@@ -205,16 +253,7 @@ impl<'a> ReferenceSky<'a> {
                     + a.mie.scattering_per_m[k] * rho[1] * p_m;
                 out[k] += w * tr[k] * sun[k] * scattering;
             }
-        });
-        if ground && a.ground_albedo > 0.0 {
-            let mu_s = end.normalize().dot(self.sun);
-            if mu_s > 0.0 {
-                self.sunlight(end, &mut sun[..n]);
-                for k in 0..n {
-                    out[k] += t_end[k] * a.ground_albedo / std::f64::consts::PI * sun[k] * mu_s;
-                }
-            }
-        }
+        })
     }
 
     /// Second-order scattering arriving at `p` from `d`: at every node, Rayleigh (and,
@@ -225,21 +264,27 @@ impl<'a> ReferenceSky<'a> {
         let n = a.channels();
         let weight = 4.0 * std::f64::consts::PI / self.sphere.len() as f64;
         let mut incoming = vec![0.0; n];
-        self.march(p, d, self.settings.nested_segments, |q, tr, w| {
-            let rho = self.densities_at(q);
-            let mut source = [0.0; MAX_CHANNELS];
-            for omega in &self.sphere {
-                incoming.fill(0.0);
-                self.single_scattering(q, *omega, self.settings.nested_segments, &mut incoming);
-                let phase = a.rayleigh.phase.eval(omega.dot(d));
-                for k in 0..n {
-                    source[k] += weight * phase * incoming[k];
+        self.march(
+            p,
+            d,
+            self.settings.nested_segments,
+            f64::INFINITY,
+            |q, tr, w| {
+                let rho = self.densities_at(q);
+                let mut source = [0.0; MAX_CHANNELS];
+                for omega in &self.sphere {
+                    incoming.fill(0.0);
+                    self.single_scattering(q, *omega, self.settings.nested_segments, &mut incoming);
+                    let phase = a.rayleigh.phase.eval(omega.dot(d));
+                    for k in 0..n {
+                        source[k] += weight * phase * incoming[k];
+                    }
                 }
-            }
-            for k in 0..n {
-                out[k] += w * tr[k] * a.rayleigh.scattering_per_m[k] * rho[0] * source[k];
-            }
-        });
+                for k in 0..n {
+                    out[k] += w * tr[k] * a.rayleigh.scattering_per_m[k] * rho[0] * source[k];
+                }
+            },
+        );
     }
 }
 

@@ -28,6 +28,7 @@
 //! # Ok::<(), atmo::Error>(())
 //! ```
 
+pub mod aerial;
 pub mod daylight;
 pub mod envmap;
 pub mod frame;

@@ -61,6 +61,20 @@ pub fn unpack_add(lanes: &[Lane], out: &mut [f32]) {
 /// A sample's scattering weight below which its higher orders are not evaluated.
 const NEGLIGIBLE_WEIGHT: f32 = 1e-8;
 
+/// Marks closer than this to a crossing are put on it, m.
+const MARK_SNAP_M: f64 = 1e-3;
+
+/// One ray to build maps for: from shell `origin` with zenith cosine `mu`, intervals
+/// split at `max_interval_m`, marks at the distances `marks` (the ray then ends at the
+/// last one).
+#[derive(Clone, Copy)]
+struct RaySpec<'a> {
+    origin: usize,
+    mu: f64,
+    max_interval_m: f64,
+    marks: &'a [f64],
+}
+
 /// Gauss-Legendre segments (of 4 nodes) per interval between crossings.
 const INTERVAL_SEGMENTS: usize = 2;
 
@@ -94,6 +108,16 @@ pub struct ScatteringMaps {
     pub(crate) ground: Vec<f32>,
     /// Distance to the ground (m) of each ray, or a negative value.
     pub(crate) ground_distance: Vec<f64>,
+    /// Marks of each ray (aerial perspective: points at given distances where the
+    /// light gathered so far is read): `mark_start[i]..mark_start[i + 1]`.
+    pub(crate) mark_start: Vec<u32>,
+    /// Per mark: the sample it is at (a ray's last one for marks beyond its end).
+    pub(crate) mark_sample: Vec<u32>,
+    /// Per mark, `[2][lane]`: the part of its sample's Rayleigh and aerosol weights
+    /// that comes from the interval before it (the rest lies beyond the mark).
+    pub(crate) mark_left: Vec<Lane>,
+    /// Per mark, `[channel]`: transmittance from the ray's origin to it.
+    pub(crate) mark_transmittance: Vec<f32>,
 }
 
 /// Where the sun is, seen from a ray's origin, and the ray's angle to it.
@@ -137,10 +161,29 @@ impl ScatteringMaps {
         rays: &[(usize, f64)],
         max_interval_m: f64,
     ) -> Self {
+        Self::with_marks(atmosphere, shells, rays, max_interval_m, &[])
+    }
+
+    /// Maps as [`ScatteringMaps::new`] with, on every ray, a mark at each of the
+    /// distances `marks` (m, increasing): [`ScatteringMaps::radiance_at_marks`] reads
+    /// the light gathered between the origin and each.
+    pub fn with_marks(
+        atmosphere: &Atmosphere,
+        shells: &SamplingShells,
+        rays: &[(usize, f64)],
+        max_interval_m: f64,
+        marks: &[f64],
+    ) -> Self {
         let per_ray: Vec<ScatteringMaps> = rays
             .par_iter()
             .map_init(Vec::new, |crossings, &(origin, mu)| {
-                Self::ray_maps(atmosphere, shells, origin, mu, max_interval_m, crossings)
+                let ray = RaySpec {
+                    origin,
+                    mu,
+                    max_interval_m,
+                    marks,
+                };
+                Self::ray_maps(atmosphere, shells, ray, crossings)
             })
             .collect();
         let mut maps = ScatteringMaps::empty(atmosphere.channels());
@@ -164,6 +207,10 @@ impl ScatteringMaps {
             mie: Vec::new(),
             ground: Vec::new(),
             ground_distance: Vec::new(),
+            mark_start: vec![0],
+            mark_sample: Vec::new(),
+            mark_left: Vec::new(),
+            mark_transmittance: Vec::new(),
         }
     }
 
@@ -182,50 +229,109 @@ impl ScatteringMaps {
         self.mie.append(&mut other.mie);
         self.ground.append(&mut other.ground);
         self.ground_distance.append(&mut other.ground_distance);
+        let marks = self.mark_sample.len() as u32;
+        self.mark_start
+            .extend(other.mark_start[1..].iter().map(|m| m + marks));
+        self.mark_sample
+            .extend(other.mark_sample.iter().map(|s| s + offset));
+        self.mark_left.append(&mut other.mark_left);
+        self.mark_transmittance
+            .append(&mut other.mark_transmittance);
     }
 
-    /// The maps of one ray from shell `origin` with zenith cosine `mu0`.
+    /// The maps of one ray.
     fn ray_maps(
         atmosphere: &Atmosphere,
         shells: &SamplingShells,
-        origin: usize,
-        mu0: f64,
-        max_interval_m: f64,
+        ray: RaySpec,
         crossings: &mut Vec<(u16, f64)>,
     ) -> ScatteringMaps {
+        let (origin, mu0) = (ray.origin, ray.mu);
         let n = atmosphere.channels();
-        let on_ground = shells.crossings(origin, mu0, crossings);
+        let mut on_ground = shells.crossings(origin, mu0, crossings);
+        // A marked ray ends at its last mark: nothing beyond it is read.
+        let end = ray.marks.last().copied().unwrap_or(f64::INFINITY);
         let radii = shells.radii();
         let r0 = radii[origin];
         let mut maps = ScatteringMaps::empty(n);
         maps.origin_r.push(r0);
         maps.ground = vec![0.0; n];
         maps.ground_distance.push(-1.0);
-        let mut push = |shell: u16, between: f32, r: f64, t: f64| {
+        let mut push = |shell: u16, between: f32, r: f64, t: f64| -> usize {
             maps.shell.push(shell);
             maps.between.push(between);
             maps.radius.push(r);
             maps.distance.push(t);
             maps.mu.push(((r0 * mu0 + t) / r).clamp(-1.0, 1.0));
+            maps.shell.len() - 1
         };
+        // The sample each mark lands on.
+        let mut mark_samples = vec![usize::MAX; ray.marks.len()];
+        let mut inside = Vec::new();
         for (k, &(j, t)) in crossings.iter().enumerate() {
             if k > 0 {
-                // Sub-samples of a long interval, between the shells that bracket them.
+                // Sub-samples of a long interval and marks inside it, between the shells
+                // that bracket them.
                 let t_prev = crossings[k - 1].1;
-                let parts = ((t - t_prev) / max_interval_m).ceil() as usize;
-                for q in 1..parts {
-                    let tq = t_prev + (t - t_prev) * q as f64 / parts as f64;
+                let parts = ((t - t_prev) / ray.max_interval_m).ceil() as usize;
+                inside.clear();
+                inside.extend(
+                    (1..parts).map(|q| (t_prev + (t - t_prev) * q as f64 / parts as f64, None)),
+                );
+                for (m, &d) in ray.marks.iter().enumerate() {
+                    if d > t_prev + MARK_SNAP_M && d < t - MARK_SNAP_M {
+                        inside.push((d, Some(m)));
+                    }
+                }
+                inside.sort_by(|a, b| a.0.total_cmp(&b.0));
+                for &(tq, mark) in &inside {
+                    if tq > end {
+                        break;
+                    }
                     let r = radius_at(r0, mu0, tq).clamp(radii[0], radii[radii.len() - 1]);
                     let below = (radii.partition_point(|&x| x <= r) - 1).min(radii.len() - 2);
                     let f = (r - radii[below]) / (radii[below + 1] - radii[below]);
-                    push(below as u16, f.max(1e-6) as f32, r, tq);
+                    let at = push(below as u16, f.max(1e-6) as f32, r, tq);
+                    if let Some(m) = mark {
+                        mark_samples[m] = at;
+                    }
                 }
             }
+            if t > end + MARK_SNAP_M {
+                on_ground = false;
+                break;
+            }
             push(j, 0.0, radii[j as usize], t);
+        }
+        // Marks on a crossing, before the origin or beyond the ray's end: the sample
+        // nearest them.
+        let last = maps.distance.len() - 1;
+        for (m, &d) in ray.marks.iter().enumerate() {
+            if mark_samples[m] == usize::MAX {
+                mark_samples[m] = if d >= maps.distance[last] {
+                    last
+                } else {
+                    (0..=last)
+                        .min_by(|&a, &b| {
+                            (maps.distance[a] - d)
+                                .abs()
+                                .total_cmp(&(maps.distance[b] - d).abs())
+                        })
+                        .unwrap_or(0)
+                };
+            }
         }
         let m = maps.shell.len();
         maps.ray_start.push(m as u32);
         let (mut rayleigh, mut mie) = (vec![0.0f32; m * n], vec![0.0f32; m * n]);
+        // With marks: the part of each weight from the interval before its sample, and
+        // the transmittance from the origin to each sample.
+        let marked = !ray.marks.is_empty();
+        let (mut left, mut transmittance) = if marked {
+            (vec![0.0f32; 2 * m * n], vec![1.0f32; m * n])
+        } else {
+            (Vec::new(), Vec::new())
+        };
         // Quadrature weights folded with the density and attenuation maps: over each
         // interval between crossings the light (light map x phase map) is taken as
         // linear, and density x attenuation is integrated exactly, which also covers
@@ -250,11 +356,21 @@ impl ScatteringMaps {
                     rayleigh[i * n + c] += (u * r) as f32;
                     mie[(i - 1) * n + c] += ((1.0 - u) * m) as f32;
                     mie[i * n + c] += (u * m) as f32;
+                    if marked {
+                        left[(2 * i) * n + c] += (u * r) as f32;
+                        left[(2 * i + 1) * n + c] += (u * m) as f32;
+                    }
                 }
             });
             let step = column_densities(atmosphere, r0, mu0, ta, dt, INTERVAL_SEGMENTS);
             for k in 0..CONSTITUENTS {
                 columns[k] += step[k];
+            }
+            if marked {
+                for c in 0..n {
+                    transmittance[i * n + c] =
+                        (-atmosphere.optical_depth(&columns, c)).exp() as f32;
+                }
             }
         }
         let l = lanes(n);
@@ -263,6 +379,17 @@ impl ScatteringMaps {
             for (values, out) in flat.chunks(n).zip(packed.chunks_mut(l)) {
                 pack(values, out);
             }
+        }
+        maps.mark_start.push(mark_samples.len() as u32);
+        for &at in &mark_samples {
+            maps.mark_sample.push(at as u32);
+            let mut lanes_of = [Lane::ZERO; 2 * MAX_LANES];
+            for (k, out) in lanes_of.chunks_mut(l).take(2).enumerate() {
+                pack(&left[(2 * at + k) * n..(2 * at + k + 1) * n], out);
+            }
+            maps.mark_left.extend_from_slice(&lanes_of[..2 * l]);
+            maps.mark_transmittance
+                .extend_from_slice(&transmittance[at * n..(at + 1) * n]);
         }
         if on_ground {
             maps.ground_distance[0] = maps.distance[m - 1];
@@ -280,7 +407,8 @@ impl ScatteringMaps {
     }
 
     /// Radiance per channel arriving at ray `ray`'s origin from along the ray, of the
-    /// scattering orders `orders`, sky (3) summed over the crossings; added to `out`.
+    /// scattering orders `orders`, sky (3) summed over the crossings, and the ground's
+    /// reflected light at its end; added to `out`.
     pub fn radiance(
         &self,
         ray: usize,
@@ -289,30 +417,100 @@ impl ScatteringMaps {
         orders: Orders,
         out: &mut [f32],
     ) {
-        let n = self.channels;
-        let l = lanes(n);
+        let l = lanes(self.channels);
+        let mut total = [Lane::ZERO; MAX_LANES];
+        let total = &mut total[..l];
+        self.sources_along(ray, sun, sources, orders, |s, source_r, source_m| {
+            self.add_weighted(s, source_r, source_m, total);
+        });
+        self.ground_light(ray, sun, sources, orders, total);
+        unpack_add(total, out);
+    }
+
+    /// The aerial perspective of ray `ray` at each of its marks: the radiance scattered
+    /// toward the origin from between it and the mark (`inscatter`, `[mark][channel]`),
+    /// and the transmittance from the origin to the mark (`transmittance`, the same
+    /// layout); both overwritten. A mark beyond the ray's end (the ground or space)
+    /// reads the whole ray without the ground's light.
+    pub fn radiance_at_marks(
+        &self,
+        ray: usize,
+        sun: SunGeometry,
+        sources: &Sources,
+        orders: Orders,
+        inscatter: &mut [f32],
+        transmittance: &mut [f32],
+    ) {
+        let (n, l) = (self.channels, lanes(self.channels));
+        let marks = self.mark_start[ray] as usize..self.mark_start[ray + 1] as usize;
+        inscatter.fill(0.0);
+        let mut total = [Lane::ZERO; MAX_LANES];
+        let total = &mut total[..l];
+        let mut next = marks.start;
+        self.sources_along(ray, sun, sources, orders, |s, source_r, source_m| {
+            // Marks at this sample read the light so far plus its interval before it.
+            while next < marks.end && self.mark_sample[next] as usize == s {
+                let left = &self.mark_left[2 * next * l..2 * (next + 1) * l];
+                let mut at = [Lane::ZERO; MAX_LANES];
+                for (k, a) in at[..l].iter_mut().enumerate() {
+                    *a = total[k] + left[k] * source_r[k] + left[l + k] * source_m[k];
+                }
+                let k = next - marks.start;
+                unpack_add(&at[..l], &mut inscatter[k * n..(k + 1) * n]);
+                next += 1;
+            }
+            self.add_weighted(s, source_r, source_m, total);
+        });
+        transmittance.copy_from_slice(&self.mark_transmittance[marks.start * n..marks.end * n]);
+    }
+
+    /// Adds sample `s`'s weights times the light its species scatter there to `total`.
+    #[inline]
+    fn add_weighted(&self, s: usize, source_r: &[Lane], source_m: &[Lane], total: &mut [Lane]) {
+        let l = total.len();
+        let (w_r, w_m) = (
+            &self.rayleigh[s * l..(s + 1) * l],
+            &self.mie[s * l..(s + 1) * l],
+        );
+        for ((t, (w_r, w_m)), (r, m)) in total
+            .iter_mut()
+            .zip(w_r.iter().zip(w_m))
+            .zip(source_r.iter().zip(source_m))
+        {
+            *t += *w_r * *r + *w_m * *m;
+        }
+    }
+
+    /// Calls `visit(sample, rayleigh, aerosols)` for each sample of ray `ray` in order
+    /// with the light each species scatters toward the origin there per unit weight
+    /// (packed): sunlight x phase (the light and phase maps, sky (6)-(8)) for order 1,
+    /// and the scattered light of the orders below scattered again, sky (10)-(11).
+    fn sources_along(
+        &self,
+        ray: usize,
+        sun: SunGeometry,
+        sources: &Sources,
+        orders: Orders,
+        mut visit: impl FnMut(usize, &[Lane], &[Lane]),
+    ) {
+        let l = lanes(self.channels);
         let atmosphere = sources.atmosphere;
-        let radii = sources.shells.radii();
         let r0_mu_s = self.origin_r[ray] * sun.mu_s;
         let nu = sun.nu;
         // The phase maps, sky (7)-(8): one value per ray, the sun being at infinity.
         let phase_r = atmosphere.rayleigh.phase.eval(nu) as f32;
         let phase_m = atmosphere.mie.phase.eval(nu) as f32;
-        let mut total = [Lane::ZERO; MAX_LANES];
-        let total = &mut total[..l];
-        let mut light = [Lane::ZERO; MAX_LANES];
-        let light = &mut light[..l];
-        let mut upper = [Lane::ZERO; MAX_LANES];
-        let upper = &mut upper[..l];
+        let mut scratch = [[Lane::ZERO; MAX_LANES]; 4];
+        let [light, upper, source_r, source_m] = &mut scratch;
+        let (light, upper) = (&mut light[..l], &mut upper[..l]);
+        let (source_r, source_m) = (&mut source_r[..l], &mut source_m[..l]);
         let higher = sources.higher.filter(|_| orders.multiple);
         let range = self.ray_start[ray] as usize..self.ray_start[ray + 1] as usize;
         for s in range {
             let (j, between, r) = (self.shell[s] as usize, self.between[s], self.radius[s]);
             let mu_s = ((r0_mu_s + self.distance[s] * nu) / r).clamp(-1.0, 1.0);
-            let (ray_r, ray_m) = (
-                &self.rayleigh[s * l..(s + 1) * l],
-                &self.mie[s * l..(s + 1) * l],
-            );
+            source_r.fill(Lane::ZERO);
+            source_m.fill(Lane::ZERO);
             if orders.single {
                 // The light map, sky (6): sunlight reaching the sample.
                 if between == 0.0 {
@@ -320,66 +518,91 @@ impl ScatteringMaps {
                 } else {
                     sources.sunlight.sample_at(r, mu_s, light);
                 }
-                for ((t, li), (r, m)) in total.iter_mut().zip(&*light).zip(ray_r.iter().zip(ray_m))
-                {
-                    *t += *li * (*r * phase_r + *m * phase_m);
-                }
-            }
-            let Some(map) = higher else {
-                continue;
-            };
-            // Scattered light arriving from every direction, scattered again toward the
-            // ray, sky (10)-(11), interpolated in radius between two shells.
-            let d = local_direction(self.mu[s], mu_s, nu);
-            let species = [
-                (&atmosphere.rayleigh.phase, ray_r),
-                (&atmosphere.mie.phase, ray_m),
-            ];
-            for (k, (phase, weights)) in species.into_iter().enumerate() {
-                // Above about 16 km the aerosols' weight is below 1e-8 (a hundred
-                // thousandth of the molecules'): skipping it changes nothing visible and
-                // halves the cost of the aerosols' higher orders.
-                if !map.scatters[k] || weights.iter().all(|w| w.max_element() < NEGLIGIBLE_WEIGHT) {
-                    continue;
-                }
-                map.inscatter(k, phase, j, mu_s, d, light);
-                if between > 0.0 {
-                    map.inscatter(k, phase, j + 1, mu_s, d, upper);
-                    for (li, u) in light.iter_mut().zip(&*upper) {
-                        *li += (*u - *li) * between;
-                    }
-                }
-                for ((t, w), li) in total.iter_mut().zip(weights).zip(&*light) {
-                    *t += *w * *li;
-                }
-            }
-        }
-        // A Lambertian ground at the end of the ray reflects the sunlight (order 1) and
-        // the scattered light coming down on it (the higher orders).
-        let t_ground = self.ground_distance[ray];
-        if t_ground >= 0.0 && atmosphere.ground_albedo > 0.0 {
-            let mu_s = ((r0_mu_s + t_ground * nu) / radii[0]).clamp(-1.0, 1.0);
-            let mut irradiance = [Lane::ZERO; MAX_LANES];
-            let irradiance = &mut irradiance[..l];
-            if orders.single && mu_s > 0.0 {
-                sources.sunlight.sample(0, mu_s, light);
-                for (e, li) in irradiance.iter_mut().zip(&*light) {
-                    *e += *li * mu_s as f32;
+                for ((r, m), li) in source_r.iter_mut().zip(source_m.iter_mut()).zip(&*light) {
+                    *r = *li * phase_r;
+                    *m = *li * phase_m;
                 }
             }
             if let Some(map) = higher {
-                map.ground_irradiance(mu_s, light);
-                for (e, li) in irradiance.iter_mut().zip(&*light) {
-                    *e += *li;
+                // Scattered light arriving from every direction, scattered again toward
+                // the ray, interpolated in radius between two shells.
+                let d = local_direction(self.mu[s], mu_s, nu);
+                let species = [
+                    (
+                        &atmosphere.rayleigh.phase,
+                        &self.rayleigh[s * l..(s + 1) * l],
+                        &mut *source_r,
+                    ),
+                    (
+                        &atmosphere.mie.phase,
+                        &self.mie[s * l..(s + 1) * l],
+                        &mut *source_m,
+                    ),
+                ];
+                for (k, (phase, weights, source)) in species.into_iter().enumerate() {
+                    // Above about 16 km the aerosols' weight is below 1e-8 (a hundred
+                    // thousandth of the molecules'): skipping it changes nothing visible
+                    // and halves the cost of the aerosols' higher orders.
+                    if !map.scatters[k]
+                        || weights.iter().all(|w| w.max_element() < NEGLIGIBLE_WEIGHT)
+                    {
+                        continue;
+                    }
+                    map.inscatter(k, phase, j, mu_s, d, light);
+                    if between > 0.0 {
+                        map.inscatter(k, phase, j + 1, mu_s, d, upper);
+                        for (li, u) in light.iter_mut().zip(&*upper) {
+                            *li += (*u - *li) * between;
+                        }
+                    }
+                    for (o, li) in source.iter_mut().zip(&*light) {
+                        *o += *li;
+                    }
                 }
             }
-            let mut g = [Lane::ZERO; MAX_LANES];
-            pack(&self.ground[ray * n..(ray + 1) * n], &mut g[..l]);
-            for ((t, e), g) in total.iter_mut().zip(&*irradiance).zip(&g) {
-                *t += *e * *g;
+            visit(s, source_r, source_m);
+        }
+    }
+
+    /// Adds to `total` the light a Lambertian ground at the end of ray `ray` reflects
+    /// toward its origin: the sunlight (order 1) and the scattered light coming down on
+    /// it (the higher orders), times the attenuation to it.
+    fn ground_light(
+        &self,
+        ray: usize,
+        sun: SunGeometry,
+        sources: &Sources,
+        orders: Orders,
+        total: &mut [Lane],
+    ) {
+        let (n, l) = (self.channels, lanes(self.channels));
+        let t_ground = self.ground_distance[ray];
+        if t_ground < 0.0 || sources.atmosphere.ground_albedo <= 0.0 {
+            return;
+        }
+        let r0_mu_s = self.origin_r[ray] * sun.mu_s;
+        let mu_s = ((r0_mu_s + t_ground * sun.nu) / sources.shells.radii()[0]).clamp(-1.0, 1.0);
+        let mut light = [Lane::ZERO; MAX_LANES];
+        let light = &mut light[..l];
+        let mut irradiance = [Lane::ZERO; MAX_LANES];
+        let irradiance = &mut irradiance[..l];
+        if orders.single && mu_s > 0.0 {
+            sources.sunlight.sample(0, mu_s, light);
+            for (e, li) in irradiance.iter_mut().zip(&*light) {
+                *e += *li * mu_s as f32;
             }
         }
-        unpack_add(total, out);
+        if let Some(map) = sources.higher.filter(|_| orders.multiple) {
+            map.ground_irradiance(mu_s, light);
+            for (e, li) in irradiance.iter_mut().zip(&*light) {
+                *e += *li;
+            }
+        }
+        let mut g = [Lane::ZERO; MAX_LANES];
+        pack(&self.ground[ray * n..(ray + 1) * n], &mut g[..l]);
+        for ((t, e), g) in total.iter_mut().zip(&*irradiance).zip(&g) {
+            *t += *e * *g;
+        }
     }
 }
 

@@ -456,7 +456,7 @@ impl SkyModel {
         )
     }
 
-    fn all_orders(&self) -> Orders {
+    pub(crate) fn all_orders(&self) -> Orders {
         Orders {
             single: true,
             multiple: true,
@@ -489,6 +489,20 @@ impl SkyModel {
             channels: n,
             radiance,
         }
+    }
+
+    /// Maps of rays from the viewpoint with zenith cosines `mus`, each marked at the
+    /// distances `marks` (m, increasing; for the aerial perspective).
+    pub(crate) fn marked_rays(&self, mus: &[f64], marks: &[f64]) -> ScatteringMaps {
+        let rays: Vec<(usize, f64)> = mus.iter().map(|&mu| (self.viewpoint, mu)).collect();
+        let light = &self.light;
+        ScatteringMaps::with_marks(
+            &light.atmosphere,
+            &light.shells,
+            &rays,
+            light.settings.max_interval_m,
+            marks,
+        )
     }
 
     /// Radiance per wavelength along arbitrary directions, given as (azimuth from the
@@ -525,7 +539,7 @@ impl SkyModel {
             .collect()
     }
 
-    fn sources(&self) -> Sources<'_> {
+    pub(crate) fn sources(&self) -> Sources<'_> {
         Sources {
             atmosphere: &self.light.atmosphere,
             shells: &self.light.shells,
