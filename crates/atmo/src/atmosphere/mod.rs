@@ -564,8 +564,8 @@ mod tests {
         let earth = include_str!("../../presets/earth.toml");
         let with = |v: &str| {
             let text = earth.replace("scattering_per_m = 3.996e-6\n", "").replace(
-                "ground_albedo = 0.0",
-                &format!("ground_albedo = 0.0\nvisibility_km = {v}"),
+                "ground_albedo = 0.1",
+                &format!("ground_albedo = 0.1\nvisibility_km = {v}"),
             );
             Atmosphere::from_toml_str(&text, "visible")
         };
@@ -592,8 +592,8 @@ mod tests {
         }
         // Both ways of giving the aerosols at once is refused; so is neither.
         let both = earth.replace(
-            "ground_albedo = 0.0",
-            "ground_albedo = 0.0\nvisibility_km = 20",
+            "ground_albedo = 0.1",
+            "ground_albedo = 0.1\nvisibility_km = 20",
         );
         let e = Atmosphere::from_toml_str(&both, "both")
             .unwrap_err()
