@@ -28,6 +28,8 @@ fn every_method_gives_the_same_picture_on_the_gpu_and_the_cpu() {
         "--shells",
         "16",
     ];
+    let mut envmap_args = shell_args.to_vec();
+    envmap_args.extend(["--envmap", "equirect", "--envmap-size", "16"]);
     let shafts_args = ["shafts", &fig6, "--planes", "8", "--supersampling", "1"];
     let clouds_args = [
         "clouds",
@@ -41,6 +43,7 @@ fn every_method_gives_the_same_picture_on_the_gpu_and_the_cpu() {
     for (name, args) in [
         ("sky-table", &table_args[..]),
         ("sky-shells", &shell_args[..]),
+        ("sky-envmap", &envmap_args[..]),
         ("shafts", &shafts_args[..]),
         ("clouds", &clouds_args[..]),
     ] {

@@ -80,7 +80,8 @@ pub struct SkyArgs {
     /// radiance in an .exr (a .png is a tone-mapped preview): `equirect`, 2N x N (azimuth from north clockwise left to right,
     /// zenith on top), or `cubemap`, six N x N faces FILE_px.exr, _nx, _py, _ny, _pz,
     /// _nz (OpenGL's order and orientation, world x east, y up, z south). Drawn on the
-    /// CPU from the model's or the table's maps; the sun's disc unless --no-sun-disc.
+    /// CPU from the table's maps or the shell method's (on the GPU with --backend
+    /// gpu); the sun's disc unless --no-sun-disc.
     #[arg(long, value_enum, conflicts_with_all = ["probe", "animate"])]
     envmap: Option<EnvmapArg>,
     /// N of --envmap: rows of the equirectangular map, or a cube face's side.
@@ -251,7 +252,16 @@ fn environment(args: &SkyArgs, picture: &atmo_view::sky::SkyParams, sun: Sun) ->
             let settings = args.method.settings();
             settings.validate(&atmosphere)?;
             let model = SkyModel::new(&atmosphere, &settings, picture.altitude_m)?;
-            (SkyPicture::new(&model, sun), atmosphere)
+            let sky = match args.device.open()? {
+                // The maps from the GPU's shell pass; the directions drawn on the CPU.
+                Some(gpu) => {
+                    let on_gpu = GpuSkyModel::new(&gpu, &model).map_err(gpu_error)?;
+                    let [sky, ground] = on_gpu.maps(&gpu, sun.elevation()).map_err(gpu_error)?;
+                    SkyPicture::from_model_maps(&model, sun, sky, ground)
+                }
+                None => SkyPicture::new(&model, sun),
+            };
+            (sky, atmosphere)
         }
     };
     let sun_disc = !args.picture.no_sun_disc;

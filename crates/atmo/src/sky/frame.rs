@@ -139,6 +139,31 @@ pub struct SkyPicture {
 impl SkyPicture {
     /// Computes the maps of `model` for `sun`.
     pub fn new(model: &SkyModel, sun: Sun) -> Self {
+        let colour = SpectrumToRgb::new(&model.atmosphere().wavelengths_nm);
+        let sky = model.skylight_map(sun.elevation());
+        let ground = model.ground_map(sun.elevation());
+        Self::of_model_maps(
+            model,
+            sun,
+            RgbGrid::of_map(&sky, &colour),
+            RgbGrid::of_map(&ground, &colour),
+        )
+    }
+
+    /// A picture of `model`'s sky for `sun` from its skylight and ground maps computed
+    /// elsewhere (a GPU's shell pass), as linear sRGB `[elevation][azimuth]` on the
+    /// model's grids.
+    pub fn from_model_maps(model: &SkyModel, sun: Sun, sky: Vec<Vec3>, ground: Vec<Vec3>) -> Self {
+        let (sky_grid, ground_grid) = model.grids();
+        Self::of_model_maps(
+            model,
+            sun,
+            RgbGrid::new(sky_grid, sky),
+            RgbGrid::new(ground_grid, ground),
+        )
+    }
+
+    fn of_model_maps(model: &SkyModel, sun: Sun, sky: RgbGrid, ground: RgbGrid) -> Self {
         let atmosphere = model.atmosphere();
         let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
         let mut sun_spectrum = vec![0.0; atmosphere.channels()];
@@ -146,8 +171,8 @@ impl SkyPicture {
         Self::with_maps(
             atmosphere,
             sun,
-            RgbGrid::of_map(&model.skylight_map(sun.elevation()), &colour),
-            Some(RgbGrid::of_map(&model.ground_map(sun.elevation()), &colour)),
+            sky,
+            Some(ground),
             -horizon_dip(atmosphere.bottom_radius_m, model.altitude_m()),
             colour.rgb(&sun_spectrum),
         )

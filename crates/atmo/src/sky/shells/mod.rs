@@ -402,6 +402,11 @@ impl SkyModel {
         &self.light.settings
     }
 
+    /// The direction grids of the skylight map and of the ground map.
+    pub fn grids(&self) -> (&DirectionGrid, &DirectionGrid) {
+        (&self.sky_grid, &self.ground_grid)
+    }
+
     /// The light the model reads, shared with other altitudes' models.
     pub fn light(&self) -> &Arc<SkyLight> {
         &self.light
