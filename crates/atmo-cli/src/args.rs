@@ -162,6 +162,10 @@ pub struct AtmosphereArgs {
     /// Switch on the atmosphere's ozone layer.
     #[arg(long)]
     pub ozone: bool,
+    /// The ground's Lambertian albedo, 0 (black) to 1, instead of the atmosphere's
+    /// (`earth`: 0.1); it lights the ground and every scattering order above the first.
+    #[arg(long, value_name = "ALBEDO")]
+    pub ground_albedo: Option<f64>,
 }
 
 /// The shell method's settings (sky 3).
@@ -229,15 +233,29 @@ impl AtmosphereArgs {
         if self.ozone {
             out.push_str(" --ozone");
         }
+        if let Some(albedo) = self.ground_albedo {
+            out.push_str(&format!(" --ground-albedo {albedo}"));
+        }
         out
     }
 
-    /// The atmosphere from `--atmosphere` or `--preset`, with `--ozone` applied.
+    /// The atmosphere from `--atmosphere` or `--preset`, with `--ozone` and
+    /// `--ground-albedo` applied.
     pub fn load(&self) -> atmo::Result<Atmosphere> {
-        let atmosphere = match &self.atmosphere {
+        let mut atmosphere = match &self.atmosphere {
             Some(path) => Atmosphere::from_toml_file(path)?,
             None => Atmosphere::preset(&self.preset)?,
         };
+        if let Some(albedo) = self.ground_albedo {
+            if !(0.0..=1.0).contains(&albedo) {
+                return Err(atmo::Error::out_of_range(
+                    "--ground-albedo",
+                    albedo,
+                    "[0, 1]",
+                ));
+            }
+            atmosphere.ground_albedo = albedo;
+        }
         if self.ozone {
             atmosphere.with_ozone(true)
         } else {

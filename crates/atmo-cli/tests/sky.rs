@@ -123,6 +123,11 @@ fn bad_input_exits_2_with_a_message_and_no_file() {
     );
     refused("envmap-kind", &["--envmap", "sphere"], "envmap");
     refused(
+        "albedo",
+        &["--ground-albedo", "1.5"],
+        "--ground-albedo = 1.5 is out of range: allowed [0, 1]",
+    );
+    refused(
         "envmap-size",
         &["--envmap", "equirect", "--envmap-size", "2"],
         "envmap size",

@@ -61,7 +61,7 @@ pub struct SkyArgs {
     /// Draw from a skylight table (`atmo precompute sky`) instead of computing the sky:
     /// any sun elevation and altitude inside the table's ranges, in well under a millisecond.
     #[arg(long, value_name = "FILE.atmo-sky", conflicts_with_all = [
-        "probe", "atmosphere", "ozone", "shells", "directions", "scattering_directions",
+        "probe", "atmosphere", "ozone", "ground_albedo", "shells", "directions", "scattering_directions",
         "multiple_mie", "order", "max_interval",
     ])]
     table: Option<PathBuf>,

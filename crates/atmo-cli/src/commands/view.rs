@@ -35,7 +35,7 @@ pub struct ViewSkyArgs {
     /// Draw from a skylight table (`atmo precompute sky`): any sun and altitude in its
     /// ranges, each frame in well under a millisecond.
     #[arg(long, value_name = "FILE.atmo-sky", conflicts_with_all = [
-        "atmosphere", "ozone", "shells", "directions", "scattering_directions",
+        "atmosphere", "ozone", "ground_albedo", "shells", "directions", "scattering_directions",
         "multiple_mie", "order",
     ])]
     table: Option<PathBuf>,
