@@ -193,6 +193,65 @@ fn ground_light(mu_s: f32, l: u32) -> vec4<f32> {
     return e0 + (data[at + params.lanes] - e0) * bin.y;
 }
 
+// The light each species scatters toward a ray's origin per unit weight at a sample
+// (lane l): sunlight x phase for order 1, and the higher orders' light scattered again
+// (ScatteringMaps::sources_along).
+struct Sources {
+    r: vec4<f32>,
+    m: vec4<f32>,
+}
+
+// A sample of a ray: its shell, fraction between it and the next, altitude (m), the
+// sun's zenith cosine there, and the ray's local direction (higher orders only).
+struct Sample {
+    shell: u32,
+    between: f32,
+    altitude: f32,
+    mu_s: f32,
+    d: vec3<f32>,
+}
+
+// The sample of records `a` (shell bits, between, altitude, distance) and zenith cosine
+// `mu`, on a ray with origin radius x sun zenith cosine `r0_mu_s` at cosine `nu` to the
+// sun.
+fn sample_at(a: vec4<f32>, mu: f32, r0_mu_s: f32, nu: f32) -> Sample {
+    let mu_s = clamp((r0_mu_s + a.w * nu) / (params.bottom + a.z), -1.0, 1.0);
+    var d = vec3<f32>(0.0);
+    if params.multiple == 1u {
+        d = local_direction(mu, mu_s, nu);
+    }
+    return Sample(bitcast<u32>(a.x), a.y, a.z, mu_s, d);
+}
+
+fn sources_at(at: Sample, phase_r: f32, phase_m: f32, l: u32) -> Sources {
+    let shell = at.shell;
+    let between = at.between;
+    let mu_s = at.mu_s;
+    let d = at.d;
+    var light: vec4<f32>;
+    if between == 0.0 {
+        light = light_map(shell, mu_s, l);
+    } else {
+        light = sunlight(at.altitude, mu_s, l);
+    }
+    var out = Sources(light * phase_r, light * phase_m);
+    if params.multiple == 1u {
+        var scattered = inscatter(shell, mu_s, d, l);
+        if between > 0.0 {
+            scattered += (inscatter(shell + 1u, mu_s, d, l) - scattered) * between;
+        }
+        out.r += scattered;
+        if params.aerosols == 1u {
+            var aerosol = aerosol_inscatter(shell, mu_s, d, l);
+            if between > 0.0 {
+                aerosol += (aerosol_inscatter(shell + 1u, mu_s, d, l) - aerosol) * between;
+            }
+            out.m += aerosol;
+        }
+    }
+    return out;
+}
+
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let azimuths = u32(params.grid.z);
@@ -212,40 +271,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let n = params.lanes;
     var total: array<vec4<f32>, MAX_LANES>;
     for (var s = bitcast<u32>(ray.x); s < bitcast<u32>(ray.y); s++) {
-        let a = data[params.samples_at + 2u * s];
-        let mu = data[params.samples_at + 2u * s + 1u].x;
-        let shell = bitcast<u32>(a.x);
-        let between = a.y;
-        let r = params.bottom + a.z;
-        let mu_s = clamp((r0_mu_s + a.w * nu) / r, -1.0, 1.0);
-        var d = vec3<f32>(0.0);
-        if params.multiple == 1u {
-            d = local_direction(mu, mu_s, nu);
-        }
+        let at = sample_at(data[params.samples_at + 2u * s], data[params.samples_at + 2u * s + 1u].x, r0_mu_s, nu);
         for (var l = 0u; l < n; l++) {
-            let ray_r = data[params.rayleigh_at + s * n + l];
-            let ray_m = data[params.mie_at + s * n + l];
-            var light: vec4<f32>;
-            if between == 0.0 {
-                light = light_map(shell, mu_s, l);
-            } else {
-                light = sunlight(a.z, mu_s, l);
-            }
-            total[l] += light * (ray_r * phase_r + ray_m * phase_m);
-            if params.multiple == 1u {
-                var scattered = inscatter(shell, mu_s, d, l);
-                if between > 0.0 {
-                    scattered += (inscatter(shell + 1u, mu_s, d, l) - scattered) * between;
-                }
-                total[l] += ray_r * scattered;
-                if params.aerosols == 1u {
-                    var aerosol = aerosol_inscatter(shell, mu_s, d, l);
-                    if between > 0.0 {
-                        aerosol += (aerosol_inscatter(shell + 1u, mu_s, d, l) - aerosol) * between;
-                    }
-                    total[l] += ray_m * aerosol;
-                }
-            }
+            let source = sources_at(at, phase_r, phase_m, l);
+            total[l] += data[params.rayleigh_at + s * n + l] * source.r
+                + data[params.mie_at + s * n + l] * source.m;
         }
     }
     // A Lambertian ground at the end of the ray reflects the sunlight and the higher
@@ -274,4 +304,109 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     map[at] = rgb.x;
     map[at + 1u] = rgb.y;
     map[at + 2u] = rgb.z;
+}
+
+// The aerial perspective of froxel columns (atmo::sky::aerial::AerialRays::froxels):
+// each invocation reads the marked ray of its column's elevation row at the column's
+// angle to the sun, as ScatteringMaps::radiance_at_marks does, and writes for each mark
+// (slice) the in-scattered radiance and the transmittance as linear sRGB.
+
+// Mirrors atmo_gpu::sky::AerialParams.
+struct AerialParams {
+    // The solar spectrum's linear sRGB, to turn transmittance into colour.
+    white: vec4<f32>,
+    // Sine of the sun's elevation.
+    sin_sun: f32,
+    columns: u32,
+    slices: u32,
+    pad0: u32,
+    // Where each region starts in `marked`, in vec4s.
+    rows_at: u32,
+    samples_at: u32,
+    rayleigh_at: u32,
+    mie_at: u32,
+    marks_at: u32,
+    pad1: u32,
+    pad2: u32,
+    pad3: u32,
+}
+
+@group(0) @binding(3) var<uniform> aerial: AerialParams;
+// Rows (first sample, end sample, origin radius, first mark bits), samples (as the
+// sky's), Rayleigh and aerosol weights [sample][lane], marks (sample bits; left
+// weights 2 x lanes; transmittance lanes).
+@group(0) @binding(4) var<storage, read> marked: array<vec4<f32>>;
+// Per column: (row, cosine of the angle to the sun).
+@group(0) @binding(5) var<storage, read> columns: array<vec2<f32>>;
+// Out: [slice][column][6]: in-scattered radiance RGB, transmittance RGB.
+@group(0) @binding(6) var<storage, read_write> froxels: array<f32>;
+
+// Lane `l` of a spectrum to linear sRGB.
+fn lane_rgb(v: vec4<f32>, l: u32) -> vec3<f32> {
+    var rgb = vec3<f32>(0.0);
+    for (var c = 0u; c < 4u; c++) {
+        rgb += data[params.rgb_at + 4u * l + c].xyz * v[c];
+    }
+    return rgb;
+}
+
+@compute @workgroup_size(64)
+fn aerial_main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k = id.x;
+    if k >= aerial.columns {
+        return;
+    }
+    let column = columns[k];
+    let row = u32(column.x);
+    let nu = column.y;
+    let record = marked[aerial.rows_at + row];
+    var m = bitcast<u32>(record.w);
+    let m_first = m;
+    let m_end = bitcast<u32>(marked[aerial.rows_at + row + 1u].w);
+    let r0_mu_s = record.z * aerial.sin_sun;
+    let phase_r = phase_function(params.rayleigh_kind, params.rayleigh_g, nu);
+    let phase_m = phase_function(params.mie_kind, params.mie_g, nu);
+    let n = params.lanes;
+    let per_mark = 1u + 3u * n;
+    var total: array<vec4<f32>, MAX_LANES>;
+    var source_r: array<vec4<f32>, MAX_LANES>;
+    var source_m: array<vec4<f32>, MAX_LANES>;
+    for (var s = bitcast<u32>(record.x); s < bitcast<u32>(record.y); s++) {
+        let sample = sample_at(marked[aerial.samples_at + 2u * s], marked[aerial.samples_at + 2u * s + 1u].x, r0_mu_s, nu);
+        for (var l = 0u; l < n; l++) {
+            let source = sources_at(sample, phase_r, phase_m, l);
+            source_r[l] = source.r;
+            source_m[l] = source.m;
+        }
+        // The marks at this sample: the light so far plus the part of its weights
+        // before it.
+        loop {
+            if m >= m_end {
+                break;
+            }
+            let at = aerial.marks_at + m * per_mark;
+            if bitcast<u32>(marked[at].x) != s {
+                break;
+            }
+            var inscattered = vec3<f32>(0.0);
+            var through = vec3<f32>(0.0);
+            for (var l = 0u; l < n; l++) {
+                let here = total[l] + marked[at + 1u + l] * source_r[l] + marked[at + 1u + n + l] * source_m[l];
+                inscattered += lane_rgb(here, l);
+                through += lane_rgb(marked[at + 1u + 2u * n + l] * data[params.irradiance_at + l], l);
+            }
+            let out = ((m - m_first) * aerial.columns + k) * 6u;
+            froxels[out] = inscattered.x;
+            froxels[out + 1u] = inscattered.y;
+            froxels[out + 2u] = inscattered.z;
+            let t = through / max(aerial.white.xyz, vec3<f32>(1e-30));
+            froxels[out + 3u] = t.x;
+            froxels[out + 4u] = t.y;
+            froxels[out + 5u] = t.z;
+            m++;
+        }
+        for (var l = 0u; l < n; l++) {
+            total[l] += marked[aerial.rayleigh_at + s * n + l] * source_r[l] + marked[aerial.mie_at + s * n + l] * source_m[l];
+        }
+    }
 }

@@ -12,11 +12,12 @@
 use std::borrow::Borrow;
 
 use atmo::atmosphere::spectrum::SpectrumToRgb;
+use atmo::sky::aerial::{AerialRays, Froxels};
 use atmo::sky::frame::{sky_from_world, sun_disc_rgb, GridLookup, View};
 use atmo::sky::shells::export::RayArrays;
 use atmo::sky::table::SkylightTable;
 use atmo::sky::{DirectionGrid, SkyModel};
-use atmo::view::{PixelBasis, Sun};
+use atmo::view::{Camera, PixelBasis, Sun};
 use glam::Vec3;
 
 use crate::display::cleared_pass;
@@ -103,6 +104,167 @@ gpu_struct! {
         aerosols: u32,
         pad0: u32,
         pad1: u32,
+    }
+}
+
+gpu_struct! {
+    /// The aerial pass's sun and where the marked rays' regions start (see
+    /// sky_shells.wgsl).
+    pub struct AerialParams in "sky_shells.wgsl" {
+        white: [f32; 4],
+        sin_sun: f32,
+        columns: u32,
+        slices: u32,
+        pad0: u32,
+        rows_at: u32,
+        samples_at: u32,
+        rayleigh_at: u32,
+        mie_at: u32,
+        marks_at: u32,
+        pad1: u32,
+        pad2: u32,
+        pad3: u32,
+    }
+}
+
+/// The aerial perspective's froxels on the GPU ([`atmo::sky::aerial`]): the marked rays
+/// of an [`AerialRays`] uploaded once; per sun and camera, one invocation per froxel
+/// column reads its row's ray at its angle to the sun, as the CPU does.
+pub struct GpuAerial {
+    rays: AerialRays,
+    marked: wgpu::Buffer,
+    params: AerialParams,
+    pipeline: wgpu::ComputePipeline,
+}
+
+impl GpuAerial {
+    /// Uploads `rays` (made by `sky`'s model) for `sky`'s device.
+    pub fn new<M: Borrow<SkyModel>>(
+        gpu: &Gpu,
+        sky: &GpuSkyModel<M>,
+        rays: AerialRays,
+    ) -> Result<Self, GpuError> {
+        let arrays = rays.arrays();
+        if arrays.lanes != sky.sky_params.lanes as usize {
+            return Err(atmo::Error::Invalid(
+                "the aerial rays were made for another atmosphere than the sky's".into(),
+            )
+            .into());
+        }
+        let mut data: Vec<[f32; 4]> = Vec::new();
+        let mut at = |values: &[[f32; 4]]| {
+            let start = data.len() as u32;
+            data.extend_from_slice(values);
+            start
+        };
+        let params = AerialParams {
+            white: [0.0; 4],
+            sin_sun: 0.0,
+            columns: 0,
+            slices: rays.slices_m().len() as u32,
+            pad0: 0,
+            rows_at: at(&arrays.rows),
+            samples_at: at(&arrays.samples),
+            rayleigh_at: at(&arrays.rayleigh),
+            mie_at: at(&arrays.mie),
+            marks_at: at(&arrays.marks),
+            pad1: 0,
+            pad2: 0,
+            pad3: 0,
+        };
+        let marked = gpu.storage(
+            "the aerial rays",
+            bytemuck::cast_slice(&data),
+            "aerial rows or slices",
+        )?;
+        let module = wgsl::module(gpu, "sky_shells.wgsl")?;
+        Ok(GpuAerial {
+            rays,
+            marked,
+            params,
+            pipeline: gpu.compute_pipeline(&module, "aerial_main", None)?,
+        })
+    }
+
+    /// The froxels of `camera` for `sun`, as [`AerialRays::froxels`] gives them.
+    pub fn froxels<M: Borrow<SkyModel>>(
+        &self,
+        gpu: &Gpu,
+        sky: &GpuSkyModel<M>,
+        sun: Sun,
+        camera: &Camera,
+    ) -> Result<Froxels, GpuError> {
+        let columns: Vec<[f32; 2]> = self
+            .rays
+            .columns(sun, camera)
+            .into_iter()
+            .map(|(row, nu)| [row as f32, nu as f32])
+            .collect();
+        let depth = self.rays.slices_m().len();
+        let atmosphere = sky.model().atmosphere();
+        let solar: Vec<f32> = atmosphere
+            .solar_irradiance
+            .iter()
+            .map(|&e| e as f32)
+            .collect();
+        let white = sky.to_rgb.rgb(&solar);
+        let params = AerialParams {
+            white: [white[0], white[1], white[2], 0.0],
+            sin_sun: sun.elevation().sin() as f32,
+            columns: columns.len() as u32,
+            ..self.params
+        };
+        let uniform = gpu.uniform("the aerial pass", &params);
+        let column_buffer = gpu.storage(
+            "the froxel columns",
+            bytemuck::cast_slice(&columns),
+            "the camera's width and height",
+        )?;
+        let out = gpu.output(
+            "the froxels",
+            (columns.len() * depth * 6 * 4) as u64,
+            "the camera's width and height, or the slices",
+        )?;
+        // Bindings 0 and 1 are the shell pass's; 2 (its map) is not read here.
+        let entries: Vec<wgpu::BindGroupEntry> = [
+            (0, &sky.uniforms[0]),
+            (1, &sky.data),
+            (3, &uniform),
+            (4, &self.marked),
+            (5, &column_buffer),
+            (6, &out),
+        ]
+        .into_iter()
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("the aerial pass"),
+            layout: &self.pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        gpu.run("the aerial pass", |encoder| {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups((columns.len() as u32).div_ceil(64), 1, 1);
+        })?;
+        let bytes = gpu.read("the froxels", &out, 0, out.size())?;
+        let values: &[f32] = bytemuck::cast_slice(&bytes);
+        let (inscatter, transmittance) = values
+            .chunks(6)
+            .take(columns.len() * depth)
+            .map(|v| (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])))
+            .unzip();
+        Ok(Froxels {
+            width: camera.width,
+            height: camera.height,
+            slices_m: self.rays.slices_m().to_vec(),
+            inscatter,
+            transmittance,
+        })
     }
 }
 

@@ -43,6 +43,7 @@ fn sky_structs_match_their_wgsl() {
     check::<atmo_gpu::sky::SkyMapParams>();
     check::<atmo_gpu::sky::SkyFrameParams>();
     check::<atmo_gpu::sky::ShellParams>();
+    check::<atmo_gpu::sky::AerialParams>();
 }
 
 #[test]

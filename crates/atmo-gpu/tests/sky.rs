@@ -10,7 +10,7 @@ use atmo::sky::{Order, SkyModel, SkySettings};
 use atmo::sky::{SkyPicture, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
-use atmo_gpu::sky::{DepthTarget, GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget};
+use atmo_gpu::sky::{DepthTarget, GpuAerial, GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget};
 use common::{assert_close, gpu, mean_level};
 use glam::Vec3;
 
@@ -330,4 +330,40 @@ fn molecules_with_another_phase_in_the_higher_orders_are_refused_with_a_way_out(
     );
     // Single scattering needs no table: drawn.
     assert!(GpuSkyModel::new(&gpu, model(&atmosphere, 1, 0.0)).is_ok());
+}
+
+#[test]
+fn the_aerial_froxels_equal_the_cpu_froxels() {
+    let Some(gpu) = gpu() else { return };
+    let mut bright = Atmosphere::earth();
+    bright.ground_albedo = 0.3;
+    // Every order of both species (order 0 here), and single scattering.
+    for order in [0, 1] {
+        let model = model(&bright, order, 1200.0);
+        let slices = atmo::sky::aerial::quadratic_slices(12, 80_000.0);
+        let rays = model.aerial_rays(256, &slices).unwrap();
+        let sun = Sun::from_degrees(15.0, 120.0).unwrap();
+        let camera =
+            Camera::yaw_pitch(Vec3::ZERO, 90.0, -3.0, Fov::Vertical(50.0), (20, 14)).unwrap();
+        let cpu = rays.froxels(&model, sun, &camera);
+        let sky = GpuSkyModel::new(&gpu, &model).unwrap();
+        let aerial = GpuAerial::new(&gpu, &sky, rays).unwrap();
+        let out = aerial.froxels(&gpu, &sky, sun, &camera).unwrap();
+        assert_eq!(out.inscatter.len(), cpu.inscatter.len());
+        let brightest = cpu
+            .inscatter
+            .iter()
+            .fold(0.0f32, |m, v| m.max(v.max_element()));
+        assert!(brightest > 0.0);
+        for (k, (a, b)) in out.inscatter.iter().zip(&cpu.inscatter).enumerate() {
+            // f32 where the CPU keeps radii and distances in f64.
+            assert!(
+                (*a - *b).abs().max_element() <= 1e-3 * brightest,
+                "order {order}, {k}: {a} vs {b}"
+            );
+        }
+        for (a, b) in out.transmittance.iter().zip(&cpu.transmittance) {
+            assert!((*a - *b).abs().max_element() <= 1e-4, "{a} vs {b}");
+        }
+    }
 }

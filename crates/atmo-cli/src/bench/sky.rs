@@ -10,7 +10,7 @@ use atmo::sky::aerial::quadratic_slices;
 use atmo::sky::{Order, SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
-use atmo_gpu::sky::{GpuSkyModel, SkyPass, SkyTarget};
+use atmo_gpu::sky::{GpuAerial, GpuSkyModel, SkyPass, SkyTarget};
 use atmo_gpu::{Gpu, GpuError, Rendered};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -330,6 +330,38 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
             wall_ms: wall,
             gpu_ms,
             cpu_ms,
+            error: None,
+        },
+    );
+    // The aerial perspective's 32^3 froxels on the GPU (read back) and on the CPU.
+    let slices = quadratic_slices(32, 100_000.0);
+    let aerial = GpuAerial::new(gpu, &sky, model.aerial_rays(512, &slices)?).map_err(gpu_error)?;
+    let rays = model.aerial_rays(512, &slices)?;
+    let camera = Camera::yaw_pitch(Vec3::ZERO, 0.0, 5.0, Fov::Vertical(60.0), (32, 32))?;
+    let mut froxels_wall = Vec::new();
+    for _ in 0..runs {
+        let start = Instant::now();
+        aerial.froxels(gpu, &sky, sun, &camera).map_err(gpu_error)?;
+        froxels_wall.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    let froxels_cpu = median(
+        (0..runs)
+            .map(|_| {
+                time_ms(|| {
+                    std::hint::black_box(rays.froxels(&model, sun, &camera));
+                })
+            })
+            .collect(),
+    );
+    report(
+        json,
+        gpu,
+        Case {
+            name: "sky.aerial.gpu",
+            params: json!({"width": 32, "height": 32, "depth": 32, "rows": 512, "model": params}),
+            wall_ms: median(froxels_wall),
+            gpu_ms: None,
+            cpu_ms: froxels_cpu,
             error: None,
         },
     );
