@@ -186,6 +186,11 @@ impl GpuAerial {
         })
     }
 
+    /// The marked rays uploaded (the CPU's froxels come from them too).
+    pub fn rays(&self) -> &AerialRays {
+        &self.rays
+    }
+
     /// The froxels of `camera` for `sun`, as [`AerialRays::froxels`] gives them.
     pub fn froxels<M: Borrow<SkyModel>>(
         &self,

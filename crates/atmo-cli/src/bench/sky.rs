@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::Result;
 use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::sky::{ReferenceSettings, ReferenceSky};
-use atmo::sky::aerial::quadratic_slices;
+use atmo::sky::aerial::{quadratic_slices, AerialRays};
 use atmo::sky::{Order, SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
@@ -245,14 +245,28 @@ pub fn all_orders(quick: bool, json: bool) -> Result<()> {
     Ok(())
 }
 
+/// Froxels a side, the farthest slice (m) and the elevation rows of the `sky.aerial`
+/// cases, CPU and GPU.
+const FROXELS: u32 = 32;
+const FROXELS_FAR_M: f64 = 100_000.0;
+const FROXEL_ROWS: usize = 512;
+
+/// The `sky.aerial` cases' marked rays of `model` and camera (60 deg, 5 deg up).
+fn froxel_case(model: &SkyModel) -> Result<(AerialRays, Camera)> {
+    let slices = quadratic_slices(FROXELS as usize, FROXELS_FAR_M);
+    let rays = model.aerial_rays(FROXEL_ROWS, &slices)?;
+    let size = (FROXELS, FROXELS);
+    let camera = Camera::yaw_pitch(Vec3::ZERO, 0.0, 5.0, Fov::Vertical(60.0), size)?;
+    Ok((rays, camera))
+}
+
 /// `sky.aerial`: the 32 x 32 x 32 froxels of a camera (60 deg, slices out to 100 km)
 /// for a moving sun from `model`'s marked rays, against the aerial perspective of each
 /// column's own ray (`SkyModel::aerial`) on a few columns, scaled to all of them.
 fn aerial(model: &SkyModel, quick: bool, json: bool) -> Result<()> {
-    let (size, runs) = (32u32, if quick { 10 } else { 40 });
-    let slices = quadratic_slices(size as usize, 100_000.0);
-    let rays = model.aerial_rays(512, &slices)?;
-    let camera = Camera::yaw_pitch(Vec3::ZERO, 0.0, 5.0, Fov::Vertical(60.0), (size, size))?;
+    let runs = if quick { 10 } else { 40 };
+    let (rays, camera) = froxel_case(model)?;
+    let (size, slices) = (FROXELS, rays.slices_m());
     let sun = |k: usize| Sun::from_degrees(30.0 + 1e-3 * k as f64, 20.0).expect("in range");
     let froxels_ms = median(
         (0..runs)
@@ -271,7 +285,7 @@ fn aerial(model: &SkyModel, quick: bool, json: bool) -> Result<()> {
     let mut worst = 0.0f32;
     for &(x, y) in &columns {
         let d = basis.direction(x, y).expect("a pinhole sees every pixel");
-        let lights = model.aerial_along(sun(0), d, &slices)?;
+        let lights = model.aerial_along(sun(0), d, slices)?;
         for (k, light) in lights.iter().enumerate() {
             let want = Vec3::from(colour.rgb(&light.inscatter));
             let got = froxels.inscatter[(k as u32 * size * size + y * size + x) as usize];
@@ -284,7 +298,7 @@ fn aerial(model: &SkyModel, quick: bool, json: bool) -> Result<()> {
         json,
         json!({
             "bench": "sky.aerial", "params": {"width": size, "height": size, "depth": size,
-            "far_m": 100_000.0, "rows": 512, "order": model.settings().order},
+            "far_m": FROXELS_FAR_M, "rows": FROXEL_ROWS, "order": model.settings().order},
             "median_ms": froxels_ms, "baseline": "a ray per froxel column (SkyModel::aerial)",
             "baseline_median_ms": baseline_ms, "ratio": baseline_ms / froxels_ms,
             "error": {"max_relative": worst},
@@ -334,10 +348,9 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         },
     );
     // The aerial perspective's 32^3 froxels on the GPU (read back) and on the CPU.
-    let slices = quadratic_slices(32, 100_000.0);
-    let aerial = GpuAerial::new(gpu, &sky, model.aerial_rays(512, &slices)?).map_err(gpu_error)?;
-    let rays = model.aerial_rays(512, &slices)?;
-    let camera = Camera::yaw_pitch(Vec3::ZERO, 0.0, 5.0, Fov::Vertical(60.0), (32, 32))?;
+    let (rays, camera) = froxel_case(&model)?;
+    let aerial = GpuAerial::new(gpu, &sky, rays).map_err(gpu_error)?;
+    let rays = aerial.rays();
     let mut froxels_wall = Vec::new();
     for _ in 0..runs {
         let start = Instant::now();
@@ -358,7 +371,8 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         gpu,
         Case {
             name: "sky.aerial.gpu",
-            params: json!({"width": 32, "height": 32, "depth": 32, "rows": 512, "model": params}),
+            params: json!({"width": FROXELS, "height": FROXELS, "depth": FROXELS,
+                "far_m": FROXELS_FAR_M, "rows": FROXEL_ROWS, "model": params}),
             wall_ms: median(froxels_wall),
             gpu_ms: None,
             cpu_ms: froxels_cpu,

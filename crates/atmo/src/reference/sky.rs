@@ -85,11 +85,7 @@ impl<'a> ReferenceSky<'a> {
     /// `azimuth` from the sun and `elevation` (rad), of the orders `first..=last`
     /// (1 or 2).
     pub fn radiance(&self, azimuth: f64, elevation: f64, first: u32, last: u32) -> Vec<f64> {
-        let d = DVec3::new(
-            elevation.cos() * azimuth.cos(),
-            elevation.cos() * azimuth.sin(),
-            elevation.sin(),
-        );
+        let d = direction(azimuth, elevation);
         let n = self.atmosphere.channels();
         let mut out = vec![0.0; n];
         if first <= 1 {
@@ -110,11 +106,7 @@ impl<'a> ReferenceSky<'a> {
         elevation: f64,
         distance: f64,
     ) -> (Vec<f64>, Vec<f64>) {
-        let d = DVec3::new(
-            elevation.cos() * azimuth.cos(),
-            elevation.cos() * azimuth.sin(),
-            elevation.sin(),
-        );
+        let d = direction(azimuth, elevation);
         let mut inscatter = vec![0.0; self.atmosphere.channels()];
         let segments = self.settings.view_segments;
         let (_, _, transmittance) =
@@ -288,6 +280,16 @@ impl<'a> ReferenceSky<'a> {
     }
 }
 
+/// The unit direction at `azimuth` from the sun and `elevation` (rad), in the
+/// reference's frame (the sun in the xz plane, z up).
+fn direction(azimuth: f64, elevation: f64) -> DVec3 {
+    DVec3::new(
+        elevation.cos() * azimuth.cos(),
+        elevation.cos() * azimuth.sin(),
+        elevation.sin(),
+    )
+}
+
 /// Steps of the march that finds where a path's next collision is.
 const FREE_FLIGHT_STEPS: usize = 96;
 
@@ -312,11 +314,7 @@ impl ReferenceSky<'_> {
         paths: usize,
         seed: u64,
     ) -> (Vec<f64>, Vec<f64>) {
-        let d = DVec3::new(
-            elevation.cos() * azimuth.cos(),
-            elevation.cos() * azimuth.sin(),
-            elevation.sin(),
-        );
+        let d = direction(azimuth, elevation);
         let n = self.atmosphere.channels();
         let a = self.atmosphere;
         let bounds = [phase_bound(&a.rayleigh.phase), phase_bound(&a.mie.phase)];

@@ -13,6 +13,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::frame::sky_from_world;
+use super::shells::cos_to_sun;
 use super::shells::maps::MAX_CHANNELS;
 use super::shells::maps::{pack, Lane, ScatteringMaps, SunGeometry, MAX_LANES};
 use super::SkyModel;
@@ -91,8 +92,7 @@ impl SkyModel {
     ) -> Result<Vec<AerialLight>> {
         check_distances(distances_m)?;
         let maps = self.marked_rays(&[elevation.sin()], distances_m);
-        let nu = elevation.cos() * azimuth.cos() * sun_elevation.cos()
-            + elevation.sin() * sun_elevation.sin();
+        let nu = cos_to_sun(azimuth, elevation, sun_elevation);
         let n = self.atmosphere().channels();
         let k = distances_m.len();
         let (mut inscatter, mut transmittance) = (vec![0.0; k * n], vec![0.0; k * n]);

@@ -187,6 +187,8 @@ pub(crate) const SPECIES: usize = 2;
 #[derive(Debug, Clone)]
 pub struct ScatteredLightMap {
     channels: usize,
+    /// Shells the light is known at.
+    shells: usize,
     pub(crate) bins: SunBins,
     /// Which species scatter this light (the paper: the molecules only).
     pub(crate) scatters: [bool; SPECIES],
@@ -335,6 +337,7 @@ impl ScatteredLightMap {
         }
         ScatteredLightMap {
             channels: n,
+            shells: rules.len(),
             bins,
             scatters,
             values,
@@ -462,7 +465,7 @@ impl ScatteredLightMap {
             * (TABLE_PHI - 1) as f64;
         let j = (y as usize).min(TABLE_PHI - 2);
         let fy = (y - j as f64) as f32;
-        let shells = table.len() / (self.bins.count * TABLE_CELLS * l);
+        let shells = self.shells;
         out.fill(Lane::ZERO);
         for (g, w) in [
             (i * TABLE_PHI + j, (1.0 - fx) * (1.0 - fy)),

@@ -31,7 +31,7 @@ use sampling_shells::SamplingShells;
 
 /// Cosine of the angle between the view direction at `azimuth` from the sun and
 /// `elevation`, and the sun at `sun_elevation` (all rad).
-fn cos_to_sun(azimuth: f64, elevation: f64, sun_elevation: f64) -> f64 {
+pub(crate) fn cos_to_sun(azimuth: f64, elevation: f64, sun_elevation: f64) -> f64 {
     elevation.cos() * azimuth.cos() * sun_elevation.cos() + elevation.sin() * sun_elevation.sin()
 }
 
