@@ -112,7 +112,67 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
             vec!["--generate", "cumulus", "--resolution", "1024"],
             "budget",
         ),
-        (vec!["--generate", "cumulus", "--forward", "2"], "forward"),
+        (
+            vec![
+                "--generate",
+                "cumulus",
+                "--scattering",
+                "single",
+                "--forward",
+                "2",
+            ],
+            "forward",
+        ),
+        (
+            vec!["--generate", "cumulus", "--forward", "0.5"],
+            "applies to --scattering single only",
+        ),
+        (
+            vec!["--generate", "cumulus", "--ambient", "sky"],
+            "the sky's light needs --sky",
+        ),
+        (
+            vec!["--generate", "cumulus", "--ambient", "1,2"],
+            "--ambient = \"1,2\": not three finite numbers >= 0",
+        ),
+        (
+            vec!["--generate", "cumulus", "--ambient", "0.1,-1,0"],
+            "--ambient",
+        ),
+        (
+            vec!["--generate", "cumulus", "--camera", "0,1900,0"],
+            "--camera = [0, 1900, 0] is inside particle",
+        ),
+        (
+            vec![
+                "--generate",
+                "cumulus",
+                "--camera",
+                "0,1000,-5000",
+                "--look-at",
+                "0,1000,-5000",
+            ],
+            "--look-at",
+        ),
+        (
+            vec![
+                "--generate",
+                "cumulus",
+                "--camera",
+                "0,9000,0",
+                "--look-at",
+                "0,0,0",
+            ],
+            "parallel",
+        ),
+        (
+            vec!["--generate", "cumulus", "--sun-direction", "0,0,0"],
+            "--sun-direction",
+        ),
+        (
+            vec!["--generate", "cumulus", "--sun-direction", "1,NaN,0"],
+            "--sun-direction",
+        ),
         (
             vec!["--generate", "cumulus", "--view-azimuth", "NaN"],
             "--view-azimuth = NaN is out of range: allowed [-360, 360]",
@@ -185,4 +245,46 @@ fn saved_particles_are_written_only_once_everything_is_valid() {
         assert_eq!(files_in(&dir), 0, "{bad:?} left a file");
     }
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn an_explicit_camera_and_sun_and_every_order_brighter_than_one() {
+    let dir = scratch("clouds-camera");
+    let mean = |path: &std::path::Path| {
+        let img = image::open(path).unwrap().to_luma8();
+        img.pixels().map(|p| p.0[0] as f64).sum::<f64>() / img.pixels().len() as f64
+    };
+    let mut means = Vec::new();
+    for scattering in ["single", "multiple"] {
+        let out = dir.join(format!("{scattering}.png"));
+        // From the south-west at the cloud's height, the sun behind the camera.
+        let mut args = vec![
+            "clouds",
+            "--generate",
+            "cumulus",
+            "--camera",
+            "-1800,1900,1800",
+            "--look-at",
+            "0,1900,0",
+            "--fov",
+            "50",
+            "--fov-axis",
+            "horizontal",
+            "--sun-direction",
+            "-1,1,1",
+            "--scattering",
+            scattering,
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        // SMALL_CLOUD without its camera distance.
+        args.extend(&SMALL_CLOUD[..8]);
+        let o = atmo(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        means.push(mean(&out));
+    }
+    // The cloud shows, and the light of every order makes it brighter.
+    assert!(means[0] > 5.0, "{means:?}");
+    assert!(means[1] > 1.3 * means[0], "{means:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,7 +1,9 @@
 // Drawing the cloud (clouds 2.2): each particle a screen-parallel Gaussian billboard,
 // drawn back to front with E_k = S_k + T_k E_{k-1} (5) as premultiplied "over"
-// blending, S_k = a_k tau_k p(omega, l) I_k / 4 pi (6) with I_k looked up per pixel in
-// the 3-D intensity buffer (trilinear in ln Gamma), as atmo::clouds::render does.
+// blending, S_k the light the blob sends along each pixel's own ray (its column faded
+// at its cut, the sunlight read at its two emission nodes, integrated over its depth,
+// the phase for the ray), as atmo::clouds::render does. The higher octaves go to a
+// second target, scaled afterwards by the cloud's depth on the ray.
 
 // Mirrors atmo_gpu::clouds::DrawParams.
 struct DrawParams {
@@ -21,10 +23,12 @@ struct DrawParams {
     // The air between the eye and the cloud: transmittance and in-scattered light, RGB.
     haze_transmittance: vec4<f32>,
     haze_inscatter: vec4<f32>,
+    // atmo::clouds::Octaves: attenuation, contribution, eccentricity, depth scale.
+    octaves: vec4<f32>,
     width: u32,
     height: u32,
+    octave_count: u32,
     pad0: u32,
-    pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: DrawParams;
@@ -37,13 +41,18 @@ struct DrawParams {
 
 struct Billboard {
     @builtin(position) clip: vec4<f32>,
-    // Centre and radius on the screen (pixels), and camera depth (m).
-    @location(0) @interpolate(flat) screen: vec4<f32>,
-    // a p(omega, l) E_sun and a E_ambient for this particle.
-    @location(1) @interpolate(flat) lit: vec3<f32>,
+    // Centre (m, world) and standard deviation (m).
+    @location(0) @interpolate(flat) centre: vec4<f32>,
+    // Albedo times sunlight, and times the ambient light.
+    @location(1) @interpolate(flat) sun: vec3<f32>,
     @location(2) @interpolate(flat) ambient: vec3<f32>,
-    // radius, density.
-    @location(3) @interpolate(flat) blob: vec2<f32>,
+    @location(3) @interpolate(flat) density: f32,
+}
+
+struct Colours {
+    // The picture, and the higher octaves' light apart (alpha alike in both).
+    @location(0) picture: vec4<f32>,
+    @location(1) higher: vec4<f32>,
 }
 
 fn phase(c: f32) -> f32 {
@@ -54,14 +63,19 @@ fn phase(c: f32) -> f32 {
 fn vertex(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> Billboard {
     let p = particles[order[i]];
     let centre = p.position_radius.xyz;
+    let s = p.position_radius.w / 3.0;
     let d = centre - params.position.xyz;
     let z = dot(d, params.forward.xyz);
     let focal = params.position.w;
     let w = f32(params.width);
     let h = f32(params.height);
-    let sx = dot(d, params.right.xyz) / z * focal + 0.5 * w;
-    let sy = -dot(d, params.up.xyz) / z * focal + 0.5 * h;
-    let sr = p.position_radius.w / z * focal;
+    let tx = dot(d, params.right.xyz) / z;
+    let ty = dot(d, params.up.xyz) / z;
+    let sx = tx * focal + 0.5 * w;
+    let sy = -ty * focal + 0.5 * h;
+    // The reach's radius at its distance, widened off the axis (the CPU's footprint).
+    let r = FOOTPRINT * s;
+    let sr = r / sqrt(z * z - r * r) * focal * (1.0 + tx * tx + ty * ty);
     // Two triangles over the square around the footprint.
     let corner = array<vec2<f32>, 6>(
         vec2(-1.0, -1.0), vec2(1.0, -1.0), vec2(1.0, 1.0),
@@ -71,12 +85,10 @@ fn vertex(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> Bil
     let py = sy + corner.y * sr;
     var out: Billboard;
     out.clip = vec4<f32>(2.0 * px / w - 1.0, 1.0 - 2.0 * py / h, 0.5, 1.0);
-    out.screen = vec4<f32>(sx, sy, sr, z);
-    // The phase at the particle's centre: the angle changes little over it.
-    let view = normalize(d);
-    out.lit = p.albedo * phase(dot(params.to_sun.xyz, view)) * params.sun.xyz;
+    out.centre = vec4<f32>(centre, s);
+    out.sun = p.albedo * params.sun.xyz;
     out.ambient = p.albedo * params.ambient.xyz;
-    out.blob = vec2<f32>(p.position_radius.w, p.density);
+    out.density = p.density;
     return out;
 }
 
@@ -85,11 +97,11 @@ fn cell(x: u32, z: u32, y: u32) -> f32 {
     return log_gamma[(x * n + z) * n + y];
 }
 
-// Gamma at grid coordinates g (voxel centres at integers): ln Gamma trilinear, clamped
-// to the grid, 1 on the sun's side of it.
-fn gamma(g: vec3<f32>) -> f32 {
+// ln Gamma at grid coordinates g (voxel centres at integers), trilinear, clamped to
+// the grid, 0 on the sun's side of it: IntensityBuffer::sample_log_grid.
+fn log_gamma_at(g: vec3<f32>) -> f32 {
     if g.y < -0.5 {
-        return 1.0;
+        return 0.0;
     }
     let n = frame.resolution;
     let last = f32(n - 1u);
@@ -101,36 +113,134 @@ fn gamma(g: vec3<f32>) -> f32 {
     let b = mix(cell(i.x + 1u, i.z, i.y), cell(i.x + 1u, i.z, i.y + 1u), f.y);
     let c0 = mix(cell(i.x, i.z + 1u, i.y), cell(i.x, i.z + 1u, i.y + 1u), f.y);
     let d = mix(cell(i.x + 1u, i.z + 1u, i.y), cell(i.x + 1u, i.z + 1u, i.y + 1u), f.y);
-    return exp(mix(mix(a, b, f.x), mix(c0, d, f.x), f.z));
+    return mix(mix(a, b, f.x), mix(c0, d, f.x), f.z);
+}
+
+// Particle::faded_column: the column at squared distance b2 from the centre, faded to
+// zero at the cut.
+fn faded_column(b2: f32, s: f32, density: f32) -> f32 {
+    let x = b2 / (2.0 * s * s);
+    let cut = 0.5 * FOOTPRINT * FOOTPRINT;
+    if x >= cut {
+        return 0.0;
+    }
+    return density * s * sqrt(2.0 * PI) * FADE_SCALE * (exp(-x) - exp(-cut));
+}
+
+// atmo::clouds::particles::erf_inverse (Giles 2010).
+fn erf_inverse(x: f32) -> f32 {
+    var w = -log((1.0 - x) * (1.0 + x));
+    var p: f32;
+    if w < 5.0 {
+        w = w - 2.5;
+        p = 2.81022636e-08;
+        p = 3.43273939e-07 + p * w;
+        p = -3.5233877e-06 + p * w;
+        p = -4.39150654e-06 + p * w;
+        p = 0.00021858087 + p * w;
+        p = -0.00125372503 + p * w;
+        p = -0.00417768164 + p * w;
+        p = 0.246640727 + p * w;
+        p = 1.50140941 + p * w;
+    } else {
+        w = sqrt(w) - 3.0;
+        p = -0.000200214257;
+        p = 0.000100950558 + p * w;
+        p = 0.00134934322 + p * w;
+        p = -0.00367342844 + p * w;
+        p = 0.00573950773 + p * w;
+        p = -0.0076224613 + p * w;
+        p = 0.00943887047 + p * w;
+        p = 1.00167406 + p * w;
+        p = 2.83297682 + p * w;
+    }
+    return p * x;
+}
+
+// atmo::clouds::particles::emission_nodes: (u, l) at the Gauss-Legendre node `node`
+// of the absorbed fraction.
+fn emission_node(tau: f32, node: f32) -> vec2<f32> {
+    let absorbed = 1.0 - exp(-tau);
+    // ln(1 - v) for small v without losing it (log1p is not in WGSL).
+    let v = absorbed * node;
+    var u = -log(1.0 - v);
+    if v < 1e-4 {
+        u = v * (1.0 + 0.5 * v);
+    }
+    var q = node;
+    if tau > 1e-6 {
+        q = u / tau;
+    }
+    return vec2<f32>(u, sqrt(2.0) * erf_inverse(clamp(2.0 * q - 1.0, -0.999999, 0.999999)));
+}
+
+// atmo::clouds::octaves::Emission::integral: the integral of exp(f(u)) e^-u over
+// 0..tau, f linear through (u0, l0) and (u1, l1), capped at 0 at the ends.
+fn blob_integral(tau: f32, u: vec2<f32>, l: vec2<f32>) -> f32 {
+    var slope = 0.0;
+    if u.y - u.x > 1e-6 * tau {
+        slope = (l.y - l.x) / (u.y - u.x);
+    }
+    let start = min(l.x - slope * u.x, 0.0);
+    let end = min(l.x + slope * (tau - u.x), 0.0);
+    let x = end - start - tau;
+    var ratio = 1.0 + 0.5 * x;
+    if abs(x) >= 1e-3 {
+        ratio = (exp(x) - 1.0) / x;
+    }
+    return tau * exp(start) * ratio;
 }
 
 @fragment
-fn fragment(b: Billboard) -> @location(0) vec4<f32> {
-    // The pixel's centre, in pixels.
+fn fragment(b: Billboard) -> Colours {
+    // The pixel's centre, in pixels, and its ray (component 1 along the view axis).
     let pixel = b.clip.xy;
-    let z = b.screen.w;
-    let metres_per_pixel = z / params.position.w;
-    let dx = (pixel.x - b.screen.x) * metres_per_pixel;
-    let dy = (pixel.y - b.screen.y) * metres_per_pixel;
-    let b2 = dx * dx + dy * dy;
-    let radius = b.blob.x;
-    if b2 >= radius * radius {
-        discard;
-    }
-    let s = radius / 3.0;
-    let column = b.blob.y * s * sqrt(2.0 * PI);
-    let tau = column * exp(-b2 / (2.0 * s * s));
-    // The point the pixel shows on the billboard, in the buffer's grid.
     let w = f32(params.width);
     let h = f32(params.height);
-    let ray = params.forward.xyz + (2.0 * pixel.x / w - 1.0) * params.forward.w * params.right.xyz
+    let r = params.forward.xyz + (2.0 * pixel.x / w - 1.0) * params.forward.w * params.right.xyz
         + (1.0 - 2.0 * pixel.y / h) * params.right.w * params.up.xyz;
-    let world = params.position.xyz + ray * z;
-    let g = (to_buffer(frame, world) - frame.min.xyz) / frame.voxel.xyz - vec3<f32>(0.5);
-    let source = tau * (b.lit * gamma(g) + b.ambient);
+    // Its nearest approach to the centre (at t times the ray) and the column there.
+    let d = b.centre.xyz - params.position.xyz;
+    let rr = dot(r, r);
+    let t = dot(d, r) / rr;
+    let s = b.centre.w;
+    let tau = faded_column(max(dot(d, d) - t * t * rr, 0.0), s, b.density);
+    if tau <= 0.0 {
+        discard;
+    }
+    // The sunlight at the blob's two emission nodes along the ray, in the grid.
+    let inv_length = inverseSqrt(rr);
+    let g_ray = to_buffer(frame, r) / frame.voxel.xyz;
+    let g_eye = (to_buffer(frame, params.position.xyz) - frame.min.xyz) / frame.voxel.xyz
+        - vec3<f32>(0.5);
+    let g = g_eye + t * g_ray;
+    let along = (s * inv_length) * g_ray;
+    let n0 = emission_node(tau, 0.21132487);
+    let n1 = emission_node(tau, 0.7886751);
+    let u = vec2<f32>(n0.x, n1.x);
+    let l = vec2<f32>(log_gamma_at(g + n0.y * along), log_gamma_at(g + n1.y * along));
+    // Octaves::light: single scattering, and the higher octaves apart.
+    let p = phase(dot(params.to_sun.xyz, r) * inv_length);
+    let single = p * blob_integral(tau, u, l);
+    var higher = 0.0;
+    var weight = 1.0;
+    var shape = 1.0;
+    var share = 1.0;
+    for (var i = 1u; i < params.octave_count; i++) {
+        weight *= params.octaves.y;
+        shape *= params.octaves.z;
+        share *= params.octaves.x;
+        let pi = shape * p + (1.0 - shape) / (4.0 * PI);
+        higher += weight * pi * blob_integral(tau, u, share * l);
+    }
     // Premultiplied: colour + (1 - alpha) x what is behind, alpha = 1 - T_k; hazed, the
     // colour seen through the air plus the air's light where the particle hides what is
     // behind (summed over the particles, the CPU's haze exactly).
     let alpha = 1.0 - exp(-tau);
-    return vec4<f32>(params.haze_transmittance.xyz * source + alpha * params.haze_inscatter.xyz, alpha);
+    let haze = params.haze_transmittance.xyz;
+    var out: Colours;
+    out.picture = vec4<f32>(haze * (single * b.sun + alpha * b.ambient)
+        + alpha * params.haze_inscatter.xyz, alpha);
+    out.higher = vec4<f32>(haze * higher * b.sun, alpha);
+    return out;
 }

@@ -6,7 +6,7 @@
 //! between the light pass and the draw, so a moving sun costs one light pass and a
 //! moving camera none.
 
-use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
+use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat, FOOTPRINT};
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::Lighting;
 use atmo::image::Frame;
@@ -60,10 +60,12 @@ gpu_struct! {
         ambient: [f32; 4],
         haze_transmittance: [f32; 4],
         haze_inscatter: [f32; 4],
+        /// The octaves' attenuation, contribution, eccentricity and depth scale.
+        octaves: [f32; 4],
         width: u32,
         height: u32,
+        octave_count: u32,
         pad0: u32,
-        pad1: u32,
     }
 }
 
@@ -131,7 +133,8 @@ impl GpuClouds {
             frame: None,
             splat: gpu.compute_pipeline(&light, "main", None)?,
             prefix: gpu.compute_pipeline(&prefix, "main", None)?,
-            // Premultiplied "over": E_k = S_k + T_k E_{k-1}.
+            // Premultiplied "over": E_k = S_k + T_k E_{k-1}; into the picture and into
+            // the higher octaves' target.
             draw: gpu.blended_pipeline(
                 &draw,
                 None,
@@ -140,6 +143,7 @@ impl GpuClouds {
                     dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
                     operation: wgpu::BlendOperation::Add,
                 },
+                2,
             )?,
         })
     }
@@ -261,7 +265,7 @@ impl GpuClouds {
             .map(|p| camera.depth(p.position))
             .collect();
         let mut order: Vec<u32> = (0..self.particles.len() as u32)
-            .filter(|&k| depth[k as usize] > self.particles[k as usize].radius)
+            .filter(|&k| depth[k as usize] > reach(&self.particles[k as usize]))
             .collect();
         order.sort_by(|&a, &b| {
             depth[b as usize]
@@ -274,6 +278,8 @@ impl GpuClouds {
             "the particle count",
         )?;
         let (tan_half_width, tan_half_height) = camera.pinhole("the clouds' billboards")?;
+        let octaves = light.scattering;
+        octaves.validate()?;
         let focal = 0.5 * h as f32 / tan_half_height;
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
         // The phase function's code and parameter (functions.wgsl's phase_function).
@@ -288,10 +294,16 @@ impl GpuClouds {
             ambient: v4(light.ambient, 0.0),
             haze_transmittance: v4(light.haze.transmittance, 0.0),
             haze_inscatter: v4(light.haze.inscatter, 0.0),
+            octaves: [
+                octaves.attenuation,
+                octaves.contribution,
+                octaves.eccentricity,
+                octaves.depth_scale,
+            ],
             width: w,
             height: h,
+            octave_count: octaves.count,
             pad0: 0,
-            pad1: 0,
         };
         let params = gpu.uniform("the cloud draw", &params);
         let frame_buffer = gpu.uniform("the buffer frame", &frame);
@@ -305,32 +317,48 @@ impl GpuClouds {
                 self.cells.as_entire_binding(),
             ],
         );
+        // The picture over the background, and the higher octaves' light apart (its
+        // alpha, 1 - the cloud's transmittance, gives the depth that scales it).
         let target = target_texture(gpu, w, h, background);
-        let view = target.create_view(&Default::default());
+        let higher = target_texture(gpu, w, h, None);
+        let views = [&target, &higher].map(|t| t.create_view(&Default::default()));
         let gpu_ms = gpu.run("the cloud draw", |encoder| {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("billboards"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
+            let attachments = views.each_ref().map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
                         load: wgpu::LoadOp::Load,
                         store: wgpu::StoreOp::Store,
                     },
-                })],
+                })
+            });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("billboards"),
+                color_attachments: &attachments,
                 ..Default::default()
             });
             pass.set_pipeline(&self.draw);
             pass.set_bind_group(0, &group, &[]);
             pass.draw(0..6, 0..order.len() as u32);
         })?;
-        let bytes = gpu.read_texture("the cloud frame", &target, w, h)?;
-        Ok(Rendered {
-            frame: crate::frame_of(w, h, &bytes),
-            gpu_ms,
-        })
+        let mut frame = crate::frame_of(w, h, &gpu.read_texture("the cloud frame", &target, w, h)?);
+        if octaves.count > 1 {
+            let bytes = gpu.read_texture("the higher octaves", &higher, w, h)?;
+            let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+            for (pixel, t) in frame.pixels.iter_mut().zip(texels) {
+                let depth = -(1.0 - t[3]).max(f32::MIN_POSITIVE).ln();
+                *pixel += octaves.higher_share(depth) * Vec3::new(t[0], t[1], t[2]);
+            }
+        }
+        Ok(Rendered { frame, gpu_ms })
     }
+}
+
+/// How far across the line of sight a particle's billboard reaches, m (as the CPU's).
+fn reach(p: &Particle) -> f32 {
+    FOOTPRINT * p.sigma()
 }
 
 /// The particles as the shaders read them.

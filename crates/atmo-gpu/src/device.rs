@@ -232,13 +232,14 @@ impl Gpu {
     }
 
     /// A render pipeline drawing `vertex` and `fragment` of `module` (no vertex
-    /// buffers) into one RGBA f32 target with `blend`, e.g. additive planes or
+    /// buffers) into `targets` RGBA f32 targets with `blend`, e.g. additive planes or
     /// premultiplied "over" billboards.
     pub fn blended_pipeline(
         &self,
         module: &wgpu::ShaderModule,
         layout: Option<&wgpu::PipelineLayout>,
         blend: wgpu::BlendComponent,
+        targets: usize,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
         let target = wgpu::ColorTargetState {
             format: wgpu::TextureFormat::Rgba32Float,
@@ -248,18 +249,19 @@ impl Gpu {
             }),
             write_mask: wgpu::ColorWrites::ALL,
         };
-        self.screen_pipeline("a render pipeline", module, layout, target, None)
+        let targets = vec![Some(target); targets];
+        self.screen_pipeline("a render pipeline", module, layout, &targets, None)
     }
 
     /// A render pipeline drawing `vertex` and `fragment` of `module` (no vertex
-    /// buffers, triangles) into one colour `target`, depth-tested by `depth` where given;
+    /// buffers, triangles) into the colour `targets`, depth-tested by `depth` where given;
     /// refused as a [`GpuError`] naming `what` where the device cannot make it.
     pub fn screen_pipeline(
         &self,
         what: &str,
         module: &wgpu::ShaderModule,
         layout: Option<&wgpu::PipelineLayout>,
-        target: wgpu::ColorTargetState,
+        targets: &[Option<wgpu::ColorTargetState>],
         depth: Option<wgpu::DepthStencilState>,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
         self.scoped(what, || {
@@ -277,7 +279,7 @@ impl Gpu {
                         module,
                         entry_point: Some("fragment"),
                         compilation_options: Default::default(),
-                        targets: &[Some(target)],
+                        targets,
                     }),
                     primitive: Default::default(),
                     depth_stencil: depth,

@@ -91,7 +91,7 @@ impl DisplayPass {
             "the display pass",
             &module,
             Some(&pipeline_layout),
-            format.into(),
+            &[Some(format.into())],
             None,
         )?;
         Ok(DisplayPass {

@@ -316,6 +316,7 @@ impl GpuShafts {
                     dst_factor: wgpu::BlendFactor::One,
                     operation: wgpu::BlendOperation::Add,
                 },
+                1,
             )?,
             composite: gpu.compute_pipeline(&composite, "main", None)?,
             target,

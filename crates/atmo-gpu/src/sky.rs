@@ -341,7 +341,7 @@ impl SkyPass {
             "the sky's picture pass",
             &module,
             None,
-            target.format.into(),
+            &[Some(target.format.into())],
             depth_stencil,
         )?;
         Ok(SkyPass {

@@ -8,6 +8,7 @@
 
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::FOOTPRINT;
+use atmo::clouds::particles::FADE_SCALE;
 use atmo::sky::shells::export;
 
 use crate::{Gpu, GpuError};
@@ -120,7 +121,7 @@ const FILES: &[(&str, &str)] = &[
 
 /// The constants WGSL shares with the Rust, generated: `const PHASE_RAYLEIGH: u32 = 0u;`
 /// and the rest of [`PhaseFunction::CODES`], this module's codes, the sky model's
-/// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, and the clouds' `FOOTPRINT`.
+/// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, and the clouds' `FOOTPRINT` and `FADE_SCALE`.
 pub fn prelude() -> String {
     let phases = PhaseFunction::CODES
         .iter()
@@ -137,8 +138,10 @@ pub fn prelude() -> String {
     for (name, code) in phases.chain(shared) {
         out.push_str(&format!("const {name}: u32 = {code}u;\n"));
     }
-    // How far across the light a particle's footprint reaches, in standard deviations.
+    // How far across the light a particle's footprint reaches, in standard deviations,
+    // and the scale of a faded billboard's column.
     out.push_str(&format!("const FOOTPRINT: f32 = {:?};\n", FOOTPRINT));
+    out.push_str(&format!("const FADE_SCALE: f32 = {:?};\n", FADE_SCALE));
     out
 }
 

@@ -8,6 +8,7 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::{render, Haze, Lighting};
+use atmo::clouds::Octaves;
 use atmo::image::Frame;
 use atmo::view::{Camera, Fov};
 use atmo_gpu::clouds::GpuClouds;
@@ -72,13 +73,14 @@ fn the_drawn_cloud_matches_the_cpu_picture() {
         *p = Vec3::new(0.2, 0.3, 0.5) * (1.0 + (i % 120) as f32 / 120.0);
     }
     let mut clouds = GpuClouds::new(&gpu, &particles, 48).unwrap();
-    clouds.light(&gpu, to_sun(), 0.5, Splat::Pieces).unwrap();
-    let buffer = IntensityBuffer::new(&particles, to_sun(), 48, 0.5, Splat::Pieces).unwrap();
-    for (phase, back) in [
-        (PhaseFunction::CloudMie, None),
+    clouds.light(&gpu, to_sun(), 0.0, Splat::Pieces).unwrap();
+    let buffer = IntensityBuffer::new(&particles, to_sun(), 48, 0.0, Splat::Pieces).unwrap();
+    for (phase, back, scattering) in [
+        (PhaseFunction::CloudMie, None, Octaves::MULTIPLE),
         (
             PhaseFunction::HenyeyGreenstein { g: 0.6 },
             Some(&background),
+            Octaves::SINGLE,
         ),
     ] {
         let light = Lighting {
@@ -91,6 +93,7 @@ fn the_drawn_cloud_matches_the_cpu_picture() {
                 transmittance: Vec3::new(0.8, 0.85, 0.9),
                 inscatter: Vec3::new(0.01, 0.02, 0.04),
             },
+            scattering,
         };
         let cpu = render(&particles, &buffer, &camera, &light, back).unwrap();
         let out = clouds.render(&gpu, &camera, &light, back).unwrap().frame;
@@ -121,6 +124,7 @@ fn drawing_before_the_light_pass_and_oversized_buffers_are_refused() {
         ambient: Vec3::ZERO,
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
+        scattering: Octaves::SINGLE,
     };
     let err = clouds.render(&gpu, &camera, &light, None).err().unwrap();
     assert!(err.to_string().contains("light pass"), "{err}");

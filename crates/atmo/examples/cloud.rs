@@ -5,7 +5,7 @@
 //! `cargo run --release -p atmo --example cloud -- cloud.png`
 
 use atmo::atmosphere::PhaseFunction;
-use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Splat};
+use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, Splat};
 use atmo::sky::{Daylight, SkySettings};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
@@ -21,8 +21,8 @@ fn main() -> atmo::Result<()> {
     }
     .generate();
     let sun = Sun::from_degrees(25.0, 40.0)?;
-    // The sunlight inside the cloud, in a 128^3 buffer oriented to the sun.
-    let buffer = IntensityBuffer::new(&particles, sun.toward(), 128, 0.5, Splat::Pieces)?;
+    // The sun's transmittance inside the cloud, in a 128^3 buffer oriented to the sun.
+    let buffer = IntensityBuffer::new(&particles, sun.toward(), 128, 0.0, Splat::Pieces)?;
     // The sky's light at the cloud's height.
     let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
     let daylight = Daylight::new(
@@ -36,6 +36,8 @@ fn main() -> atmo::Result<()> {
         ambient: daylight.skylight(sun),
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
+        // Every order of scattering (Octaves::SINGLE: the paper's single scattering).
+        scattering: Octaves::MULTIPLE,
     };
     let eye = centre + Vec3::new(-1500.0, -300.0, 2500.0);
     let camera = Camera::look_at(eye, centre, Vec3::Y, Fov::Vertical(40.0), (960, 540))?;

@@ -264,13 +264,14 @@ fn particle_files_round_trip_and_bad_ones_name_the_line() {
 }
 
 #[test]
-fn billboards_composite_as_clouds_five_and_six() {
+fn billboards_composite_as_clouds_five_each_blob_taking_its_absorbed_share() {
     use atmo::atmosphere::PhaseFunction;
     use atmo::clouds::render::{render, Haze, Lighting};
     use atmo::image::Frame;
     use atmo::view::{Camera, Lens};
     // Two particles on the camera's axis, the pixel at the image centre looking through
-    // both; only ambient light, so each source is a tau ambient.
+    // both; only ambient light, so each source is a (1 - e^-tau) ambient (clouds (6)'s
+    // a tau ambient for a blob that also absorbs what it scatters), tau the faded column.
     let particle = |z: f32, density: f32| Particle {
         position: Vec3::new(0.0, 0.0, z),
         radius: 6.0,
@@ -298,6 +299,7 @@ fn billboards_composite_as_clouds_five_and_six() {
         ambient: Vec3::new(1.0, 0.5, 0.25),
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
+        scattering: atmo::clouds::Octaves::SINGLE,
     };
     let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.5, Splat::Pieces).unwrap();
     let mut background = Frame::new(65, 65);
@@ -306,11 +308,15 @@ fn billboards_composite_as_clouds_five_and_six() {
         .iter_mut()
         .for_each(|p| *p = Vec3::splat(2.0));
     let frame = render(&particles, &buffer, &camera, &light, Some(&background)).unwrap();
-    let tau = |p: &Particle| p.column(0.0, f64::NEG_INFINITY, f64::INFINITY) as f32;
+    let tau = |p: &Particle| p.faded_column(0.0);
     let (near, far) = (tau(&particles[1]), tau(&particles[0]));
+    // The faded column on the axis is the Gaussian's within a few per cent.
+    let gaussian = particles[1].column(0.0, f64::NEG_INFINITY, f64::INFINITY) as f32;
+    assert!((near / gaussian - 1.0).abs() < 0.02, "{near} {gaussian}");
     let a = 0.8;
-    let want = light.ambient * (a * near)
-        + (-near).exp() * (light.ambient * (a * far) + (-far).exp() * Vec3::splat(2.0));
+    let absorbed = |tau: f32| 1.0 - (-tau).exp();
+    let want = light.ambient * (a * absorbed(near))
+        + (-near).exp() * (light.ambient * (a * absorbed(far)) + (-far).exp() * Vec3::splat(2.0));
     let got = frame.pixels[32 * 65 + 32];
     assert!(
         (got - want).abs().max_element() < 1e-4 * want.max_element(),

@@ -1,7 +1,8 @@
 //! `atmo bench clouds`: the light pass of the 3-D intensity buffer (clouds 3) against
 //! the Harris baseline (clouds 2.1) on the paper's three particle counts and three
 //! buffer sizes, in the same run; the buffer's error against the exact transmittance;
-//! and the time to draw a 1280 x 720 frame.
+//! the time to draw a 1280 x 720 frame with every order; and a small picture of every
+//! order against the path tracer, its error and the two times.
 
 use anyhow::Result;
 use atmo::atmosphere::PhaseFunction;
@@ -9,8 +10,9 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::{Cumulus, SplitMix64};
 use atmo::clouds::harris::light_per_particle;
 use atmo::clouds::render::{render, Haze, Lighting};
+use atmo::clouds::Octaves;
 use atmo::image::{Display, Frame, ToneMap};
-use atmo::reference::clouds::transmittance;
+use atmo::reference::clouds::{transmittance, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
 use atmo_gpu::clouds::GpuClouds;
 use atmo_gpu::{Gpu, Rendered};
@@ -36,7 +38,8 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     let sizes: &[usize] = if quick { &[128] } else { &[128, 256, 384] };
     let runs = if quick { 3 } else { 7 };
     let to_sun = toward_sun(20.0, 40.0);
-    let forward = 0.5;
+    // The buffer holds the sun's transmittance (what every order needs).
+    let forward = 0.0;
     for &count in counts {
         let particles = Cumulus {
             particles: count,
@@ -94,14 +97,8 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     }
     .generate();
     let buffer = IntensityBuffer::new(&particles, to_sun, 256, forward, Splat::Pieces)?;
-    let camera = camera(&particles);
-    let light = Lighting {
-        to_sun,
-        sun: Vec3::ONE,
-        ambient: Vec3::splat(0.04),
-        phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
-    };
+    let camera = bench_camera(&particles, (1280, 720));
+    let light = lighting(to_sun);
     let frame_ms = median(
         (0..runs.min(5))
             .map(|_| time_ms(|| drop(render(&particles, &buffer, &camera, &light, None))))
@@ -109,13 +106,89 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     );
     emit(
         json,
-        json!({"bench": "clouds.frame", "params": {"particles": particles.len(), "width": 1280, "height": 720}, "median_ms": frame_ms}),
+        json!({"bench": "clouds.frame", "params": {"particles": particles.len(), "width": 1280, "height": 720, "scattering": "multiple"}, "median_ms": frame_ms}),
         format!(
-            "clouds.frame      {:>6} particles 1280 x 720: {frame_ms:.1} ms",
+            "clouds.frame      {:>6} particles 1280 x 720: {frame_ms:.1} ms (every order)",
             particles.len()
         ),
     );
+    // Every order against the path tracer, on a small picture of the same view.
+    let size = if quick { (32, 18) } else { (96, 54) };
+    let paths = if quick { 8 } else { 64 };
+    let small = bench_camera(&particles, size);
+    let mut fast = Frame::new(1, 1);
+    let fast_ms = median(
+        (0..runs)
+            .map(|_| {
+                time_ms(|| {
+                    fast = render(&particles, &buffer, &small, &light, None).expect("a pinhole")
+                })
+            })
+            .collect(),
+    );
+    let reference = ReferenceCloud::new(
+        &particles,
+        ReferenceLight {
+            to_sun: to_sun.as_dvec3(),
+            phase: light.phase,
+            sky: 0.0,
+        },
+    );
+    let settings = PathSettings {
+        paths,
+        orders: usize::MAX,
+        seed: 5,
+    };
+    let mut traced = Vec::new();
+    let traced_ms = time_ms(|| traced = reference.path_traced_picture(&small, &settings));
+    // The cloud's pixels: those its particles cover (optical depth over 0.1).
+    let covered: Vec<usize> = (0..traced.len())
+        .filter(|&k| {
+            let (x, y) = (
+                (k as u32 % size.0) as f32 + 0.5,
+                (k as u32 / size.0) as f32 + 0.5,
+            );
+            let ray = reference.volume.ray(
+                small.position.as_dvec3(),
+                small.ray(x, y).as_dvec3().normalize(),
+            );
+            ray.depth(0.0, f64::INFINITY) > 0.1
+        })
+        .collect();
+    let mean_fast = covered
+        .iter()
+        .map(|&k| fast.pixels[k].x as f64)
+        .sum::<f64>();
+    let mean_traced = covered.iter().map(|&k| traced[k].0).sum::<f64>();
+    let error = mean_fast / mean_traced - 1.0;
+    emit(
+        json,
+        json!({"bench": "clouds.multiple", "params": {"particles": particles.len(), "width": size.0, "height": size.1,
+                   "scattering": "multiple", "paths_per_pixel": paths, "cloud_pixels": covered.len()},
+               "median_ms": fast_ms, "baseline": "clouds.path-traced", "baseline_median_ms": traced_ms,
+               "ratio": traced_ms / fast_ms, "error": {"vs_path_traced": error}}),
+        format!(
+            "clouds.multiple   {:>6} particles {} x {}: {fast_ms:.1} ms   path tracer ({paths} paths) {traced_ms:.0} ms   ratio {:.0}   mean error {:+.1} %",
+            particles.len(),
+            size.0,
+            size.1,
+            traced_ms / fast_ms,
+            100.0 * error
+        ),
+    );
     Ok(())
+}
+
+/// The benches' light: unit sunlight from `to_sun`, every order, no ambient light.
+fn lighting(to_sun: Vec3) -> Lighting {
+    Lighting {
+        to_sun,
+        sun: Vec3::ONE,
+        ambient: Vec3::ZERO,
+        phase: PhaseFunction::CloudMie,
+        haze: Haze::CLEAR,
+        scattering: Octaves::MULTIPLE,
+    }
 }
 
 /// Mean |Gamma - exact| / exact at 400 voxel centres where the exact value is above 1e-3
@@ -140,11 +213,11 @@ fn mean_error(
     sum / count as f64
 }
 
-/// The bench's camera: 1280 x 720, 40 degrees, looking at the cloud from 1.6 widths.
-fn camera(particles: &[atmo::clouds::particles::Particle]) -> Camera {
+/// The bench's camera: 40 degrees, looking at the cloud from 1.6 widths, `size` pixels.
+fn bench_camera(particles: &[atmo::clouds::particles::Particle], size: (u32, u32)) -> Camera {
     let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
     let position = centre + Vec3::new(-700.0, -600.0, 1900.0);
-    Camera::look_at(position, centre, Vec3::Y, Fov::Vertical(40.0), (1280, 720))
+    Camera::look_at(position, centre, Vec3::Y, Fov::Vertical(40.0), size)
         .expect("the view is oblique: not along up")
 }
 
@@ -152,7 +225,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
     let runs = if quick { 3 } else { 7 };
     let particles = Cumulus::default().generate();
     let to_sun = toward_sun(20.0, 40.0);
-    let forward = 0.5;
+    let forward = 0.0;
     let sizes: &[usize] = if quick { &[128] } else { &[128, 256] };
     for &n in sizes {
         let mut buffer = IntensityBuffer::new(&particles, to_sun, n, forward, Splat::Pieces)?;
@@ -197,14 +270,8 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
     clouds
         .light(gpu, to_sun, forward, Splat::Pieces)
         .map_err(gpu_error)?;
-    let camera = camera(&particles);
-    let light = Lighting {
-        to_sun,
-        sun: glam::Vec3::ONE,
-        ambient: glam::Vec3::splat(0.04),
-        phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
-    };
+    let camera = bench_camera(&particles, (1280, 720));
+    let light = lighting(to_sun);
     let mut cpu = Frame::new(1, 1);
     let cpu_ms = median(
         (0..runs)
@@ -228,7 +295,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         gpu,
         Case {
             name: "clouds.frame.gpu",
-            params: json!({"particles": particles.len(), "width": camera.width, "height": camera.height}),
+            params: json!({"particles": particles.len(), "width": camera.width, "height": camera.height, "scattering": "multiple"}),
             wall_ms: wall,
             gpu_ms,
             cpu_ms,

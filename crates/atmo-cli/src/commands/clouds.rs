@@ -11,6 +11,7 @@ use atmo::clouds::files;
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::{render, Haze, Lighting};
+use atmo::clouds::Octaves;
 use atmo::error::check_range;
 use atmo::files::check_folder;
 use atmo::image::{Display, Frame, ImageKind};
@@ -66,6 +67,10 @@ pub struct CloudsArgs {
     /// Sun elevation above the horizon, degrees, in (0, 90].
     #[arg(long, default_value_t = 20.0)]
     sun_elevation: f32,
+    /// The sun as a vector toward it, `X,Y,Z` in the world frame (x east, y up, z
+    /// south), instead of --sun-elevation and --sun-azimuth.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, conflicts_with_all = ["sun_elevation", "sun_azimuth"])]
+    sun_direction: Option<Vec3>,
     /// Sun azimuth, degrees clockwise from north.
     #[arg(long, default_value_t = 40.0)]
     sun_azimuth: f32,
@@ -74,10 +79,22 @@ pub struct CloudsArgs {
     /// Intensity buffer voxels along each axis (the paper: 128, 256, 384).
     #[arg(long, default_value_t = 256)]
     resolution: usize,
-    /// The part of scattered light taken to go on along the light, the paper's
-    /// p(l,l)/4pi, in [0, 1].
-    #[arg(long, default_value_t = 0.5)]
+    /// Light scattered once (`single`, the paper's model) or every order
+    /// (`multiple`: octaves fitted to a path tracer; docs/clouds.md).
+    #[arg(long, value_enum, default_value_t = ScatteringArg::Multiple)]
+    scattering: ScatteringArg,
+    /// With --scattering single: the part of scattered light taken to go on along the
+    /// light, the paper's p(l,l)/4pi, in [0, 1] (the paper's forward scattering; 0, the
+    /// default, makes the buffer the sun's transmittance and the picture exact single
+    /// scattering).
+    #[arg(long, default_value_t = 0.0)]
     forward: f32,
+    /// Light from the sky scattered by the droplets: `none`, `sky` (the sky module's,
+    /// averaged over the sphere; needs --sky) or an RGB radiance `R,G,B`. Default:
+    /// `sky` with --sky, else `none` (a cloud on black has no other light than the
+    /// sun's).
+    #[arg(long, value_name = "none|sky|R,G,B")]
+    ambient: Option<String>,
     /// How particles enter the buffer: `pieces` (split exactly along the light) or
     /// `whole` (the paper's one factor per particle).
     #[arg(long, value_enum, default_value_t = SplatArg::Pieces)]
@@ -88,6 +105,16 @@ pub struct CloudsArgs {
     /// Henyey-Greenstein asymmetry for --phase hg.
     #[arg(long, default_value_t = 0.8)]
     g: f32,
+    /// The camera's position, `X,Y,Z` m in the world frame, instead of --distance,
+    /// --view-azimuth and --view-height.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, conflicts_with_all = ["distance", "view_azimuth", "view_height"])]
+    camera: Option<Vec3>,
+    /// The point the camera looks at, `X,Y,Z` m (default: the cloud's centre).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
+    look_at: Option<Vec3>,
+    /// Which side of the picture --fov spans.
+    #[arg(long, value_enum, default_value_t = FovAxis::Vertical)]
+    fov_axis: FovAxis,
     /// Camera distance from the cloud's centre, in cloud widths.
     #[arg(long, default_value_t = 2.2)]
     distance: f32,
@@ -97,7 +124,7 @@ pub struct CloudsArgs {
     /// Camera height above the ground, m.
     #[arg(long, default_value_t = 900.0)]
     view_height: f32,
-    /// Vertical field of view, degrees.
+    /// Field of view, degrees, across the side --fov-axis names.
     #[arg(long, default_value_t = 40.0)]
     fov: f32,
     /// Image width, pixels.
@@ -205,6 +232,69 @@ enum SplatArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum FovAxis {
+    Horizontal,
+    Vertical,
+}
+
+/// `X,Y,Z`: three finite numbers.
+fn parse_vec3(text: &str) -> Result<Vec3, String> {
+    let values: Vec<f32> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{text:?} is not X,Y,Z: {e}"))?;
+    match values[..] {
+        [x, y, z] if values.iter().all(|v| v.is_finite()) => Ok(Vec3::new(x, y, z)),
+        _ => Err(format!("{text:?} is not three finite numbers X,Y,Z")),
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq)]
+enum ScatteringArg {
+    Single,
+    Multiple,
+}
+
+/// Where the ambient light comes from.
+#[derive(Clone, Copy, PartialEq)]
+enum Ambient {
+    Rgb(Vec3),
+    Sky,
+}
+
+impl Ambient {
+    /// `--ambient` (or its default, `sky` with `--sky`), refused as exit 2 when it
+    /// does not parse or asks for a sky that is not there.
+    fn parse(arg: Option<&str>, sky: bool) -> atmo::Result<Ambient> {
+        let text = arg.unwrap_or(if sky { "sky" } else { "none" });
+        let bad = |why: &str| {
+            atmo::Error::Invalid(format!(
+                "--ambient = {text:?}: {why} (allowed: none, sky, or R,G,B radiances >= 0)"
+            ))
+        };
+        match text {
+            "none" => Ok(Ambient::Rgb(Vec3::ZERO)),
+            "sky" if sky => Ok(Ambient::Sky),
+            "sky" => Err(bad("the sky's light needs --sky")),
+            _ => {
+                let values: Vec<f32> = text
+                    .split(',')
+                    .map(|v| v.trim().parse::<f32>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| bad("not three numbers"))?;
+                match values[..] {
+                    [r, g, b] if values.iter().all(|v| v.is_finite() && *v >= 0.0) => {
+                        Ok(Ambient::Rgb(Vec3::new(r, g, b)))
+                    }
+                    _ => Err(bad("not three finite numbers >= 0")),
+                }
+            }
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum PhaseArg {
     Mie,
     Hg,
@@ -216,28 +306,55 @@ enum Animate {
     Wind,
 }
 
-/// The camera looking at `particles`' centre from `azimuth_deg`, `distance` widths
-/// away, at `height` m.
+/// The camera: at --camera, or looking at the cloud's centre from --view-azimuth,
+/// --distance widths away, at --view-height m; toward --look-at (default the centre).
+/// Refused inside a particle (a billboard cannot be drawn around the eye).
 fn camera_for(particles: &[Particle], args: &CloudsArgs) -> atmo::Result<Camera> {
     check_range("--fov", args.fov as f64, 1.0, 170.0)?;
-    check_range("--distance", args.distance as f64, 0.1, 1000.0)?;
-    check_range("--view-azimuth", args.view_azimuth as f64, -360.0, 360.0)?;
-    check_range("--view-height", args.view_height as f64, -1e5, 1e5)?;
     Frame::check_size(args.width, args.height)?;
     let (lo, hi) = particles.iter().fold(
         (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
         |(l, h), p| (l.min(p.position), h.max(p.position)),
     );
     let centre = 0.5 * (lo + hi);
-    let width = (hi - lo).x.max((hi - lo).z).max(1.0);
-    let a = args.view_azimuth.to_radians();
-    let position = Vec3::new(
-        centre.x + a.sin() * width * args.distance,
-        args.view_height,
-        centre.z - a.cos() * width * args.distance,
-    );
-    let fov = Fov::Vertical(args.fov);
-    Camera::look_at(position, centre, Vec3::Y, fov, (args.width, args.height))
+    let position = match args.camera {
+        Some(position) => position,
+        None => {
+            check_range("--distance", args.distance as f64, 0.1, 1000.0)?;
+            check_range("--view-azimuth", args.view_azimuth as f64, -360.0, 360.0)?;
+            check_range("--view-height", args.view_height as f64, -1e5, 1e5)?;
+            let width = (hi - lo).x.max((hi - lo).z).max(1.0);
+            let a = args.view_azimuth.to_radians();
+            Vec3::new(
+                centre.x + a.sin() * width * args.distance,
+                args.view_height,
+                centre.z - a.cos() * width * args.distance,
+            )
+        }
+    };
+    if let Some((k, p)) = particles
+        .iter()
+        .enumerate()
+        .find(|(_, p)| (p.position - position).length() < p.radius)
+    {
+        return Err(atmo::Error::Invalid(format!(
+            "--camera = {position} is inside particle {k} (centre {}, radius {} m): \
+             place the camera outside the cloud",
+            p.position, p.radius
+        )));
+    }
+    let fov = match args.fov_axis {
+        FovAxis::Vertical => Fov::Vertical(args.fov),
+        FovAxis::Horizontal => Fov::Horizontal(args.fov),
+    };
+    let target = args.look_at.unwrap_or(centre);
+    if target == position {
+        return Err(atmo::Error::Invalid(format!(
+            "--look-at = {target} is where the camera is (--camera): the camera has no view \
+             direction"
+        )));
+    }
+    Camera::look_at(position, target, Vec3::Y, fov, (args.width, args.height))
 }
 
 pub fn run(mut args: CloudsArgs) -> Result<()> {
@@ -248,6 +365,17 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
             p.elevation_deg, p.azimuth_deg
         );
         (args.sun_elevation, args.sun_azimuth) = (p.elevation_deg as f32, p.azimuth_deg as f32);
+    }
+    if let Some(toward) = args.sun_direction {
+        let sun = Sun::from_toward(toward).map_err(|_| {
+            atmo::Error::Invalid(format!(
+                "--sun-direction = {toward} has no direction: give a non-zero X,Y,Z toward the sun"
+            ))
+        })?;
+        (args.sun_elevation, args.sun_azimuth) = (
+            sun.elevation().to_degrees() as f32,
+            sun.azimuth().to_degrees() as f32,
+        );
     }
     check_range(
         "--sun-elevation (a sun at or below the horizon does not light a cloud from above)",
@@ -284,6 +412,21 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
         }
     }
     let camera = camera_for(&particles, &args)?;
+    let ambient = Ambient::parse(args.ambient.as_deref(), args.sky)?;
+    let scattering = match args.scattering {
+        ScatteringArg::Single => Octaves::SINGLE,
+        ScatteringArg::Multiple => {
+            if args.forward != 0.0 {
+                return Err(atmo::Error::Invalid(format!(
+                    "--forward = {} applies to --scattering single only (the octaves of \
+                     --scattering multiple need the sun's transmittance: --forward 0)",
+                    args.forward
+                ))
+                .into());
+            }
+            Octaves::MULTIPLE
+        }
+    };
     let splat = match args.splat {
         SplatArg::Pieces => Splat::Pieces,
         SplatArg::Whole => Splat::Whole,
@@ -314,20 +457,28 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
                 Lighting {
                     to_sun: sun.toward(),
                     sun: Vec3::ONE,
-                    ambient: Vec3::new(0.03, 0.04, 0.06),
+                    ambient: match ambient {
+                        Ambient::Rgb(rgb) => rgb,
+                        Ambient::Sky => unreachable!("Ambient::parse needs --sky for it"),
+                    },
                     phase,
                     haze: Haze::CLEAR,
+                    scattering,
                 },
                 None,
             ),
             Some(sky) => {
-                let (sunlight, ambient, haze, background) = sky.at(sun, &camera)?;
+                let (sunlight, skylight, haze, background) = sky.at(sun, &camera)?;
                 let light = Lighting {
                     to_sun: sun.toward(),
                     sun: sunlight,
-                    ambient,
+                    ambient: match ambient {
+                        Ambient::Rgb(rgb) => rgb,
+                        Ambient::Sky => skylight,
+                    },
                     phase,
                     haze,
+                    scattering,
                 };
                 (light, Some(background))
             }
@@ -450,8 +601,8 @@ impl SkyAround {
     }
 
     /// For `sun`: the sun's irradiance at the cloud (RGB, through the atmosphere), the
-    /// zenith sky's radiance there (the cloud's ambient light), the air in front of the
-    /// cloud, and the sky behind it as `camera` sees it.
+    /// sky's radiance averaged over the sphere there (its ambient light), the air in
+    /// front of the cloud, and the sky behind it as `camera` sees it.
     fn at(&self, sun: Sun, camera: &Camera) -> atmo::Result<(Vec3, Vec3, Haze, Frame)> {
         let view = View {
             camera: camera.clone(),

@@ -199,12 +199,25 @@ impl IntensityBuffer {
         (self.buffer_from_world * p - self.min) / self.voxel - Vec3::splat(0.5)
     }
 
+    /// The step in grid coordinates of the world displacement `v` (m).
+    #[inline]
+    pub fn grid_step(&self, v: Vec3) -> Vec3 {
+        (self.buffer_from_world * v) / self.voxel
+    }
+
     /// [`IntensityBuffer::sample`] at grid coordinates `g`.
     #[inline]
     pub fn sample_grid(&self, g: Vec3) -> f32 {
+        self.sample_log_grid(g).exp()
+    }
+
+    /// `ln Gamma` at grid coordinates `g`, trilinear between voxel centres (clamped to
+    /// the grid: 0 on the sun's side of it).
+    #[inline]
+    pub fn sample_log_grid(&self, g: Vec3) -> f32 {
         let n = self.resolution;
         if g.y < -0.5 {
-            return 1.0;
+            return 0.0;
         }
         let last = (n - 1) as f32;
         let g = g.clamp(Vec3::ZERO, Vec3::splat(last));
@@ -228,7 +241,6 @@ impl IntensityBuffer {
             lerp(at(ix, iz + 1), at(ix + 1, iz + 1), f.x),
             f.z,
         )
-        .exp()
     }
 }
 

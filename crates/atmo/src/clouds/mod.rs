@@ -11,10 +11,12 @@ pub mod buffer;
 pub mod files;
 pub mod generator;
 pub mod harris;
+pub mod octaves;
 pub mod particles;
 pub mod render;
 
 pub use buffer::{IntensityBuffer, Splat};
 pub use generator::Cumulus;
+pub use octaves::Octaves;
 pub use particles::Particle;
 pub use render::{render, Haze, Lighting};

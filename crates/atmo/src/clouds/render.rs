@@ -8,13 +8,13 @@
 //! point the pixel shows (trilinear), the quality gain of clouds 3.3: detail finer than
 //! a particle.
 
-use std::f32::consts::PI;
-
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::buffer::IntensityBuffer;
-use super::particles::Particle;
+use super::buffer::FOOTPRINT;
+use super::octaves::{Emission, Octaves};
+use super::particles::{tabulated_emission_nodes, Particle};
 use crate::atmosphere::phase::PhaseFunction;
 use crate::error::Result;
 use crate::image::Frame;
@@ -34,6 +34,8 @@ pub struct Lighting {
     /// The droplets' phase function (clouds (6)'s `p`), e.g.
     /// [`PhaseFunction::CloudMie`].
     pub phase: PhaseFunction,
+    /// Single scattering, or every order by octaves.
+    pub scattering: Octaves,
     /// The air between the eye and the cloud.
     pub haze: Haze,
 }
@@ -77,18 +79,40 @@ pub fn render(
     // Front to back: nearest first (see the module doc).
     let depth: Vec<f32> = particles.iter().map(|p| camera.depth(p.position)).collect();
     let mut order: Vec<usize> = (0..particles.len())
-        .filter(|&k| depth[k] > particles[k].radius)
+        .filter(|&k| depth[k] > reach(&particles[k]))
         .collect();
     order.sort_by(|&a, &b| depth[a].total_cmp(&depth[b]).then(a.cmp(&b)));
-    // Each particle's footprint on the screen: centre and radius in pixels.
+    // Each particle's footprint on the screen: centre and radius in pixels, the radius
+    // of its reach seen at its distance, widened off the axis where the perspective
+    // stretches it (by 1 / cos^2 of the angle from the axis).
     let footprint: Vec<(f32, f32, f32)> = order
         .iter()
         .map(|&k| {
             let d = particles[k].position - camera.position;
             let z = depth[k];
-            let sx = d.dot(camera.right) / z * focal + 0.5 * w as f32;
-            let sy = -d.dot(camera.up) / z * focal + 0.5 * h as f32;
-            (sx, sy, particles[k].radius / z * focal)
+            let (tx, ty) = (d.dot(camera.right) / z, d.dot(camera.up) / z);
+            let r = reach(&particles[k]);
+            let stretch = 1.0 + tx * tx + ty * ty;
+            let (sx, sy) = (tx * focal + 0.5 * w as f32, -ty * focal + 0.5 * h as f32);
+            (sx, sy, r / (z * z - r * r).sqrt() * focal * stretch)
+        })
+        .collect();
+    // Each pixel's ray (its component along the view axis 1) is affine in the pixel
+    // centre: `r = r0 + x rx + y ry`; so is its step in the buffer's grid.
+    let r0 = camera.ray(0.5, 0.5);
+    let (rx, ry) = (camera.ray(1.5, 0.5) - r0, camera.ray(0.5, 1.5) - r0);
+    let (g_eye, g0, gx, gy) = (
+        buffer.grid_coordinates(camera.position),
+        buffer.grid_step(r0),
+        buffer.grid_step(rx),
+        buffer.grid_step(ry),
+    );
+    // The phase function for each pixel's ray: the same for every blob it crosses.
+    let phases: Vec<f32> = (0..w * h)
+        .into_par_iter()
+        .map(|k| {
+            let r = r0 + (k % w) as f32 * rx + (k / w) as f32 * ry;
+            light.phase.eval_f32(light.to_sun.dot(r.normalize()))
         })
         .collect();
     let mut frame = Frame::new(camera.width, camera.height);
@@ -100,6 +124,8 @@ pub fn render(
             let (y0, y1) = (band * BAND, (band * BAND + pixels.len() / w) as f32);
             // What still gets through each pixel of the band from behind.
             let mut through = vec![1.0f32; pixels.len()];
+            // The higher octaves' light, kept apart until the pixel's depth is known.
+            let mut higher = vec![Vec3::ZERO; pixels.len()];
             // Blocks of BLOCK columns across the band: whether one of their pixels still
             // lets light through, kept up to date lazily (`dirty` after a particle).
             let blocks = w.div_ceil(BLOCK);
@@ -130,52 +156,65 @@ pub fn render(
                 }
                 dirty[b0..=b1].iter_mut().for_each(|d| *d = true);
                 let p = &particles[k];
-                let z = depth[k];
                 let s = p.sigma();
-                let inv_2s2 = 1.0 / (2.0 * s * s);
-                let column = p.density * s * (2.0 * PI).sqrt();
-                // The phase at the particle's centre: the angle changes little over it.
-                let view = (p.position - camera.position).normalize();
-                let phase = light.phase.eval_f32(light.to_sun.dot(view));
-                let lit = p.albedo * phase * light.sun;
+                // The centre from the eye; its dot with a pixel's ray, affine in the pixel.
+                let d = p.position - camera.position;
+                let (d2, d0, dx, dy) = (d.length_squared(), d.dot(r0), d.dot(rx), d.dot(ry));
+                let sun = p.albedo * light.sun;
                 let ambient = p.albedo * light.ambient;
-                let metres_per_pixel = z / focal;
                 let rows = ((sy - sr).floor().max(y0 as f32) as usize)
                     ..((sy + sr).ceil().min(y1) as usize);
                 let cols = ((sx - sr).floor().max(0.0) as usize)
                     ..((sx + sr).ceil().min(w as f32) as usize);
-                // The billboard's points are affine in the pixel: so are their grid
-                // coordinates in the buffer.
-                let grid_at = |x: f32, y: f32| {
-                    buffer.grid_coordinates(camera.position + camera.ray(x, y) * z)
-                };
-                let origin = grid_at(0.5, 0.5);
-                let (step_x, step_y) = (grid_at(1.5, 0.5) - origin, grid_at(0.5, 1.5) - origin);
                 for y in rows {
-                    let dy = (y as f32 + 0.5 - sy) * metres_per_pixel;
+                    let (yf, ray_y) = (y as f32, y as f32 * ry);
                     for x in cols.clone() {
                         let i = (y - band * BAND) * w + x;
                         if through[i] < OPAQUE {
                             continue;
                         }
-                        let dx = (x as f32 + 0.5 - sx) * metres_per_pixel;
-                        let b2 = dx * dx + dy * dy;
-                        if b2 >= p.radius * p.radius {
+                        // The pixel's ray, its nearest approach to the centre (at `t`
+                        // times the ray) and the column through the blob there.
+                        let xf = x as f32;
+                        let r = r0 + xf * rx + ray_y;
+                        let rr = r.length_squared();
+                        let t = (d0 + xf * dx + yf * dy) / rr;
+                        let tau = p.faded_column((d2 - t * t * rr).max(0.0));
+                        if tau <= 0.0 {
                             continue;
                         }
-                        // The column through the blob at this pixel, and the point it shows.
-                        let tau = column * (-b2 * inv_2s2).exp();
-                        let gamma =
-                            buffer.sample_grid(origin + x as f32 * step_x + y as f32 * step_y);
-                        let source = tau * (lit * gamma + ambient);
+                        // The sunlight at two depths of the blob along the ray (see
+                        // `emission_nodes`), from which Octaves::light integrates what
+                        // the blob sends toward the eye; the phase for this ray.
+                        let inv_length = rr.sqrt().recip();
+                        let g_ray = g0 + xf * gx + yf * gy;
+                        let g = g_eye + t * g_ray;
+                        let along = (s * inv_length) * g_ray;
+                        let [(u0, l0), (u1, l1)] = tabulated_emission_nodes(tau);
+                        let emission = Emission {
+                            tau,
+                            u: [u0, u1],
+                            log_gamma: [
+                                buffer.sample_log_grid(g + l0 * along),
+                                buffer.sample_log_grid(g + l1 * along),
+                            ],
+                        };
+                        let phase = phases[band * BAND * w + i];
+                        let [single, more] = light.scattering.light(phase, &emission);
+                        let transmitted = (-tau).exp();
+                        let source = single * sun + (1.0 - transmitted) * ambient;
                         pixels[i] += through[i] * source;
-                        through[i] *= (-tau).exp();
+                        higher[i] += through[i] * more * sun;
+                        through[i] *= transmitted;
                     }
                 }
             }
-            // The haze in front of the cloud, then what shows through it.
+            // The higher octaves by the cloud's depth on the ray, the haze in front of
+            // the cloud, then what shows through it.
             let haze = light.haze;
-            for (e, t) in pixels.iter_mut().zip(&through) {
+            for ((e, t), more) in pixels.iter_mut().zip(&through).zip(&higher) {
+                let depth = -t.max(f32::MIN_POSITIVE).ln();
+                *e += light.scattering.higher_share(depth) * *more;
                 *e = haze.transmittance * *e + (1.0 - *t) * haze.inscatter;
             }
             if let Some(background) = background {
@@ -188,6 +227,11 @@ pub fn render(
     Ok(frame)
 }
 
+/// How far across the line of sight a particle's billboard reaches, m.
+fn reach(p: &Particle) -> f32 {
+    FOOTPRINT * p.sigma()
+}
+
 /// A pixel that lets less than this through from behind is finished: the particles
-/// still to come would change it by less than 0.1 %.
+/// still to come would change it by less than 0.1 %. `exp(-OPAQUE_DEPTH)`.
 const OPAQUE: f32 = 1e-3;

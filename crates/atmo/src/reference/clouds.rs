@@ -1,12 +1,19 @@
-//! References for the cloud light pass: the exact transmittance of a particle field,
-//! and the paper's own way of filling the intensity buffer (clouds 4.1), slice by slice
-//! with shadow polygons, which the prefix-sum fill of [`crate::clouds::buffer`] must
-//! equal.
+//! References for the clouds: the exact transmittance of a particle field; the paper's
+//! own way of filling the intensity buffer (clouds 4.1), slice by slice with shadow
+//! polygons, which the prefix-sum fill of [`crate::clouds::buffer`] must equal; and the
+//! light the particles' Gaussian density scatters toward a camera, single scattering by
+//! quadrature and every order by a volumetric path tracer ([`ReferenceCloud`]), which
+//! the billboards are held to.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
+use crate::atmosphere::PhaseFunction;
 use crate::clouds::buffer::{IntensityBuffer, FOOTPRINT};
+use crate::clouds::generator::SplitMix64;
 use crate::clouds::particles::Particle;
+use crate::reference::sampling::PhaseSampler;
+use crate::view::Camera;
 
 /// The fraction of sunlight arriving at `point` through `particles` with nothing
 /// scattered into its path: `exp(-tau)`, `tau` the optical depth from the sun (along
@@ -59,4 +66,442 @@ pub fn shadow_polygons(grid: &IntensityBuffer, particles: &[Particle], forward: 
         }
     }
     gamma.into_iter().map(|g| g as f32).collect()
+}
+
+/// Standard deviations from its centre beyond which a particle is left out of a ray:
+/// the column there is `exp(-12.5)`, 4e-6 of the axis's. (The fast method's footprints
+/// stop sooner; this is the Gaussian the particles describe.)
+const REACH: f64 = 5.0;
+
+/// The particles indexed for rays: a uniform grid whose cells list the particles that
+/// reach into them, walked cell by cell along a ray (Amanatides and Woo), so that a ray
+/// meets only the particles near it. Everything in f64.
+pub struct CloudVolume<'a> {
+    particles: &'a [Particle],
+    /// The grid's smallest corner, m, and its cells' side, m.
+    min: DVec3,
+    cell: f64,
+    dims: [usize; 3],
+    /// The particles of cell `c` are `entries[starts[c]..starts[c + 1]]`.
+    starts: Vec<u32>,
+    entries: Vec<u32>,
+}
+
+/// A particle a ray passes: where along the ray it comes closest to the centre (m) and
+/// the square of that distance (m^2).
+#[derive(Debug, Clone, Copy)]
+struct Crossing {
+    particle: u32,
+    closest: f64,
+    b2: f64,
+}
+
+/// The particles along one ray from its origin, and the exact optical depth and
+/// extinction on it.
+pub struct RayThrough<'a> {
+    particles: &'a [Particle],
+    crossings: Vec<Crossing>,
+}
+
+impl<'a> CloudVolume<'a> {
+    /// Indexes `particles` (not empty).
+    pub fn new(particles: &'a [Particle]) -> CloudVolume<'a> {
+        let reach = |p: &Particle| REACH * p.sigma() as f64;
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for p in particles {
+            let c = p.position.as_dvec3();
+            lo = lo.min(c - reach(p));
+            hi = hi.max(c + reach(p));
+        }
+        // Cells about as wide as a typical particle's reach, at most 128 a side.
+        let mut reaches: Vec<f64> = particles.iter().map(reach).collect();
+        reaches.sort_by(f64::total_cmp);
+        let extent = hi - lo;
+        let cell = reaches[reaches.len() / 2].max(extent.max_element() / 128.0);
+        let dims = [0, 1, 2].map(|a| ((extent[a] / cell).ceil() as usize).max(1));
+        let index = |a: usize, v: f64| (((v - lo[a]) / cell) as usize).min(dims[a] - 1);
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
+        for (k, p) in particles.iter().enumerate() {
+            let c = p.position.as_dvec3();
+            let (a, b) = (c - reach(p), c + reach(p));
+            for x in index(0, a.x)..=index(0, b.x) {
+                for y in index(1, a.y)..=index(1, b.y) {
+                    for z in index(2, a.z)..=index(2, b.z) {
+                        lists[(x * dims[1] + y) * dims[2] + z].push(k as u32);
+                    }
+                }
+            }
+        }
+        let mut starts = Vec::with_capacity(lists.len() + 1);
+        let mut entries = Vec::new();
+        for list in lists {
+            starts.push(entries.len() as u32);
+            entries.extend(list);
+        }
+        starts.push(entries.len() as u32);
+        CloudVolume {
+            particles,
+            min: lo,
+            cell,
+            dims,
+            starts,
+            entries,
+        }
+    }
+
+    /// The particles along the ray from `origin` in the unit direction `dir`.
+    pub fn ray(&self, origin: DVec3, dir: DVec3) -> RayThrough<'a> {
+        let mut seen: Vec<u32> = Vec::new();
+        self.walk(origin, dir, |c| {
+            seen.extend_from_slice(
+                &self.entries[self.starts[c] as usize..self.starts[c + 1] as usize],
+            )
+        });
+        seen.sort_unstable();
+        seen.dedup();
+        let crossings = seen
+            .into_iter()
+            .filter_map(|k| {
+                let p = &self.particles[k as usize];
+                let d = p.position.as_dvec3() - origin;
+                let closest = d.dot(dir);
+                let b2 = (d - closest * dir).length_squared();
+                let r = REACH * p.sigma() as f64;
+                (b2 < r * r && closest + r > 0.0).then_some(Crossing {
+                    particle: k,
+                    closest,
+                    b2,
+                })
+            })
+            .collect();
+        RayThrough {
+            particles: self.particles,
+            crossings,
+        }
+    }
+
+    /// The fraction of light from the unit direction `toward` reaching `point` with
+    /// nothing scattered into its path.
+    pub fn transmittance(&self, point: DVec3, toward: DVec3) -> f64 {
+        (-self.ray(point, toward).depth(0.0, f64::INFINITY)).exp()
+    }
+
+    /// Calls `visit` with each grid cell the ray crosses (for `t >= 0`), in order.
+    fn walk(&self, origin: DVec3, dir: DVec3, mut visit: impl FnMut(usize)) {
+        let size = DVec3::new(
+            self.dims[0] as f64,
+            self.dims[1] as f64,
+            self.dims[2] as f64,
+        );
+        let max = self.min + size * self.cell;
+        // Where the ray is inside the grid's box (slabs).
+        let (mut enter, mut exit) = (0.0f64, f64::INFINITY);
+        for a in 0..3 {
+            if dir[a] == 0.0 {
+                if origin[a] < self.min[a] || origin[a] > max[a] {
+                    return;
+                }
+                continue;
+            }
+            let (t0, t1) = (
+                (self.min[a] - origin[a]) / dir[a],
+                (max[a] - origin[a]) / dir[a],
+            );
+            enter = enter.max(t0.min(t1));
+            exit = exit.min(t0.max(t1));
+        }
+        if enter > exit {
+            return;
+        }
+        let start = (origin + dir * enter - self.min) / self.cell;
+        let mut cell = [0usize; 3];
+        let (mut next, mut delta, mut step) = ([f64::INFINITY; 3], [f64::INFINITY; 3], [0i64; 3]);
+        for a in 0..3 {
+            cell[a] = (start[a].floor().max(0.0) as usize).min(self.dims[a] - 1);
+            if dir[a] != 0.0 {
+                step[a] = dir[a].signum() as i64;
+                delta[a] = self.cell / dir[a].abs();
+                let edge = self.min[a] + (cell[a] as f64 + (dir[a] > 0.0) as u8 as f64) * self.cell;
+                next[a] = (edge - origin[a]) / dir[a];
+            }
+        }
+        loop {
+            visit((cell[0] * self.dims[1] + cell[1]) * self.dims[2] + cell[2]);
+            let a = (0..3)
+                .min_by(|&i, &j| next[i].total_cmp(&next[j]))
+                .unwrap_or(0);
+            if next[a] > exit {
+                return;
+            }
+            let moved = cell[a] as i64 + step[a];
+            if moved < 0 || moved >= self.dims[a] as i64 {
+                return;
+            }
+            cell[a] = moved as usize;
+            next[a] += delta[a];
+        }
+    }
+}
+
+impl RayThrough<'_> {
+    /// Optical depth between `t0 <= t1` m along the ray (infinite allowed).
+    pub fn depth(&self, t0: f64, t1: f64) -> f64 {
+        self.crossings
+            .iter()
+            .map(|c| {
+                self.particles[c.particle as usize].column(
+                    c.b2.sqrt(),
+                    t0 - c.closest,
+                    t1 - c.closest,
+                )
+            })
+            .sum()
+    }
+
+    /// Extinction and scattering coefficients `t` m along the ray, 1/m.
+    pub fn extinction(&self, t: f64) -> (f64, f64) {
+        self.crossings.iter().fold((0.0, 0.0), |(e, s), c| {
+            let p = &self.particles[c.particle as usize];
+            let sigma = p.sigma() as f64;
+            let l = t - c.closest;
+            let v = p.density as f64 * (-(c.b2 + l * l) / (2.0 * sigma * sigma)).exp();
+            (e + v, s + v * p.albedo as f64)
+        })
+    }
+
+    /// Where the particles along the ray lie: the first and last `t` (m) within their
+    /// reach, or `None` for a ray that meets none.
+    pub fn span(&self) -> Option<(f64, f64)> {
+        self.crossings.iter().fold(None, |span, c| {
+            let r = REACH * self.particles[c.particle as usize].sigma() as f64;
+            let (a, b) = ((c.closest - r).max(0.0), c.closest + r);
+            Some(span.map_or((a, b), |(lo, hi): (f64, f64)| (lo.min(a), hi.max(b))))
+        })
+    }
+
+    /// The standard deviation of the smallest particle on the ray, m.
+    fn finest(&self) -> f64 {
+        self.crossings
+            .iter()
+            .map(|c| self.particles[c.particle as usize].sigma() as f64)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The distance `t` at which the optical depth from the origin reaches `target`, or
+    /// `None` if the whole ray holds less: free-flight sampling by inverting the exact
+    /// depth (Newton steps kept inside a bisection bracket), with no majorant.
+    pub fn free_flight(&self, target: f64) -> Option<f64> {
+        let (_, end) = self.span()?;
+        if self.depth(0.0, end) < target {
+            return None;
+        }
+        let (mut lo, mut hi) = (0.0, end);
+        let mut t = 0.5 * end;
+        for _ in 0..100 {
+            let f = self.depth(0.0, t) - target;
+            if f.abs() <= 1e-10 * target.max(1.0) {
+                break;
+            }
+            if f > 0.0 {
+                hi = t;
+            } else {
+                lo = t;
+            }
+            let (sigma, _) = self.extinction(t);
+            let newton = t - f / sigma;
+            t = if sigma > 0.0 && newton > lo && newton < hi {
+                newton
+            } else {
+                0.5 * (lo + hi)
+            };
+            if hi - lo < 1e-9 * end {
+                break;
+            }
+        }
+        Some(t)
+    }
+}
+
+/// How a reference cloud is lit: sunlight of irradiance 1 from `to_sun`, scattered by
+/// `phase`, and optionally a sky of uniform radiance over the upper hemisphere (`y` up).
+#[derive(Debug, Clone, Copy)]
+pub struct ReferenceLight {
+    /// Unit vector toward the sun.
+    pub to_sun: DVec3,
+    pub phase: PhaseFunction,
+    /// Radiance of the sky above the horizon (0: none), per unit sun irradiance.
+    pub sky: f64,
+}
+
+/// The light a cloud scatters toward a camera, integrated without the fast method's
+/// buffer or billboards: the single-scattering integral by quadrature, and every order
+/// by a volumetric path tracer.
+pub struct ReferenceCloud<'a> {
+    pub volume: CloudVolume<'a>,
+    pub light: ReferenceLight,
+}
+
+/// What a path tracer is asked for.
+#[derive(Debug, Clone, Copy)]
+pub struct PathSettings {
+    /// Paths per pixel.
+    pub paths: usize,
+    /// The highest scattering order followed: 1 for single scattering.
+    pub orders: usize,
+    pub seed: u64,
+}
+
+/// Scattering orders a path follows at most with `orders` unbounded (a path in a cloud
+/// of optical depth 10 scatters some 20 times on average; this many leave out less than
+/// 1e-6 of the light).
+pub const MAX_ORDER: usize = 2000;
+
+impl<'a> ReferenceCloud<'a> {
+    pub fn new(particles: &'a [Particle], light: ReferenceLight) -> ReferenceCloud<'a> {
+        ReferenceCloud {
+            volume: CloudVolume::new(particles),
+            light,
+        }
+    }
+
+    /// Single-scattered sunlight reaching `origin` from the unit direction `-dir` (the
+    /// ray travels along `dir`), and the ray's transmittance through the cloud:
+    /// `integral sigma_s(t) p T_sun(t) T(0, t) dt`, in steps of a quarter of the finest
+    /// particle's standard deviation, each step's
+    /// `integral sigma T dt = T(t_i) - T(t_i+1)` exact and its albedo, phase and sun
+    /// transmittance taken at its middle.
+    pub fn single_scattering(&self, origin: DVec3, dir: DVec3) -> (f64, f64) {
+        self.single_scattering_with(origin, dir, 4.0)
+    }
+
+    /// [`ReferenceCloud::single_scattering`] in steps of `1 / steps_per_sigma` of the
+    /// finest particle's standard deviation (to show it converged).
+    pub fn single_scattering_with(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        steps_per_sigma: f64,
+    ) -> (f64, f64) {
+        let ray = self.volume.ray(origin, dir);
+        let Some((a, b)) = ray.span() else {
+            return (0.0, 1.0);
+        };
+        let phase = self.light.phase.eval(self.light.to_sun.dot(dir));
+        let steps = ((b - a) / ray.finest() * steps_per_sigma).ceil().max(1.0) as usize;
+        let h = (b - a) / steps as f64;
+        let mut before = (-ray.depth(0.0, a)).exp();
+        let mut radiance = 0.0;
+        for i in 0..steps {
+            let t = a + (i as f64 + 0.5) * h;
+            let after = before * (-ray.depth(t - 0.5 * h, t + 0.5 * h)).exp();
+            let (sigma, scattering) = ray.extinction(t);
+            if sigma > 0.0 && before > after {
+                let sun = self
+                    .volume
+                    .transmittance(origin + dir * t, self.light.to_sun);
+                radiance += scattering / sigma * phase * sun * (before - after);
+            }
+            before = after;
+        }
+        (radiance, before)
+    }
+
+    /// Every order of sunlight (and sky light, if any) scattered toward `origin` from
+    /// the unit direction `-dir`, up to `settings.orders`: the mean over
+    /// `settings.paths` paths and its standard error. Each path flies by inverting the
+    /// exact optical depth ([`RayThrough::free_flight`]), keeps the albedo as a weight,
+    /// adds the sunlight scattered toward the eye at every event (next-event estimation
+    /// with the exact transmittance to the sun), takes its next direction from the
+    /// phase function and, leaving the cloud upward, adds the sky's radiance.
+    pub fn path_traced(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        settings: &PathSettings,
+        seed: u64,
+    ) -> (f64, f64) {
+        let sampler = PhaseSampler::new(self.light.phase);
+        let mut rng = SplitMix64::new(seed);
+        let (mut sum, mut squares) = (0.0, 0.0);
+        for _ in 0..settings.paths {
+            let v = self.path(
+                origin,
+                dir,
+                settings.orders.min(MAX_ORDER),
+                &sampler,
+                &mut rng,
+            );
+            sum += v;
+            squares += v * v;
+        }
+        let n = settings.paths as f64;
+        let mean = sum / n;
+        let variance = (squares / n - mean * mean).max(0.0);
+        (mean, (variance / (n - 1.0).max(1.0)).sqrt())
+    }
+
+    fn path(
+        &self,
+        mut origin: DVec3,
+        mut dir: DVec3,
+        orders: usize,
+        sampler: &PhaseSampler,
+        rng: &mut SplitMix64,
+    ) -> f64 {
+        let mut weight = 1.0;
+        let mut total = 0.0;
+        for order in 1..=orders {
+            let ray = self.volume.ray(origin, dir);
+            let Some(t) = ray.free_flight(-(1.0 - rng.unit_f64()).ln()) else {
+                // Out of the cloud: the sky, seen after one scattering or more.
+                if order > 1 && dir.y > 0.0 {
+                    total += weight * self.light.sky;
+                }
+                break;
+            };
+            let (sigma, scattering) = ray.extinction(t);
+            weight *= scattering / sigma;
+            origin += dir * t;
+            let sun = self.volume.transmittance(origin, self.light.to_sun);
+            total += weight * self.light.phase.eval(self.light.to_sun.dot(dir)) * sun;
+            dir = sampler.sample(dir, rng);
+        }
+        total
+    }
+
+    /// [`ReferenceCloud::single_scattering`] at every pixel centre of `camera`: radiance
+    /// and transmittance, row by row.
+    pub fn single_scattering_picture(&self, camera: &Camera) -> Vec<(f64, f64)> {
+        pixels(camera)
+            .into_par_iter()
+            .map(|(origin, dir)| self.single_scattering(origin, dir))
+            .collect()
+    }
+
+    /// [`ReferenceCloud::path_traced`] at every pixel centre of `camera`: mean and
+    /// standard error, row by row (each pixel its own random sequence).
+    pub fn path_traced_picture(&self, camera: &Camera, settings: &PathSettings) -> Vec<(f64, f64)> {
+        pixels(camera)
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, (origin, dir))| {
+                let seed = settings.seed ^ (k as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                self.path_traced(origin, dir, settings, seed)
+            })
+            .collect()
+    }
+}
+
+/// Each pixel centre's ray of a pinhole `camera`: origin and unit direction.
+fn pixels(camera: &Camera) -> Vec<(DVec3, DVec3)> {
+    let (w, h) = (camera.width, camera.height);
+    (0..w * h)
+        .map(|k| {
+            let (x, y) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
+            (
+                camera.position.as_dvec3(),
+                camera.ray(x, y).as_dvec3().normalize(),
+            )
+        })
+        .collect()
 }

@@ -7,5 +7,6 @@
 //! marching with shadow rays, converged by doubling.
 
 pub mod clouds;
+pub mod sampling;
 pub mod shafts;
 pub mod sky;

@@ -16,9 +16,10 @@ use glam::DVec3;
 use crate::atmosphere::geometry::{
     distance_to_ground, distance_to_sphere_exit, sun_visible_fraction,
 };
-use crate::atmosphere::{Atmosphere, PhaseFunction, CONSTITUENTS};
+use crate::atmosphere::{Atmosphere, CONSTITUENTS};
 use crate::clouds::generator::SplitMix64;
 use crate::quadrature::{fibonacci_sphere, gauss_legendre};
+use crate::reference::sampling::{sample_cosine, PhaseSampler};
 use crate::sky::shells::maps::MAX_CHANNELS;
 
 /// Resolution of the reference integrator.
@@ -317,13 +318,16 @@ impl ReferenceSky<'_> {
         let d = direction(azimuth, elevation);
         let n = self.atmosphere.channels();
         let a = self.atmosphere;
-        let bounds = [phase_bound(&a.rayleigh.phase), phase_bound(&a.mie.phase)];
+        let samplers = [
+            PhaseSampler::new(a.rayleigh.phase),
+            PhaseSampler::new(a.mie.phase),
+        ];
         let (mut mean, mut error) = (vec![0.0; n], vec![0.0; n]);
         for c in 0..n {
             let mut rng = SplitMix64::new(seed ^ (c as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
             let (mut sum, mut squares) = (0.0, 0.0);
             for _ in 0..paths {
-                let v = self.path(d, c, bounds, &mut rng);
+                let v = self.path(d, c, &samplers, &mut rng);
                 sum += v;
                 squares += v * v;
             }
@@ -335,7 +339,7 @@ impl ReferenceSky<'_> {
     }
 
     /// One path's estimate of orders >= 2 in channel `c`, leaving the eye along `d`.
-    fn path(&self, d: DVec3, c: usize, bounds: [f64; 2], rng: &mut SplitMix64) -> f64 {
+    fn path(&self, d: DVec3, c: usize, samplers: &[PhaseSampler; 2], rng: &mut SplitMix64) -> f64 {
         let a = self.atmosphere;
         let mut sun = [0.0; MAX_CHANNELS];
         let (mut p, mut w) = (self.viewpoint, d);
@@ -366,12 +370,12 @@ impl ReferenceSky<'_> {
                             / (scatter_r + scatter_m);
                         total += weight * phase * sun[c];
                     }
-                    let (species, bound) = if rng.unit_f64() * (scatter_r + scatter_m) < scatter_r {
-                        (&a.rayleigh.phase, bounds[0])
+                    let species = if rng.unit_f64() * (scatter_r + scatter_m) < scatter_r {
+                        &samplers[0]
                     } else {
-                        (&a.mie.phase, bounds[1])
+                        &samplers[1]
                     };
-                    w = sample_phase(species, bound, w, rng);
+                    w = species.sample(w, rng);
                     p = q;
                 }
                 None if ground => {
@@ -445,74 +449,6 @@ impl ReferenceSky<'_> {
         let f = (target - depth[s]) / (depth[s + 1] - depth[s]).max(1e-300);
         (Some((s as f64 + f.clamp(0.0, 1.0)) * h), t_end)
     }
-}
-
-/// The Henyey-Greenstein of the same asymmetry that proposes directions for `phase`
-/// (isotropic for phases without one), and the largest ratio of `phase` to it over the
-/// sphere (found on a fine grid, plus 1 %).
-fn proposal(phase: &PhaseFunction) -> PhaseFunction {
-    let g = match phase {
-        PhaseFunction::HenyeyGreenstein { g } | PhaseFunction::CornetteShanks { g } => *g,
-        _ => 0.0,
-    };
-    PhaseFunction::HenyeyGreenstein { g }
-}
-
-fn phase_bound(phase: &PhaseFunction) -> f64 {
-    let hg = proposal(phase);
-    (0..=2000)
-        .map(|k| {
-            let x = -1.0 + k as f64 / 1000.0;
-            phase.eval(x) / hg.eval(x)
-        })
-        .fold(0.0, f64::max)
-        * 1.01
-}
-
-/// A direction scattered from `w` by `phase`: Rayleigh's exactly (inverting its
-/// cumulative distribution in closed form), the others by Henyey-Greenstein proposals
-/// accepted in proportion to the phase's ratio to it (at most `bound`).
-fn sample_phase(phase: &PhaseFunction, bound: f64, w: DVec3, rng: &mut SplitMix64) -> DVec3 {
-    let cos = if phase.is_rayleigh() {
-        // CDF of 3/8 (1 + x^2) over [-1, 1]: (x^3 + 3x + 4) / 8 = u.
-        let q = 4.0 * rng.unit_f64() - 2.0;
-        let root = (q * q + 1.0).sqrt();
-        (q + root).cbrt() + (q - root).cbrt()
-    } else {
-        let hg = proposal(phase);
-        let PhaseFunction::HenyeyGreenstein { g } = hg else {
-            unreachable!("proposal is Henyey-Greenstein")
-        };
-        loop {
-            let x = sample_henyey_greenstein(g, rng.unit_f64());
-            if rng.unit_f64() * bound * hg.eval(x) <= phase.eval(x) {
-                break x;
-            }
-        }
-    };
-    around(w, cos.clamp(-1.0, 1.0), rng)
-}
-
-/// The cosine of a Henyey-Greenstein scattering angle for the uniform number `u`.
-fn sample_henyey_greenstein(g: f64, u: f64) -> f64 {
-    if g.abs() < 1e-6 {
-        return 2.0 * u - 1.0;
-    }
-    let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
-    (1.0 + g * g - s * s) / (2.0 * g)
-}
-
-/// A unit vector at cosine `cos` from `w`, uniform in azimuth around it.
-fn around(w: DVec3, cos: f64, rng: &mut SplitMix64) -> DVec3 {
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let phi = 2.0 * std::f64::consts::PI * rng.unit_f64();
-    let (u, v) = w.any_orthonormal_pair();
-    (w * cos + (u * phi.cos() + v * phi.sin()) * sin).normalize()
-}
-
-/// A cosine-distributed direction over the hemisphere about `normal`.
-fn sample_cosine(normal: DVec3, rng: &mut SplitMix64) -> DVec3 {
-    around(normal, rng.unit_f64().sqrt(), rng)
 }
 
 #[cfg(test)]

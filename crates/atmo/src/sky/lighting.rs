@@ -142,6 +142,24 @@ pub fn irradiance_up(map: &Frame) -> [f64; 3] {
     e
 }
 
+/// An equirectangular map's radiance averaged over the sphere, `(1 / 4 pi) integral L
+/// dw`, each row weighted by its solid angle.
+pub fn mean_radiance(map: &Frame) -> [f64; 3] {
+    let h = map.height;
+    let mut sum = [0.0; 3];
+    for y in 0..h {
+        let elevation =
+            std::f64::consts::FRAC_PI_2 - std::f64::consts::PI * (y as f64 + 0.5) / h as f64;
+        let solid_angle = (std::f64::consts::PI / h as f64).powi(2) * elevation.cos();
+        for p in &map.pixels[(y * map.width) as usize..((y + 1) * map.width) as usize] {
+            for (s, v) in sum.iter_mut().zip(p.to_array()) {
+                *s += solid_angle * v as f64;
+            }
+        }
+    }
+    sum.map(|s| s / (4.0 * std::f64::consts::PI))
+}
+
 /// The light on a scene at the viewpoint: the sun, and the sky (without the sun's
 /// disc; with the ground below the horizon where the picture has it).
 #[derive(Debug, Clone, PartialEq)]
@@ -185,9 +203,11 @@ mod tests {
                 assert!(s[c].abs() < 1e-3 * want, "{sh:?}");
             }
         }
-        // A uniform radiance L puts pi L on any surface.
+        // A uniform radiance L puts pi L on any surface, and is its own mean.
         let e = irradiance(&sh, Vec3::new(0.3, 0.9, 0.1).normalize());
         assert!((e[1] - 2.0 * std::f64::consts::PI).abs() < 1e-2, "{e:?}");
+        let mean = mean_radiance(&map);
+        assert!((mean[2] - 3.0).abs() < 1e-3, "{mean:?}");
     }
 
     #[test]
@@ -208,5 +228,8 @@ mod tests {
             (up - want).abs() < 0.03 * want && down.abs() < 0.03 * want,
             "{up} {down}"
         );
+        // Its mean over the sphere: (1 / 4 pi) 2 pi (1/2) = 1/4.
+        let mean = mean_radiance(&map)[0];
+        assert!((mean - 0.25).abs() < 1e-3, "{mean}");
     }
 }

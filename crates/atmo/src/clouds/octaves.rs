@@ -1,0 +1,207 @@
+//! Multiple scattering in a cloud, approximated by octaves (Wrenninge, Kulla and
+//! Lundqvist, "Oz: the great and volumetric", SIGGRAPH 2013 talk; used by Hillaire's
+//! Frostbite clouds, 2016): light scattered many times is summed as further copies of
+//! single scattering, octave `i` seeing the sun through `a^i` of the optical depth,
+//! contributing `b^i` of the light, with a phase function softened toward isotropic
+//! by `c^i`:
+//!
+//! ```text
+//! L = sum_i b^i p_i(theta) exp(-a^i tau_sun),   p_i = c^i p + (1 - c^i) / (4 pi)
+//! ```
+//!
+//! Octaves see only the optical depth toward the sun, so they light a thin edge as
+//! much as the face of a thick core, where a path tracer shows the light of higher
+//! orders coming back out of the cloud behind the point: the higher octaves of a pixel
+//! are therefore scaled by `1 - exp(-k tau_view)`, `tau_view` the cloud's whole optical
+//! depth on the pixel's ray (the share of diffuse light such a layer sends back, to
+//! first order; atmo's addition). Against the path tracer (two cumulus clouds of
+//! optical depth 8 to 17, sun from the front, the side and behind) this brought the
+//! share of 8 x 8 blocks within 15 % from a quarter to three fifths, at the same mean.
+//!
+//! Why this method: it keeps the paper's structure whole (the intensity buffer holds
+//! `ln Gamma = -tau_sun`, and every octave is a power of it, so the light pass costs
+//! the same as single scattering), it runs per pixel on a CPU or a GPU at the cost of
+//! a few `exp`s, and its four numbers are fitted to a converged path tracer
+//! ([`crate::reference::clouds::ReferenceCloud::path_traced`]) rather than guessed.
+//! A diffusion of the buffer or a transfer table would add a pass over the whole grid
+//! per sun direction. What octaves cannot do is carry light around a corner: a region
+//! in a deep shadow lit only from the side stays a little dark (docs/clouds.md).
+
+/// The optical depth at which a pixel lets a thousandth through and the billboards
+/// stop drawing into it: `-ln 1e-3`.
+pub const OPAQUE_DEPTH: f32 = 6.907_755_4;
+
+/// The octaves of the approximation: octave 0 is single scattering.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Octaves {
+    /// Octaves summed (1: single scattering only), at most [`Octaves::MAX`].
+    pub count: u32,
+    /// `a`: the share of the sun's optical depth each further octave sees, in (0, 1].
+    pub attenuation: f32,
+    /// `b`: each further octave's light relative to the one before, in [0, 1).
+    pub contribution: f32,
+    /// `c`: how much of the phase function's shape each further octave keeps, in
+    /// [0, 1].
+    pub eccentricity: f32,
+    /// `k`: the higher octaves of a pixel are scaled by `1 - exp(-k tau_view)`.
+    pub depth_scale: f32,
+}
+
+impl Octaves {
+    /// The most octaves a picture sums.
+    pub const MAX: u32 = 8;
+
+    /// Single scattering: the paper's model.
+    pub const SINGLE: Octaves = Octaves {
+        count: 1,
+        attenuation: 1.0,
+        contribution: 0.0,
+        eccentricity: 1.0,
+        depth_scale: 0.0,
+    };
+
+    /// Every order, with the numbers fitted to the path tracer (a grid search over
+    /// the five, the best worst case over a 200-particle cumulus of optical depth 8-11
+    /// and a 2000-particle one of 10-17, sun 25 deg high from the front, the side and
+    /// behind; tests/clouds_light.rs holds them to it).
+    pub const MULTIPLE: Octaves = Octaves {
+        count: 3,
+        attenuation: 0.25,
+        contribution: 0.9,
+        eccentricity: 0.5,
+        depth_scale: 0.3,
+    };
+
+    /// What the higher octaves of a pixel whose ray crosses the optical depth
+    /// `tau_view` of cloud are scaled by: `tau_view` counted up to
+    /// [`OPAQUE_DEPTH`], where the pixel is finished (the billboards stop there).
+    #[inline]
+    pub fn higher_share(&self, tau_view: f32) -> f32 {
+        -(-self.depth_scale * tau_view.min(OPAQUE_DEPTH)).exp_m1()
+    }
+
+    /// The sunlight one blob sends toward the eye per unit sun irradiance and unit
+    /// albedo along a line through it:
+    /// `sum_i b^i p_i integral exp(a^i ln Gamma(u)) e^-u du` over the blob's own
+    /// optical depth `u` on the line, `0..tau` from the eye's side ([`Emission`]);
+    /// `phase` is the phase function's value for the angle, 1/sr. Octave 0 (single
+    /// scattering) and the sum of the higher ones, apart: the pixel scales the latter
+    /// ([`Octaves::higher_share`]).
+    #[inline]
+    pub fn light(&self, phase: f32, e: &Emission) -> [f32; 2] {
+        const ISOTROPIC: f32 = 1.0 / (4.0 * std::f32::consts::PI);
+        let single = phase * e.integral(e.log_gamma);
+        let (mut higher, mut weight, mut shape, mut share) = (0.0, 1.0, 1.0, 1.0);
+        for _ in 1..self.count {
+            weight *= self.contribution;
+            shape *= self.eccentricity;
+            share *= self.attenuation;
+            let p = shape * phase + (1.0 - shape) * ISOTROPIC;
+            higher += weight * p * e.integral(e.log_gamma.map(|l| share * l));
+        }
+        [single, higher]
+    }
+
+    /// Refuses numbers outside their ranges, naming the field.
+    pub fn validate(&self) -> crate::error::Result<()> {
+        use crate::error::check_range;
+        check_range("octaves.count", self.count as f64, 1.0, Self::MAX as f64)?;
+        check_range("octaves.attenuation", self.attenuation as f64, 1e-3, 1.0)?;
+        check_range("octaves.contribution", self.contribution as f64, 0.0, 1.0)?;
+        check_range("octaves.eccentricity", self.eccentricity as f64, 0.0, 1.0)?;
+        check_range("octaves.depth_scale", self.depth_scale as f64, 0.0, 100.0)
+    }
+}
+
+/// What one blob's light toward the eye along a pixel's ray is made from: its column
+/// `tau`, and at two depths `u` of it (its emission nodes,
+/// [`crate::clouds::particles::emission_nodes`]) the sunlight, `ln Gamma`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Emission {
+    pub tau: f32,
+    pub u: [f32; 2],
+    pub log_gamma: [f32; 2],
+}
+
+impl Emission {
+    /// `integral exp(f(u)) e^-u du` over `0..tau`, `f` linear in `u` through the values
+    /// `log` at the two depths and capped at 0 at the blob's ends: then exact,
+    /// `tau e^f(0) (e^x - 1) / x` with `x = f(tau) - f(0) - tau`. Exact for a lone blob
+    /// lit along the line of sight from either end.
+    #[inline]
+    pub fn integral(&self, log: [f32; 2]) -> f32 {
+        let [u0, u1] = self.u;
+        let slope = if u1 - u0 > 1e-6 * self.tau {
+            (log[1] - log[0]) / (u1 - u0)
+        } else {
+            0.0
+        };
+        let start = (log[0] - slope * u0).min(0.0);
+        let end = (log[0] + slope * (self.tau - u0)).min(0.0);
+        let x = end - start - self.tau;
+        // (e^x - 1) / x, 1 at 0: its series near 0 (within 5e-8), else exp (cheaper
+        // than exp_m1, and within 1.2e-5 there).
+        let ratio = if x.abs() < 1e-2 {
+            1.0 + x * (0.5 + x * (1.0 / 6.0))
+        } else {
+            (x.exp() - 1.0) / x
+        };
+        self.tau * start.exp() * ratio
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Against a fine midpoint sum of the same integral, for `ln Gamma` linear in the
+    /// depth (the sun behind, in front, across), thin and thick blobs, both kinds.
+    #[test]
+    fn the_blob_integral_is_exact_for_linear_light() {
+        let phase = 0.3;
+        for octaves in [Octaves::SINGLE, Octaves::MULTIPLE] {
+            for tau in [1e-3f32, 0.5, 4.0, 15.0] {
+                for slope in [-1.0f32, -0.4, 0.0, 0.7, 1.0] {
+                    // ln Gamma(u) = slope (u - tau), 0 at the far end for slope > 0,
+                    // else -slope u below 0 from the near end.
+                    let ln_gamma = |u: f32| {
+                        if slope > 0.0 {
+                            slope * (u - tau)
+                        } else {
+                            slope * u
+                        }
+                    };
+                    let u = [0.2 * tau, 0.9 * tau];
+                    let e = Emission {
+                        tau,
+                        u,
+                        log_gamma: u.map(ln_gamma),
+                    };
+                    let [single, higher] = octaves.light(phase, &e);
+                    let got = single + higher;
+                    let steps = 20_000;
+                    let h = tau as f64 / steps as f64;
+                    let mut want = 0.0f64;
+                    let (mut weight, mut shape, mut share) = (1.0f64, 1.0f64, 1.0f64);
+                    for _ in 0..octaves.count {
+                        let p = shape * phase as f64 + (1.0 - shape) / (4.0 * std::f64::consts::PI);
+                        let integral: f64 = (0..steps)
+                            .map(|k| {
+                                let u = (k as f64 + 0.5) * h;
+                                (share * ln_gamma(u as f32) as f64 - u).exp() * h
+                            })
+                            .sum();
+                        want += weight * p * integral;
+                        weight *= octaves.contribution as f64;
+                        shape *= octaves.eccentricity as f64;
+                        share *= octaves.attenuation as f64;
+                    }
+                    assert!(
+                        (got as f64 - want).abs() < 1e-4 * want,
+                        "{octaves:?} tau {tau} slope {slope}: {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+}
