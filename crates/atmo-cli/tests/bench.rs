@@ -13,6 +13,18 @@ fn bench_lines_report_their_peak_memory() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     let lines: Vec<&str> = stdout.lines().collect();
     assert!(lines.len() >= 2, "{stdout}");
+    // Every order against the path tracer: its error and the two times.
+    let multiple = lines
+        .iter()
+        .find(|l| l.contains("\"bench\":\"clouds.multiple\""))
+        .unwrap_or_else(|| panic!("no clouds.multiple in {stdout}"));
+    for field in [
+        "\"scattering\":\"multiple\"",
+        "\"vs_path_traced\":",
+        "\"ratio\":",
+    ] {
+        assert!(multiple.contains(field), "{field} in {multiple}");
+    }
     for line in lines {
         let field = line
             .split("\"peak_rss_mb\":")

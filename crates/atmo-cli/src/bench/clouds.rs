@@ -113,8 +113,8 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
         ),
     );
     // Every order against the path tracer, on a small picture of the same view.
-    let size = if quick { (32, 18) } else { (96, 54) };
-    let paths = if quick { 8 } else { 64 };
+    let size = if quick { (32, 18) } else { (64, 36) };
+    let paths = if quick { 8 } else { 16 };
     let small = bench_camera(&particles, size);
     let mut fast = Frame::new(1, 1);
     let fast_ms = median(
