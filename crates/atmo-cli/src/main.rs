@@ -114,6 +114,45 @@ fn main() {
     }
 }
 
+/// `argv` with the flags of `atmo clouds --scene FILE` put in just after `clouds`, so
+/// the command line's own flags override them; a scene that cannot be read exits 2.
+fn with_scene(
+    command: &clap::Command,
+    mut argv: Vec<std::ffi::OsString>,
+) -> Vec<std::ffi::OsString> {
+    let Some(at) = argv.iter().position(|a| a == "clouds") else {
+        return argv;
+    };
+    let scene = argv[at..].iter().enumerate().find_map(|(k, a)| {
+        let a = a.to_str()?;
+        match a.strip_prefix("--scene") {
+            Some("") => argv.get(at + k + 1).map(std::path::PathBuf::from),
+            Some(rest) => rest.strip_prefix('=').map(std::path::PathBuf::from),
+            None => None,
+        }
+    });
+    let Some(scene) = scene else {
+        return argv;
+    };
+    let clouds = command
+        .find_subcommand("clouds")
+        .expect("clouds is a subcommand");
+    let flags: Vec<&str> = clouds
+        .get_arguments()
+        .filter_map(|a| a.get_long())
+        .collect();
+    match clouds::scene_arguments(&scene, &flags) {
+        Ok(extra) => {
+            argv.splice(at + 1..at + 1, extra.into_iter().map(Into::into));
+            argv
+        }
+        Err(e) => {
+            eprintln!("atmo: {e}");
+            std::process::exit(2);
+        }
+    }
+}
+
 /// The command line, where every option's value may start with a hyphen (`--exposure
 /// -1`, `--sun-elevation -inf`): such values are numbers to refuse by range, not unknown
 /// flags. A negative value for a flag that counts something is refused naming the flag.
@@ -143,8 +182,12 @@ fn parse_args() -> Cli {
         }
         error.exit()
     };
-    let matches = hyphen_values(Cli::command())
-        .try_get_matches()
+    // A later value of a flag replaces an earlier one: a cloud scene's flags go first.
+    let command =
+        hyphen_values(Cli::command()).mut_subcommand("clouds", |c| c.args_override_self(true));
+    let argv = with_scene(&command, std::env::args_os().collect());
+    let matches = command
+        .try_get_matches_from(argv)
         .unwrap_or_else(|e| refuse(e));
     Cli::from_arg_matches(&matches).unwrap_or_else(|e| refuse(e))
 }

@@ -288,3 +288,98 @@ fn an_explicit_camera_and_sun_and_every_order_brighter_than_one() {
     assert!(means[1] > 1.3 * means[0], "{means:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_scene_file_stands_for_its_flags_and_the_command_line_overrides_it() {
+    let dir = scratch("clouds-scene");
+    let scene = dir.join("cloud.toml");
+    std::fs::write(
+        &scene,
+        "# from the south-west\ngenerate = \"cumulus\"\nparticles = 2000\ncamera = [-1800, 1900, 1800]\n\
+         look-at = [0, 1900, 0]\nfov = 50\nfov-axis = \"horizontal\"\nsun-direction = [-1, 1, 1]\n\
+         width = 160\nheight = 90\nresolution = 48\n",
+    )
+    .unwrap();
+    let (from_scene, from_flags, overridden) = (
+        dir.join("scene.png"),
+        dir.join("flags.png"),
+        dir.join("single.png"),
+    );
+    let run = |args: &[&str]| {
+        let o = atmo(args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    run(&[
+        "clouds",
+        "--scene",
+        scene.to_str().unwrap(),
+        "-o",
+        from_scene.to_str().unwrap(),
+    ]);
+    let mut flags = vec![
+        "clouds",
+        "--generate",
+        "cumulus",
+        "--camera",
+        "-1800,1900,1800",
+        "--look-at",
+        "0,1900,0",
+        "--fov",
+        "50",
+        "--fov-axis",
+        "horizontal",
+        "--sun-direction",
+        "-1,1,1",
+        "-o",
+        from_flags.to_str().unwrap(),
+    ];
+    flags.extend(&SMALL_CLOUD[..8]);
+    run(&flags);
+    let picture = |p: &std::path::Path| image::open(p).unwrap().to_rgb8();
+    assert_eq!(picture(&from_scene), picture(&from_flags));
+    // A flag on the command line wins over the scene's value.
+    run(&[
+        "clouds",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--scattering",
+        "single",
+        "-o",
+        overridden.to_str().unwrap(),
+    ]);
+    assert_ne!(picture(&overridden), picture(&from_scene));
+    // The scene in scenes/, smaller.
+    let shipped = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/cumulus.toml");
+    let small = dir.join("shipped.png");
+    let mut args = vec!["clouds", "--scene", shipped, "-o", small.to_str().unwrap()];
+    args.extend(&SMALL_CLOUD[..8]);
+    run(&args);
+    assert_eq!(picture(&small).dimensions(), (160, 90));
+    // A key that is no flag, and a line that is no TOML: exit 2, named, nothing written.
+    let out = dir.join("bad.png");
+    for (text, wanted) in [
+        (
+            "generate = \"cumulus\"\ncolour = 3\n",
+            "`colour` is not a flag",
+        ),
+        ("generate = \"cumulus\"\nfov = \n", "line 2"),
+        (
+            "generate = \"cumulus\"\ncamera = [1, \"a\", 2]\n",
+            "`camera` must hold numbers",
+        ),
+    ] {
+        std::fs::write(&scene, text).unwrap();
+        let o = atmo(&[
+            "clouds",
+            "--scene",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{text}: {stderr}");
+        assert!(stderr.contains(wanted), "{text}: {stderr}");
+        assert!(!out.exists());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

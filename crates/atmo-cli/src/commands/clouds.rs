@@ -43,6 +43,11 @@ pub const FLAGS: &[(&str, &str)] = &[
 
 #[derive(Args)]
 pub struct CloudsArgs {
+    /// Read the scene from a TOML file whose keys are this command's flags
+    /// (`generate = "cumulus"`, `camera = [0, 1900, -3000]`, `sky = true`; see
+    /// docs/clouds.md); flags on the command line override it.
+    #[arg(long, value_name = "FILE")]
+    scene: Option<PathBuf>,
     /// Make a cloud: `cumulus` (deterministic for a --seed).
     #[arg(
         long,
@@ -157,6 +162,55 @@ pub struct CloudsArgs {
     output: PathBuf,
     #[command(flatten)]
     device: BackendArgs,
+}
+
+/// The command-line arguments a cloud scene file stands for: each key a flag of
+/// `atmo clouds` (its long name, `long_flags`), each value its argument (a string or
+/// number as written, `[x, y, z]` as `x,y,z`, `true` as the bare flag, `false` as
+/// nothing); `particles-file` relative to the scene's folder. An error naming the file,
+/// the line and the key for anything else.
+pub fn scene_arguments(path: &std::path::Path, long_flags: &[&str]) -> atmo::Result<Vec<String>> {
+    let name = path.display();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| atmo::Error::Invalid(format!("--scene {name}: {e}")))?;
+    let table: toml::Table = text
+        .parse()
+        .map_err(|e| atmo::Error::Invalid(format!("--scene {name}: {e}")))?;
+    let folder = path.parent().unwrap_or(std::path::Path::new("."));
+    let mut argv = Vec::new();
+    for (key, value) in table {
+        let bad = |why: &str| atmo::Error::Invalid(format!("--scene {name}: `{key}` {why}"));
+        if key == "scene" || key == "output" || !long_flags.contains(&key.as_str()) {
+            return Err(bad("is not a flag of atmo clouds a scene can set"));
+        }
+        let number = |v: &toml::Value| match v {
+            toml::Value::Integer(i) => Some(i.to_string()),
+            toml::Value::Float(f) => Some(f.to_string()),
+            _ => None,
+        };
+        let argument = match &value {
+            toml::Value::Boolean(true) => {
+                argv.push(format!("--{key}"));
+                continue;
+            }
+            toml::Value::Boolean(false) => continue,
+            toml::Value::String(s) if key == "particles-file" => {
+                folder.join(s).to_string_lossy().into_owned()
+            }
+            toml::Value::String(s) => s.clone(),
+            toml::Value::Array(items) => items
+                .iter()
+                .map(number)
+                .collect::<Option<Vec<_>>>()
+                .ok_or_else(|| bad("must hold numbers only"))?
+                .join(","),
+            v => number(v)
+                .ok_or_else(|| bad("must be a string, a number, true/false or [x, y, z]"))?,
+        };
+        argv.push(format!("--{key}"));
+        argv.push(argument);
+    }
+    Ok(argv)
 }
 
 /// The light pass and the drawing, on the CPU or the GPU.
