@@ -247,6 +247,23 @@ fn saved_particles_are_written_only_once_everything_is_valid() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// A camera south-west of the cloud at its middle height and the sun behind it, by
+/// flags (the scene test writes the same as a file).
+const EXPLICIT_VIEW: [&str; 12] = [
+    "--generate",
+    "cumulus",
+    "--camera",
+    "-1800,1900,1800",
+    "--look-at",
+    "0,1900,0",
+    "--fov",
+    "50",
+    "--fov-axis",
+    "horizontal",
+    "--sun-direction",
+    "-1,1,1",
+];
+
 #[test]
 fn an_explicit_camera_and_sun_and_every_order_brighter_than_one() {
     let dir = scratch("clouds-camera");
@@ -257,26 +274,9 @@ fn an_explicit_camera_and_sun_and_every_order_brighter_than_one() {
     let mut means = Vec::new();
     for scattering in ["single", "multiple"] {
         let out = dir.join(format!("{scattering}.png"));
-        // From the south-west at the cloud's height, the sun behind the camera.
-        let mut args = vec![
-            "clouds",
-            "--generate",
-            "cumulus",
-            "--camera",
-            "-1800,1900,1800",
-            "--look-at",
-            "0,1900,0",
-            "--fov",
-            "50",
-            "--fov-axis",
-            "horizontal",
-            "--sun-direction",
-            "-1,1,1",
-            "--scattering",
-            scattering,
-            "-o",
-            out.to_str().unwrap(),
-        ];
+        let mut args = vec!["clouds"];
+        args.extend(EXPLICIT_VIEW);
+        args.extend(["--scattering", scattering, "-o", out.to_str().unwrap()]);
         // SMALL_CLOUD without its camera distance.
         args.extend(&SMALL_CLOUD[..8]);
         let o = atmo(&args);
@@ -316,23 +316,9 @@ fn a_scene_file_stands_for_its_flags_and_the_command_line_overrides_it() {
         "-o",
         from_scene.to_str().unwrap(),
     ]);
-    let mut flags = vec![
-        "clouds",
-        "--generate",
-        "cumulus",
-        "--camera",
-        "-1800,1900,1800",
-        "--look-at",
-        "0,1900,0",
-        "--fov",
-        "50",
-        "--fov-axis",
-        "horizontal",
-        "--sun-direction",
-        "-1,1,1",
-        "-o",
-        from_flags.to_str().unwrap(),
-    ];
+    let mut flags = vec!["clouds"];
+    flags.extend(EXPLICIT_VIEW);
+    flags.extend(["-o", from_flags.to_str().unwrap()]);
     flags.extend(&SMALL_CLOUD[..8]);
     run(&flags);
     let picture = |p: &std::path::Path| image::open(p).unwrap().to_rgb8();
