@@ -6,7 +6,7 @@
 //! between the light pass and the draw, so a moving sun costs one light pass and a
 //! moving camera none.
 
-use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat, FOOTPRINT};
+use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::Lighting;
 use atmo::image::Frame;
@@ -265,7 +265,7 @@ impl GpuClouds {
             .map(|p| camera.depth(p.position))
             .collect();
         let mut order: Vec<u32> = (0..self.particles.len() as u32)
-            .filter(|&k| depth[k as usize] > reach(&self.particles[k as usize]))
+            .filter(|&k| depth[k as usize] > self.particles[k as usize].reach())
             .collect();
         order.sort_by(|&a, &b| {
             depth[b as usize]
@@ -318,7 +318,7 @@ impl GpuClouds {
             ],
         );
         // The picture over the background, and the higher octaves' light apart (its
-        // alpha, 1 - the cloud's transmittance, gives the depth that scales it).
+        // alpha, 1 - the cloud's transmittance, scales it).
         let target = target_texture(gpu, w, h, background);
         let higher = target_texture(gpu, w, h, None);
         let views = [&target, &higher].map(|t| t.create_view(&Default::default()));
@@ -348,17 +348,11 @@ impl GpuClouds {
             let bytes = gpu.read_texture("the higher octaves", &higher, w, h)?;
             let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
             for (pixel, t) in frame.pixels.iter_mut().zip(texels) {
-                let depth = -(1.0 - t[3]).max(f32::MIN_POSITIVE).ln();
-                *pixel += octaves.higher_share(depth) * Vec3::new(t[0], t[1], t[2]);
+                *pixel += octaves.higher_share(1.0 - t[3]) * Vec3::new(t[0], t[1], t[2]);
             }
         }
         Ok(Rendered { frame, gpu_ms })
     }
-}
-
-/// How far across the line of sight a particle's billboard reaches, m (as the CPU's).
-fn reach(p: &Particle) -> f32 {
-    FOOTPRINT * p.sigma()
 }
 
 /// The particles as the shaders read them.

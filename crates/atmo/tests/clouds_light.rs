@@ -135,20 +135,14 @@ fn the_quadrature_and_the_free_flights_are_converged_and_exact() {
 /// Mean radiance over the cloud's pixels (optical depth over 0.1), the billboards'
 /// and the reference's.
 fn means(camera: &Camera, cloud: &ReferenceCloud, fast: &[f64], reference: &[f64]) -> (f64, f64) {
-    let (w, h) = (camera.width, camera.height);
-    let mut sums = (0.0, 0.0);
-    for k in 0..(w * h) as usize {
-        let (x, y) = ((k as u32 % w) as f32 + 0.5, (k as u32 / w) as f32 + 0.5);
-        let ray = cloud.volume.ray(
-            camera.position.as_dvec3(),
-            camera.ray(x, y).as_dvec3().normalize(),
-        );
-        if ray.depth(0.0, f64::INFINITY) > 0.1 {
-            sums.0 += fast[k];
-            sums.1 += reference[k];
-        }
-    }
-    sums
+    let covered = cloud.covered(camera);
+    let sum = |values: &[f64]| {
+        (0..values.len())
+            .filter(|&k| covered[k])
+            .map(|k| values[k])
+            .sum()
+    };
+    (sum(fast), sum(reference))
 }
 
 #[test]

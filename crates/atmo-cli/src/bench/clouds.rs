@@ -99,11 +99,7 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     let buffer = IntensityBuffer::new(&particles, to_sun, 256, forward, Splat::Pieces)?;
     let camera = bench_camera(&particles, (1280, 720));
     let light = lighting(to_sun);
-    let frame_ms = median(
-        (0..runs.min(5))
-            .map(|_| time_ms(|| drop(render(&particles, &buffer, &camera, &light, None))))
-            .collect(),
-    );
+    let (frame_ms, _) = timed_render(&particles, &buffer, &camera, &light, runs.min(5));
     emit(
         json,
         json!({"bench": "clouds.frame", "params": {"particles": particles.len(), "width": 1280, "height": 720, "scattering": "multiple"}, "median_ms": frame_ms}),
@@ -116,16 +112,7 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     let size = if quick { (32, 18) } else { (64, 36) };
     let paths = if quick { 8 } else { 16 };
     let small = bench_camera(&particles, size);
-    let mut fast = Frame::new(1, 1);
-    let fast_ms = median(
-        (0..runs)
-            .map(|_| {
-                time_ms(|| {
-                    fast = render(&particles, &buffer, &small, &light, None).expect("a pinhole")
-                })
-            })
-            .collect(),
-    );
+    let (fast_ms, fast) = timed_render(&particles, &buffer, &small, &light, runs);
     let reference = ReferenceCloud::new(
         &particles,
         ReferenceLight {
@@ -142,18 +129,8 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     let mut traced = Vec::new();
     let traced_ms = time_ms(|| traced = reference.path_traced_picture(&small, &settings));
     // The cloud's pixels: those its particles cover (optical depth over 0.1).
-    let covered: Vec<usize> = (0..traced.len())
-        .filter(|&k| {
-            let (x, y) = (
-                (k as u32 % size.0) as f32 + 0.5,
-                (k as u32 / size.0) as f32 + 0.5,
-            );
-            let ray = reference.volume.ray(
-                small.position.as_dvec3(),
-                small.ray(x, y).as_dvec3().normalize(),
-            );
-            ray.depth(0.0, f64::INFINITY) > 0.1
-        })
+    let covered: Vec<usize> = (reference.covered(&small).into_iter().enumerate())
+        .filter_map(|(k, c)| c.then_some(k))
         .collect();
     let mean_fast = covered
         .iter()
@@ -177,6 +154,27 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
         ),
     );
     Ok(())
+}
+
+/// The median time of `runs` CPU drawings of the cloud, ms, and the last picture.
+fn timed_render(
+    particles: &[atmo::clouds::particles::Particle],
+    buffer: &IntensityBuffer,
+    camera: &Camera,
+    light: &Lighting,
+    runs: usize,
+) -> (f64, Frame) {
+    let mut frame = Frame::new(1, 1);
+    let ms = median(
+        (0..runs)
+            .map(|_| {
+                time_ms(|| {
+                    frame = render(particles, buffer, camera, light, None).expect("a pinhole")
+                })
+            })
+            .collect(),
+    );
+    (ms, frame)
 }
 
 /// The benches' light: unit sunlight from `to_sun`, every order, no ambient light.
@@ -272,16 +270,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         .map_err(gpu_error)?;
     let camera = bench_camera(&particles, (1280, 720));
     let light = lighting(to_sun);
-    let mut cpu = Frame::new(1, 1);
-    let cpu_ms = median(
-        (0..runs)
-            .map(|_| {
-                time_ms(|| {
-                    cpu = render(&particles, &buffer, &camera, &light, None).expect("a pinhole")
-                })
-            })
-            .collect(),
-    );
+    let (cpu_ms, cpu) = timed_render(&particles, &buffer, &camera, &light, runs);
     let (wall, gpu_ms, frame) = time_gpu(runs, || {
         let Rendered { frame, gpu_ms } = clouds.render(gpu, &camera, &light, None)?;
         Ok((frame, gpu_ms))

@@ -331,19 +331,10 @@ impl Ambient {
             "none" => Ok(Ambient::Rgb(Vec3::ZERO)),
             "sky" if sky => Ok(Ambient::Sky),
             "sky" => Err(bad("the sky's light needs --sky")),
-            _ => {
-                let values: Vec<f32> = text
-                    .split(',')
-                    .map(|v| v.trim().parse::<f32>())
-                    .collect::<Result<_, _>>()
-                    .map_err(|_| bad("not three numbers"))?;
-                match values[..] {
-                    [r, g, b] if values.iter().all(|v| v.is_finite() && *v >= 0.0) => {
-                        Ok(Ambient::Rgb(Vec3::new(r, g, b)))
-                    }
-                    _ => Err(bad("not three finite numbers >= 0")),
-                }
-            }
+            _ => match parse_vec3(text) {
+                Ok(rgb) if rgb.min_element() >= 0.0 => Ok(Ambient::Rgb(rgb)),
+                _ => Err(bad("not three finite numbers >= 0")),
+            },
         }
     }
 }

@@ -319,7 +319,7 @@ impl Stamp {
     fn new(buffer: &IntensityBuffer, p: &Particle, forward: f32, splat: Splat) -> Stamp {
         let s = p.sigma();
         let c = buffer.buffer_from_world * p.position;
-        let reach = FOOTPRINT * s;
+        let reach = p.reach();
         let inv_2s2 = 1.0 / (2.0 * s * s);
         let x = buffer.centres_within(0, c.x - reach, c.x + reach);
         let z = buffer.centres_within(2, c.z - reach, c.z + reach);

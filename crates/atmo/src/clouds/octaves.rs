@@ -27,9 +27,7 @@
 //! per sun direction. What octaves cannot do is carry light around a corner: a region
 //! in a deep shadow lit only from the side stays a little dark (docs/clouds.md).
 
-/// The optical depth at which a pixel lets a thousandth through and the billboards
-/// stop drawing into it: `-ln 1e-3`.
-pub const OPAQUE_DEPTH: f32 = 6.907_755_4;
+use super::render::OPAQUE;
 
 /// The octaves of the approximation: octave 0 is single scattering.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -72,12 +70,12 @@ impl Octaves {
         depth_scale: 0.3,
     };
 
-    /// What the higher octaves of a pixel whose ray crosses the optical depth
-    /// `tau_view` of cloud are scaled by: `tau_view` counted up to
-    /// [`OPAQUE_DEPTH`], where the pixel is finished (the billboards stop there).
+    /// What the higher octaves of a pixel that the cloud lets `through` of what is
+    /// behind are scaled by: `1 - exp(-k tau_view)`, `tau_view = -ln through` counted
+    /// up to where the pixel is finished ([`OPAQUE`]: the billboards stop there).
     #[inline]
-    pub fn higher_share(&self, tau_view: f32) -> f32 {
-        -(-self.depth_scale * tau_view.min(OPAQUE_DEPTH)).exp_m1()
+    pub fn higher_share(&self, through: f32) -> f32 {
+        -(self.depth_scale * through.max(OPAQUE).ln()).exp_m1()
     }
 
     /// The sunlight one blob sends toward the eye per unit sun irradiance and unit

@@ -54,6 +54,13 @@ impl Particle {
         self.density * (-d2 / (2.0 * s * s)).exp()
     }
 
+    /// How far across a line of sight the methods reach from the centre, m:
+    /// [`FOOTPRINT`] standard deviations (the buffer's footprints, the billboards' fade).
+    #[inline]
+    pub fn reach(&self) -> f32 {
+        FOOTPRINT * self.sigma()
+    }
+
     /// The optical depth of the whole line passing `sqrt(b2)` m from the centre as the
     /// billboards draw it: the Gaussian column cut at [`FOOTPRINT`] standard deviations
     /// and faded to zero there (its value at the cut taken off everywhere, so a blob has

@@ -1,18 +1,19 @@
 //! Drawing a cloud (clouds 2.2): each particle a camera-facing Gaussian billboard,
-//! composited with `E_k = S_k + T_k E_{k-1}` (5) and
-//! `S_k = a_k tau_k p(omega, l) I_k / 4 pi` (6). The paper draws back to front; the same
-//! sum taken front to back, `E += T_acc S_k`, `T_acc *= T_k`, lets a pixel stop once
-//! almost nothing gets through it (a thousandth), which in a thick cloud is after a few
-//! layers of the many behind. Unlike Harris's per-particle `I_k`, the
-//! sunlight at every pixel of a billboard is looked up in the 3-D intensity buffer at the
-//! point the pixel shows (trilinear), the quality gain of clouds 3.3: detail finer than
-//! a particle.
+//! composited with `E_k = S_k + T_k E_{k-1}` (5). The paper draws back to front; the
+//! same sum taken front to back, `E += T_acc S_k`, `T_acc *= T_k`, lets a pixel stop
+//! once almost nothing gets through it (a thousandth), which in a thick cloud is after
+//! a few layers of the many behind. Unlike Harris's per-particle `I_k`, the sunlight
+//! is looked up in the 3-D intensity buffer per pixel (trilinear), the quality gain of
+//! clouds 3.3: detail finer than a particle. Where clouds (6) takes
+//! `S_k = a_k tau_k p I_k / 4 pi` for a thin particle, each pixel here follows its own
+//! ray through the blob and integrates the light the blob sends along it, what it
+//! absorbs of its own light included ([`Emission`]), for every octave of
+//! [`Octaves`] (docs/clouds.md, "Drawing").
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::buffer::IntensityBuffer;
-use super::buffer::FOOTPRINT;
 use super::octaves::{Emission, Octaves};
 use super::particles::{tabulated_emission_nodes, Particle};
 use crate::atmosphere::phase::PhaseFunction;
@@ -79,7 +80,7 @@ pub fn render(
     // Front to back: nearest first (see the module doc).
     let depth: Vec<f32> = particles.iter().map(|p| camera.depth(p.position)).collect();
     let mut order: Vec<usize> = (0..particles.len())
-        .filter(|&k| depth[k] > reach(&particles[k]))
+        .filter(|&k| depth[k] > particles[k].reach())
         .collect();
     order.sort_by(|&a, &b| depth[a].total_cmp(&depth[b]).then(a.cmp(&b)));
     // Each particle's footprint on the screen: centre and radius in pixels, the radius
@@ -91,7 +92,7 @@ pub fn render(
             let d = particles[k].position - camera.position;
             let z = depth[k];
             let (tx, ty) = (d.dot(camera.right) / z, d.dot(camera.up) / z);
-            let r = reach(&particles[k]);
+            let r = particles[k].reach();
             let stretch = 1.0 + tx * tx + ty * ty;
             let (sx, sy) = (tx * focal + 0.5 * w as f32, -ty * focal + 0.5 * h as f32);
             (sx, sy, r / (z * z - r * r).sqrt() * focal * stretch)
@@ -213,8 +214,7 @@ pub fn render(
             // the cloud, then what shows through it.
             let haze = light.haze;
             for ((e, t), more) in pixels.iter_mut().zip(&through).zip(&higher) {
-                let depth = -t.max(f32::MIN_POSITIVE).ln();
-                *e += light.scattering.higher_share(depth) * *more;
+                *e += light.scattering.higher_share(*t) * *more;
                 *e = haze.transmittance * *e + (1.0 - *t) * haze.inscatter;
             }
             if let Some(background) = background {
@@ -227,11 +227,6 @@ pub fn render(
     Ok(frame)
 }
 
-/// How far across the line of sight a particle's billboard reaches, m.
-fn reach(p: &Particle) -> f32 {
-    FOOTPRINT * p.sigma()
-}
-
 /// A pixel that lets less than this through from behind is finished: the particles
-/// still to come would change it by less than 0.1 %. `exp(-OPAQUE_DEPTH)`.
-const OPAQUE: f32 = 1e-3;
+/// still to come would change it by less than 0.1 %.
+pub const OPAQUE: f32 = 1e-3;

@@ -12,7 +12,7 @@ use crate::atmosphere::PhaseFunction;
 use crate::clouds::buffer::{IntensityBuffer, FOOTPRINT};
 use crate::clouds::generator::SplitMix64;
 use crate::clouds::particles::Particle;
-use crate::reference::sampling::PhaseSampler;
+use crate::reference::sampling::{mean_and_error, PhaseSampler};
 use crate::view::Camera;
 
 /// The fraction of sunlight arriving at `point` through `particles` with nothing
@@ -338,7 +338,10 @@ pub struct ReferenceLight {
 /// by a volumetric path tracer.
 pub struct ReferenceCloud<'a> {
     pub volume: CloudVolume<'a>,
-    pub light: ReferenceLight,
+    light: ReferenceLight,
+    /// Draws scattering directions from `light.phase` (built once: its rejection bound
+    /// takes thousands of evaluations).
+    sampler: PhaseSampler,
 }
 
 /// What a path tracer is asked for.
@@ -361,6 +364,7 @@ impl<'a> ReferenceCloud<'a> {
         ReferenceCloud {
             volume: CloudVolume::new(particles),
             light,
+            sampler: PhaseSampler::new(light.phase),
         }
     }
 
@@ -420,34 +424,12 @@ impl<'a> ReferenceCloud<'a> {
         settings: &PathSettings,
         seed: u64,
     ) -> (f64, f64) {
-        let sampler = PhaseSampler::new(self.light.phase);
         let mut rng = SplitMix64::new(seed);
-        let (mut sum, mut squares) = (0.0, 0.0);
-        for _ in 0..settings.paths {
-            let v = self.path(
-                origin,
-                dir,
-                settings.orders.min(MAX_ORDER),
-                &sampler,
-                &mut rng,
-            );
-            sum += v;
-            squares += v * v;
-        }
-        let n = settings.paths as f64;
-        let mean = sum / n;
-        let variance = (squares / n - mean * mean).max(0.0);
-        (mean, (variance / (n - 1.0).max(1.0)).sqrt())
+        let orders = settings.orders.min(MAX_ORDER);
+        mean_and_error((0..settings.paths).map(|_| self.path(origin, dir, orders, &mut rng)))
     }
 
-    fn path(
-        &self,
-        mut origin: DVec3,
-        mut dir: DVec3,
-        orders: usize,
-        sampler: &PhaseSampler,
-        rng: &mut SplitMix64,
-    ) -> f64 {
+    fn path(&self, mut origin: DVec3, mut dir: DVec3, orders: usize, rng: &mut SplitMix64) -> f64 {
         let mut weight = 1.0;
         let mut total = 0.0;
         for order in 1..=orders {
@@ -464,7 +446,7 @@ impl<'a> ReferenceCloud<'a> {
             origin += dir * t;
             let sun = self.volume.transmittance(origin, self.light.to_sun);
             total += weight * self.light.phase.eval(self.light.to_sun.dot(dir)) * sun;
-            dir = sampler.sample(dir, rng);
+            dir = self.sampler.sample(dir, rng);
         }
         total
     }
@@ -475,6 +457,15 @@ impl<'a> ReferenceCloud<'a> {
         pixels(camera)
             .into_par_iter()
             .map(|(origin, dir)| self.single_scattering(origin, dir))
+            .collect()
+    }
+
+    /// The pixels of `camera` that the cloud covers, row by row: those whose ray
+    /// crosses an optical depth over 0.1 (where pictures are compared).
+    pub fn covered(&self, camera: &Camera) -> Vec<bool> {
+        pixels(camera)
+            .into_par_iter()
+            .map(|(origin, dir)| self.volume.ray(origin, dir).depth(0.0, f64::INFINITY) > 0.1)
             .collect()
     }
 

@@ -90,6 +90,19 @@ fn around(w: DVec3, cos: f64, rng: &mut SplitMix64) -> DVec3 {
     (w * cos + (u * phi.cos() + v * phi.sin()) * sin).normalize()
 }
 
+/// The mean of `samples` (a path tracer's estimates) and its standard error.
+pub fn mean_and_error(samples: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut n, mut sum, mut squares) = (0usize, 0.0, 0.0);
+    for v in samples {
+        n += 1;
+        sum += v;
+        squares += v * v;
+    }
+    let n = n.max(1) as f64;
+    let mean = sum / n;
+    (mean, ((squares / n - mean * mean).max(0.0) / n).sqrt())
+}
+
 /// A cosine-distributed direction over the hemisphere about `normal`.
 pub fn sample_cosine(normal: DVec3, rng: &mut SplitMix64) -> DVec3 {
     around(normal, rng.unit_f64().sqrt(), rng)

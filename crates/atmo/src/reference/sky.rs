@@ -19,7 +19,7 @@ use crate::atmosphere::geometry::{
 use crate::atmosphere::{Atmosphere, CONSTITUENTS};
 use crate::clouds::generator::SplitMix64;
 use crate::quadrature::{fibonacci_sphere, gauss_legendre};
-use crate::reference::sampling::{sample_cosine, PhaseSampler};
+use crate::reference::sampling::{mean_and_error, sample_cosine, PhaseSampler};
 use crate::sky::shells::maps::MAX_CHANNELS;
 
 /// Resolution of the reference integrator.
@@ -325,15 +325,8 @@ impl ReferenceSky<'_> {
         let (mut mean, mut error) = (vec![0.0; n], vec![0.0; n]);
         for c in 0..n {
             let mut rng = SplitMix64::new(seed ^ (c as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
-            let (mut sum, mut squares) = (0.0, 0.0);
-            for _ in 0..paths {
-                let v = self.path(d, c, &samplers, &mut rng);
-                sum += v;
-                squares += v * v;
-            }
-            let m = sum / paths as f64;
-            mean[c] = m;
-            error[c] = ((squares / paths as f64 - m * m).max(0.0) / paths as f64).sqrt();
+            (mean[c], error[c]) =
+                mean_and_error((0..paths).map(|_| self.path(d, c, &samplers, &mut rng)));
         }
         (mean, error)
     }
