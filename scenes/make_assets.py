@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """Writes the example scenes' assets: gobos/dots.png (the dotted gobo of the stage
-scene, after the paper's Fig. 7) and meshes/knot.obj (a trefoil-knot sculpture).
+scene, after the paper's Fig. 7), meshes/knot.obj (a trefoil-knot sculpture) and the
+photometric files of scenes/photometric.toml (photometry/: an ellipsoidal spot and an
+oval wash as IES LM-63 files, a PAR can as EULUMDAT), made up, shaped like real ones.
 Pure standard library, so it runs anywhere: `python3 scenes/make_assets.py`."""
 
 import math
@@ -92,8 +94,84 @@ def knot(path, turns=240, sides=10, radius=0.09):
                 f.write("f %d %d %d %d\n" % (a, b, c, d))
 
 
+def write_lines(path, lines):
+    with open(path, "w", newline="\r\n") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def values(numbers, per_line=10):
+    """Numbers, `per_line` a line, as LM-63 writers wrap them."""
+    out = []
+    for k in range(0, len(numbers), per_line):
+        out.append(" ".join("%g" % round(x, 1) for x in numbers[k:k + per_line]))
+    return out
+
+
+def ies_spot(path):
+    """An ellipsoidal spot, LM-63-2002, rotationally symmetric: a flat top of 20,000 cd
+    falling to half at 11 degrees off the axis and cut at 30 by the shutter."""
+    vertical = list(range(0, 41))
+    candela = [0.0 if g >= 30 else 20000.0 / (1.0 + (g / 11.0) ** 8) for g in vertical]
+    write_lines(path, [
+        "IESNA:LM-63-2002",
+        "[TEST] atmo example, made up",
+        "[MANUFAC] atmo",
+        "[LUMINAIRE] ellipsoidal spot, 19 degree lens",
+        "TILT=NONE",
+        "1 -1 1.0 %d 1 1 2 0.2 0.2 0.5" % len(vertical),
+        "1.0 1.0 750",
+        *values(vertical),
+        "0",
+        *values(candela),
+    ])
+
+
+def ies_oval(path):
+    """An oval wash, LM-63-2019, symmetric in each quadrant: 8,000 cd on the axis, the
+    beam 48 degrees wide along the light's x (C = 0) and 24 along its y (C = 90)."""
+    vertical = [2.5 * k for k in range(25)]
+    horizontal = [5 * k for k in range(19)]
+    candela = []
+    for c in horizontal:
+        a = math.radians(c)
+        width = 1.0 / math.hypot(math.cos(a) / 24.0, math.sin(a) / 12.0)
+        candela += [8000.0 * max(0.0, 1.0 - (g / width) ** 2) ** 2 for g in vertical]
+    write_lines(path, [
+        "IES:LM-63-2019",
+        "[TEST] atmo example, made up",
+        "[ISSUEDATE] 2026-12-02",
+        "[MANUFAC] atmo",
+        "[LUMINAIRE] oval wash",
+        "TILT=NONE",
+        "1 -1 1.0 %d %d 1 2 0.3 0.3 0.2" % (len(vertical), len(horizontal)),
+        "1.0 1.00001 400",
+        *values(vertical),
+        *values(horizontal),
+        *values(candela),
+    ])
+
+
+def ldt_par(path):
+    """A PAR can as EULUMDAT: rotationally symmetric (Isym 1), a 1,500 lm lamp,
+    900 cd/klm on the axis falling as a Gaussian, nothing past 45 degrees."""
+    gammas = [5 * k for k in range(19)]
+    intensity = [0.0 if g > 45 else 900.0 * math.exp(-(g / 14.0) ** 2) for g in gammas]
+    lines = ["atmo", "1", "1", "1", "0", str(len(gammas)), "5", "example",
+             "PAR can, made up", "PAR-1", "par.ldt", "2026-12-02"]
+    lines += ["200", "200", "250", "180", "180", "0", "0", "0", "0"]
+    lines += ["100", "85", "1.0", "0", "1"]
+    lines += ["1", "PAR64", "1500", "3200", "100", "100"]
+    lines += ["0"] * 10
+    lines += ["0"] + [str(g) for g in gammas] + ["%.1f" % i for i in intensity]
+    write_lines(path, lines)
+
+
 if __name__ == "__main__":
     os.makedirs(os.path.join(HERE, "gobos"), exist_ok=True)
     os.makedirs(os.path.join(HERE, "meshes"), exist_ok=True)
     write_png_grey(os.path.join(HERE, "gobos", "dots.png"), 256, 256, dots())
     knot(os.path.join(HERE, "meshes", "knot.obj"))
+    os.makedirs(os.path.join(HERE, "photometry"), exist_ok=True)
+    ies_spot(os.path.join(HERE, "photometry", "spot.ies"))
+    ies_oval(os.path.join(HERE, "photometry", "oval-wash.ies"))
+    ldt_par(os.path.join(HERE, "photometry", "par.ldt"))

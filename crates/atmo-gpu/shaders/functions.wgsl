@@ -22,6 +22,18 @@ fn fast_atan(x: f32) -> f32 {
     return select(p, HALF_PI - p, flip);
 }
 
+// atan2(y, x) in [-pi, pi] within 2e-5 rad, 0 at the origin: atmo::fast::fast_atan2.
+fn fast_atan2(y: f32, x: f32) -> f32 {
+    let ax = abs(x);
+    let ay = abs(y);
+    if ax == 0.0 && ay == 0.0 {
+        return 0.0;
+    }
+    var a = select(HALF_PI - fast_atan(ax / ay), fast_atan(ay / ax), ax >= ay);
+    a = select(a, PI - a, x < 0.0);
+    return select(a, -a, y < 0.0);
+}
+
 // Interleaved gradient noise in [0, 1): atmo::fast::interleaved_offset.
 fn interleaved_offset(x: u32, y: u32) -> f32 {
     let f = fract(0.06711056 * f32(x) + 0.00583715 * f32(y));

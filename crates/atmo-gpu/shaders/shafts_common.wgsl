@@ -49,7 +49,7 @@ struct GpuLight {
     // Intensity (cd or W/sr, RGB); w: beam half angle (rad).
     intensity: vec4<f32>,
     field_half: f32,
-    // 0 linear, 1 smooth.
+    // 0 linear, 1 smooth, 2 measured (the light map is the profile).
     falloff: u32,
     // 0 none, 1 nearest, 2 bilinear.
     gobo: u32,
@@ -60,6 +60,11 @@ struct GpuLight {
     // `geometry` (as u32 bits), `cone_count` of them.
     cone_at: u32,
     cone_count: u32,
+    // The light's map is rows map_row .. map_row + map_rows of light_maps, over C.
+    map_row: u32,
+    map_rows: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: ShaftsParams;
@@ -258,11 +263,15 @@ fn world_direction(l: GpuLight, u: f32, v: f32) -> vec3<f32> {
     return l.x_axis.xyz * (u * tf) + l.y_axis.xyz * (v * tf) + l.z_axis.xyz;
 }
 
-// The beam profile at (u, v), exactly (Spotlight::profile_at).
+// The beam profile at (u, v), exactly (Spotlight::profile_at); a measured one from
+// its light map.
 fn profile_at(l: GpuLight, u: f32, v: f32) -> f32 {
     let q = u * u + v * v;
     if q >= 1.0 {
         return 0.0;
+    }
+    if l.falloff == FALLOFF_MEASURED {
+        return light_map(l, u, v);
     }
     let tf = l.position.w;
     let tb = l.z_axis.w;
@@ -372,15 +381,29 @@ fn phase_f(c: f32) -> f32 {
     return lerp_row(phase_table, 0, params.phase_size, half_sin * f32(params.phase_size - 1u));
 }
 
-// The light map of light k at q = u^2 + v^2.
-fn light_map(k: u32, l: GpuLight, q: f32) -> f32 {
-    if q <= l.x_axis.w {
+// The light map of light l at (u, v) (LightMap::get).
+fn light_map(l: GpuLight, u: f32, v: f32) -> f32 {
+    let q = u * u + v * v;
+    if q < l.x_axis.w {
         return 1.0;
     }
     if q >= 1.0 {
         return 0.0;
     }
-    return lerp_row(light_maps, i32(k), params.light_map_size, (q - l.x_axis.w) * l.y_axis.w);
+    let x = (q - l.x_axis.w) * l.y_axis.w;
+    let row = i32(l.map_row);
+    if l.map_rows == 1u {
+        return lerp_row(light_maps, row, params.light_map_size, x);
+    }
+    // Between the rows on either side of the half-plane's C.
+    let rows = f32(l.map_rows);
+    var t = fast_atan2(v, u) * (rows / (2.0 * PI));
+    t = select(t, t + rows, t < 0.0);
+    let r = min(u32(t), l.map_rows - 1u);
+    let f = t - f32(r);
+    let a = lerp_row(light_maps, row + i32(r), params.light_map_size, x);
+    let b = lerp_row(light_maps, row + i32((r + 1u) % l.map_rows), params.light_map_size, x);
+    return a + f * (b - a);
 }
 
 const PLANES_AT: u32 = 0u;
@@ -471,7 +494,7 @@ fn plane_term(k: u32, plane: u32, q: u32, x: u32, y: u32) -> vec3<f32> {
         let scale = inv_tan / lz;
         let u = (origin.x + d * step.x) * scale;
         let v = (origin.y + d * step.y) * scale;
-        let weight = f32(lit_at(k, u, v, lz)) * light_map(k, l, u * u + v * v);
+        let weight = f32(lit_at(k, u, v, lz)) * light_map(l, u, v);
         if l.gobo == GOBO_NONE {
             j_sum.x += weight;
         } else if weight > 0.0 {

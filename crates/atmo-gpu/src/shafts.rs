@@ -7,14 +7,14 @@
 //! `atmo::shafts::SamplePlanes::render`, which the tests hold it to.
 
 use atmo::geometry::Shape;
-use atmo::shafts::spotlight::{Falloff, Sampling};
+use atmo::shafts::spotlight::{Falloff, Profile, Sampling};
 use atmo::shafts::tables::{AttenuationTable, LightMap, PhaseTable};
 use atmo::shafts::Scene;
 use glam::Vec3;
 
 use crate::wgsl::{
-    self, FALLOFF_LINEAR, FALLOFF_SMOOTH, GOBO_BILINEAR, GOBO_NEAREST, GOBO_NONE, OBJECT_BOX,
-    OBJECT_MESH, OBJECT_PLANE, OBJECT_RECT, OBJECT_SPHERE,
+    self, FALLOFF_LINEAR, FALLOFF_MEASURED, FALLOFF_SMOOTH, GOBO_BILINEAR, GOBO_NEAREST, GOBO_NONE,
+    OBJECT_BOX, OBJECT_MESH, OBJECT_PLANE, OBJECT_RECT, OBJECT_SPHERE,
 };
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
@@ -62,6 +62,10 @@ gpu_struct! {
         gobo_height: u32,
         cone_at: u32,
         cone_count: u32,
+        map_row: u32,
+        map_rows: u32,
+        pad0: u32,
+        pad1: u32,
     }
 }
 
@@ -196,17 +200,22 @@ impl GpuShafts {
         )?;
         let phase = PhaseTable::new(&scene.haze);
         let phase_texture = table_texture(gpu, &phase.values, PhaseTable::SIZE as u32, 1);
-        let maps: Vec<f32> = scene
+        // Each light's map, row after row (see GpuLight::map_row).
+        let mut maps: Vec<f32> = scene
             .lights
             .iter()
-            .flat_map(|l| LightMap::new(l).values)
+            .flat_map(|l| l.light_map.values.iter().copied())
             .collect();
-        let maps = if maps.is_empty() {
-            vec![0.0; LightMap::SIZE]
-        } else {
-            maps
-        };
-        let map_texture = table_texture(gpu, &maps, LightMap::SIZE as u32, lights.max(1));
+        if maps.is_empty() {
+            maps = vec![0.0; LightMap::SIZE];
+        }
+        let map_rows = (maps.len() / LightMap::SIZE) as u32;
+        gpu.check_texture_side(
+            "the lights' maps (rows)",
+            map_rows,
+            "the number of lights with measured profiles that are not rotationally symmetric",
+        )?;
+        let map_texture = table_texture(gpu, &maps, LightMap::SIZE as u32, map_rows);
         let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("the planes"),
             size: wgpu::Extent3d {
@@ -556,6 +565,8 @@ impl Geometry {
         values.extend(nodes);
         let triangles_at = values.len() as u32;
         values.extend(triangles);
+        // Where each light's rows start in the light-map texture.
+        let mut map_row_next = 0u32;
         let lights = scene
             .lights
             .iter()
@@ -578,25 +589,39 @@ impl Geometry {
                         (sampling, at, g.width as u32, g.height as u32)
                     }
                 };
-                let map = LightMap::new(light);
+                let map = &light.light_map;
                 let m = light.light_from_world;
+                let (beam_half, falloff) = match &light.profile {
+                    Profile::Beam {
+                        beam_half,
+                        falloff: Falloff::Linear,
+                    } => (*beam_half, FALLOFF_LINEAR),
+                    Profile::Beam {
+                        beam_half,
+                        falloff: Falloff::Smooth,
+                    } => (*beam_half, FALLOFF_SMOOTH),
+                    Profile::Measured(_) => (0.0, FALLOFF_MEASURED),
+                };
+                let map_row = map_row_next;
+                map_row_next += map.rows as u32;
                 GpuLight {
                     position: v4(light.position, light.tan_field()),
                     x_axis: v4(m.row(0), map.q_beam),
                     y_axis: v4(m.row(1), map.scale),
                     z_axis: v4(m.row(2), light.tan_beam()),
-                    intensity: v4(light.intensity, light.beam_half),
+                    intensity: v4(light.intensity, beam_half),
                     field_half: light.field_half,
-                    falloff: match light.falloff {
-                        Falloff::Linear => FALLOFF_LINEAR,
-                        Falloff::Smooth => FALLOFF_SMOOTH,
-                    },
+                    falloff,
                     gobo,
                     gobo_at,
                     gobo_width,
                     gobo_height,
                     cone_at,
                     cone_count: cone.len() as u32,
+                    map_row,
+                    map_rows: map.rows as u32,
+                    pad0: 0,
+                    pad1: 0,
                 }
             })
             .collect();

@@ -37,6 +37,8 @@ shared_codes! {
     FALLOFF_LINEAR = 0;
     /// A spotlight's soft edge falls as a smoothstep.
     FALLOFF_SMOOTH = 1;
+    /// A spotlight's profile is measured (a photometric file): its light map holds it.
+    FALLOFF_MEASURED = 2;
     /// No gobo.
     GOBO_NONE = 0;
     /// A gobo sampled at the nearest texel.

@@ -1,5 +1,6 @@
 //! Light shafts on the GPU against the CPU plane method, on the example scenes at a
-//! small size: every object kind, a gobo, a haze box, supersampling, both GPU methods.
+//! small size: every object kind, a gobo, measured profiles, a haze box, supersampling,
+//! both GPU methods.
 
 mod common;
 
@@ -41,6 +42,12 @@ fn check(scene: &Scene, what: &str) {
 fn the_stage_matches_the_cpu_planes() {
     // Plane, rectangle, box, mesh and sphere; a gobo; a haze box; five lights.
     check(&scene("stage.toml", 1), "stage");
+}
+
+#[test]
+fn measured_profiles_match_the_cpu_planes() {
+    // IES and EULUMDAT lights; the oval wash's light map has rows over C.
+    check(&scene("photometric.toml", 1), "photometric");
 }
 
 #[test]

@@ -62,6 +62,22 @@ fn fast_acos_and_fast_atan_match_the_rust() {
         false,
     );
     assert!(atan < 2e-6, "fast_atan: {atan}");
+    // Around the circle at three radii, and the origin.
+    let points: Vec<[f32; 4]> = (0..=720)
+        .flat_map(|k| {
+            let a = (k as f32 * 0.5 - 180.0).to_radians();
+            [1e-3f32, 0.8, 30.0].map(|r| [r * a.cos(), r * a.sin(), 0.0, 0.0])
+        })
+        .chain([[0.0; 4]])
+        .collect();
+    let atan2 = worst(
+        &gpu,
+        "fast_atan2(v.y, v.x)",
+        &points,
+        |v| atmo::fast::fast_atan2(v[1], v[0]),
+        false,
+    );
+    assert!(atan2 < 4e-6, "fast_atan2: {atan2}");
 }
 
 #[test]

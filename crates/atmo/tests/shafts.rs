@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use atmo::image::Frame;
 use atmo::reference::shafts::RayMarcher;
+use atmo::shafts::spotlight::Profile;
 use atmo::shafts::{SamplePlanes, Scene};
 use glam::Vec3;
 
@@ -106,6 +107,45 @@ fn the_example_scenes_load_with_their_gobo_and_mesh() {
         .expect("the stage has the knot");
     assert_eq!(mesh, 240 * 10 * 2);
     assert!(stage.haze.bounds.is_some());
+
+    // Measured profiles: the field ends where the file's light does, the intensity is
+    // the colour times the dimmer times the file's peak.
+    let photometric = Scene::from_file(&scenes().join("photometric.toml")).unwrap();
+    let fields: Vec<f32> = photometric
+        .lights
+        .iter()
+        .map(|l| l.field_half.to_degrees())
+        .collect();
+    // The spot is cut at 30 degrees, the oval's widest half-plane ends at 24 (the next
+    // angle, 25, is where its light reaches zero), the PAR at 45 (its last value, at 45, is 0.0).
+    for (got, want) in fields.iter().zip([30.0, 25.0, 45.0]) {
+        assert!((got - want).abs() < 1e-3, "{fields:?}");
+    }
+    let spot = &photometric.lights[0];
+    let luminance =
+        0.2126 * spot.intensity.x + 0.7152 * spot.intensity.y + 0.0722 * spot.intensity.z;
+    assert!(
+        (luminance - 0.25 * 20000.0).abs() < 2.0,
+        "{:?}",
+        spot.intensity
+    );
+    assert!(matches!(spot.profile, Profile::Measured(_)));
+    // Rotationally symmetric files need one row of light map; the oval 144.
+    let rows: Vec<usize> = photometric
+        .lights
+        .iter()
+        .map(|l| l.light_map.rows)
+        .collect();
+    assert_eq!(rows, [1, 144, 1]);
+    // The PAR (EULUMDAT): 900 cd/klm of a 1,500 lm lamp on the axis, dimmed to 0.8.
+    let par = &photometric.lights[2];
+    let luminance = 0.2126 * par.intensity.x + 0.7152 * par.intensity.y + 0.0722 * par.intensity.z;
+    assert!(
+        (luminance - 0.8 * 1350.0).abs() < 1.0,
+        "{:?}",
+        par.intensity
+    );
+    assert_eq!(photometric.files.len(), 3);
 }
 
 #[test]
@@ -150,6 +190,45 @@ fn bad_scenes_are_refused_with_a_message_naming_what_is_wrong() {
             "aim = [0.6, 0.0, 0.2]",
             "aim = [0.6, 0.0, 0.2]\ndirection = [0.0, -1.0, 0.0]",
             &["exactly one"],
+        ),
+        (
+            "kelvin = 3200",
+            "kelvin = 3200\ndimmer = 1.5",
+            &["spotlight[0].dimmer = 1.5", "[0, 1]"],
+        ),
+        (
+            "intensity = 1500.0",
+            "",
+            &["spotlight[0]", "`intensity` is missing"],
+        ),
+        // A measured profile brings its own intensity and angles.
+        (
+            "kelvin = 3200",
+            "kelvin = 3200\nprofile = { ies = \"photometry/spot.ies\" }",
+            &["spotlight[0].intensity", "leave `intensity` out"],
+        ),
+        (
+            "intensity = 1500.0\nbeam_deg = 24.0\nfield_deg = 34.0",
+            "profile = { ies = \"photometry/spot.ies\", ldt = \"photometry/par.ldt\" }",
+            &["spotlight[0].profile", "exactly one of `ies`"],
+        ),
+        (
+            "intensity = 1500.0\nbeam_deg = 24.0\nfield_deg = 34.0",
+            "profile = { ies = \"photometry/missing.ies\" }",
+            &["missing.ies"],
+        ),
+        (
+            "intensity = 1500.0\nbeam_deg = 24.0\nfield_deg = 34.0",
+            "profile = { ldt = \"photometry/spot.ies\" }",
+            &[
+                "EULUMDAT file",
+                "spot.ies: line 3: the symmetry indicator Isym",
+            ],
+        ),
+        (
+            "intensity = 1500.0\nbeam_deg = 24.0\nfield_deg = 34.0",
+            "profile = { ies = \"photometry/spot.ies\" }\nintensity_unit = \"W/sr\"",
+            &["spotlight[0].intensity_unit", "candela"],
         ),
     ];
     for (from, to, wanted) in cases {
@@ -227,6 +306,41 @@ fn the_plane_method_stays_within_one_percent_of_the_converged_reference() {
         .level_errors(&reference, scene.display)
         .unwrap();
     assert!(ec.rms > 3.0 * e.rms, "coarse {} fine {}", ec.rms, e.rms);
+}
+
+#[test]
+fn a_measured_profile_holds_to_the_reference_as_a_drawn_beam_does() {
+    // The oval wash (asymmetric: 144 rows of light map) in place of the beam, rolled so
+    // the oval's long axis is not along a row of the image.
+    let text = small_scene(SPHERE)
+        .replace("width = 96\nheight = 64", "width = 240\nheight = 160")
+        .replace(
+            "intensity = 1500.0\nbeam_deg = 24.0\nfield_deg = 34.0",
+            "dimmer = 0.2\nup = [0.0, 1.0, 1.0]\nprofile = { ies = \"photometry/oval-wash.ies\" }",
+        );
+    let scene = parse(&text).unwrap();
+    assert_eq!(scene.lights[0].light_map.rows, 144);
+    let fast = SamplePlanes::new(&scene).render();
+    let reference = RayMarcher::CONVERGED.render(&scene);
+    assert_physical(&fast);
+    let e = fast.level_errors(&reference, scene.display).unwrap();
+    assert!(e.rms < 2.55, "rms {} levels", e.rms);
+    // The light is there: the picture is not dark, and it is not the round beam's.
+    let lit = fast
+        .pixels
+        .iter()
+        .filter(|p| p.max_element() > 0.05)
+        .count();
+    assert!(lit > fast.pixels.len() / 10, "{lit}");
+    let round = SamplePlanes::new(
+        &parse(
+            &small_scene(SPHERE).replace("width = 96\nheight = 64", "width = 240\nheight = 160"),
+        )
+        .unwrap(),
+    )
+    .render();
+    let d = round.level_errors(&fast, scene.display).unwrap();
+    assert!(d.rms > 5.0 * e.rms, "round {} measured {}", d.rms, e.rms);
 }
 
 fn assert_physical(frame: &Frame) {

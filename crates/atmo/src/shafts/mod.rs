@@ -17,6 +17,7 @@
 //! - [`scene`]: the scene file (its camera is a [`crate::view::Camera`]); [`haze`], [`spotlight`] (beam, falloff, gobo
 //!   as the projected light map), [`objects`] (planes, rectangles, spheres, boxes, OBJ
 //!   meshes).
+//! - [`photometry`]: measured profiles from IES LM-63 and EULUMDAT files.
 //! - [`shadow_map`]: `H` from a depth map per light (shafts 4.1).
 //! - [`tables`]: the `F` and `h` tables of shafts (6).
 //! - [`planes`]: the sample planes and sub-sample planes of shafts (5) and (7)-(9), the
@@ -26,6 +27,7 @@
 
 pub mod haze;
 pub mod objects;
+pub mod photometry;
 pub mod planes;
 pub mod scene;
 pub mod shadow_map;

@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use super::shadow_map::ShadowMap;
 use super::spotlight::Spotlight;
 use super::surface::{first_hit, surface_radiance, SurfacePoint};
-use super::tables::{AttenuationTable, LightMap, PhaseTable};
+use super::tables::{AttenuationTable, PhaseTable};
 use super::Scene;
 use crate::fast::interleaved_offset;
 use crate::geometry::Aabb;
@@ -54,8 +54,6 @@ pub struct LightPlanes<'a> {
     /// Whether the lamp is in the haze: then its in-haze distance to any point in the
     /// (convex) haze is the whole distance.
     lamp_in_haze: bool,
-    /// The beam profile, tabulated.
-    light_map: LightMap,
     /// The eye in the light's space: where every camera ray starts.
     eye: Vec3,
 }
@@ -157,7 +155,6 @@ impl<'a> SamplePlanes<'a> {
                     z_far: hi.min(camera.far),
                     bounds: extent.4,
                     lamp_in_haze: scene.haze.bounds.is_none_or(|b| b.contains(light.position)),
-                    light_map: LightMap::new(light),
                     eye: light.to_light(camera.position),
                 }
             })
@@ -309,7 +306,7 @@ impl<'a> SamplePlanes<'a> {
             }
             for l in 0..lanes.count {
                 let lit = shadow.lit_at(u[l], v[l], z[l]) as u8 as f32;
-                let weight = active[l] * lit * planes.light_map.get(u[l] * u[l] + v[l] * v[l]);
+                let weight = active[l] * lit * light.light_map.get(u[l], v[l]);
                 match &light.gobo {
                     None => j_sums[l].x += weight,
                     Some(gobo) if weight > 0.0 => j_sums[l] += weight * gobo.sample(u[l], v[l]),

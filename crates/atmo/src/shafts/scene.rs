@@ -10,7 +10,8 @@ use serde::Deserialize;
 
 use super::haze::Haze;
 use super::objects::{Object, Objects};
-use super::spotlight::{light_frame, Falloff, Gobo, Sampling, Spotlight};
+use super::photometry::Photometry;
+use super::spotlight::{light_frame, Falloff, Gobo, Profile, Sampling, Spotlight};
 use super::PlaneSettings;
 use crate::atmosphere::phase::PhaseFunction;
 use crate::atmosphere::spectrum::blackbody_srgb;
@@ -226,13 +227,15 @@ struct SpotlightSpec {
     up: Option<[f32; 3]>,
     color: Option<[f32; 3]>,
     kelvin: Option<f32>,
-    intensity: f32,
+    intensity: Option<f32>,
+    #[serde(default = "one_f")]
+    dimmer: f32,
     #[serde(default = "candela")]
     intensity_unit: IntensityUnit,
-    beam_deg: f32,
-    field_deg: f32,
-    #[serde(default)]
-    falloff: FalloffSpec,
+    beam_deg: Option<f32>,
+    field_deg: Option<f32>,
+    falloff: Option<FalloffSpec>,
+    profile: Option<ProfileSpec>,
     gobo: Option<PathBuf>,
     #[serde(default)]
     gobo_sampling: SamplingSpec,
@@ -240,6 +243,27 @@ struct SpotlightSpec {
 
 fn candela() -> IntensityUnit {
     IntensityUnit::Candela
+}
+
+/// A measured profile: one photometric file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfileSpec {
+    ies: Option<PathBuf>,
+    ldt: Option<PathBuf>,
+}
+
+impl ProfileSpec {
+    /// The file and whether it is EULUMDAT.
+    fn file(&self, at: &str) -> Result<(&Path, bool)> {
+        match (&self.ies, &self.ldt) {
+            (Some(f), None) => Ok((f, false)),
+            (None, Some(f)) => Ok((f, true)),
+            _ => Err(Error::Invalid(format!(
+                "{at}.profile: give exactly one of `ies` (an IES LM-63 file) and `ldt` (a EULUMDAT file)"
+            ))),
+        }
+    }
 }
 
 #[derive(Deserialize, Default, Clone, Copy)]
@@ -350,7 +374,13 @@ impl Scene {
             .enumerate()
             .map(|(i, o)| o.validate(&format!("object[{i}]"), folder))
             .collect::<Result<Vec<_>>>()?;
-        let gobos = spec.spotlight.iter().filter_map(|l| l.gobo.as_ref());
+        let gobos = spec.spotlight.iter().flat_map(|l| {
+            let profile = l
+                .profile
+                .as_ref()
+                .and_then(|p| p.ies.as_ref().or(p.ldt.as_ref()));
+            l.gobo.iter().chain(profile)
+        });
         let meshes = spec.object.iter().filter_map(|o| match o {
             ObjectSpec::Mesh { file, .. } => Some(file),
             _ => None,
@@ -517,24 +547,16 @@ impl SpotlightSpec {
                 )))
             }
         };
-        check_positive(&format!("{at}.intensity"), self.intensity as f64, 1e9)?;
+        check_range(&format!("{at}.dimmer"), self.dimmer as f64, 0.0, 1.0)?;
         if self.intensity_unit != unit {
             return Err(Error::Invalid(format!(
                 "{at}.intensity_unit differs from spotlight[0]'s: all lights of a scene share one unit"
             )));
         }
-        check_range(
-            &format!("{at}.field_deg"),
-            self.field_deg as f64,
-            0.1,
-            170.0,
-        )?;
-        check_range(
-            &format!("{at}.beam_deg"),
-            self.beam_deg as f64,
-            0.0,
-            self.field_deg as f64,
-        )?;
+        let (intensity, field_half, profile) = match &self.profile {
+            None => self.beam(at)?,
+            Some(spec) => self.measured(at, spec, folder)?,
+        };
         let gobo = match &self.gobo {
             None => None,
             Some(file) => Some(load_gobo(
@@ -548,17 +570,100 @@ impl SpotlightSpec {
         Ok(Spotlight::new(
             position,
             light_from_world,
-            colour * self.intensity,
-            (
-                0.5 * self.beam_deg.to_radians(),
-                0.5 * self.field_deg.to_radians(),
-            ),
-            match self.falloff {
-                FalloffSpec::Linear => Falloff::Linear,
-                FalloffSpec::Smooth => Falloff::Smooth,
-            },
+            colour * (self.dimmer * intensity),
+            field_half,
+            profile,
             gobo,
         ))
+    }
+
+    /// A beam and field light: its intensity, half field angle (rad) and profile.
+    fn beam(&self, at: &str) -> Result<(f32, f32, Profile)> {
+        let need = |value: Option<f32>, key: &str| {
+            value.ok_or_else(|| {
+                Error::Invalid(format!(
+                    "{at}: `{key}` is missing (a light needs `intensity`, `beam_deg` and \
+                     `field_deg`, or a measured `profile`)"
+                ))
+            })
+        };
+        let intensity = need(self.intensity, "intensity")?;
+        let (beam_deg, field_deg) = (
+            need(self.beam_deg, "beam_deg")?,
+            need(self.field_deg, "field_deg")?,
+        );
+        check_positive(&format!("{at}.intensity"), intensity as f64, 1e9)?;
+        check_range(&format!("{at}.field_deg"), field_deg as f64, 0.1, 170.0)?;
+        check_range(
+            &format!("{at}.beam_deg"),
+            beam_deg as f64,
+            0.0,
+            field_deg as f64,
+        )?;
+        let falloff = match self.falloff.unwrap_or_default() {
+            FalloffSpec::Linear => Falloff::Linear,
+            FalloffSpec::Smooth => Falloff::Smooth,
+        };
+        Ok((
+            intensity,
+            0.5 * field_deg.to_radians(),
+            Profile::Beam {
+                beam_half: 0.5 * beam_deg.to_radians(),
+                falloff,
+            },
+        ))
+    }
+
+    /// A light with a measured profile: its peak candela, half field angle (rad: where
+    /// the file's light ends, at most [`MEASURED_REACH_DEG`]) and profile.
+    fn measured(&self, at: &str, spec: &ProfileSpec, folder: &Path) -> Result<(f32, f32, Profile)> {
+        for (key, given) in [
+            ("intensity", self.intensity.is_some()),
+            ("beam_deg", self.beam_deg.is_some()),
+            ("field_deg", self.field_deg.is_some()),
+            ("falloff", self.falloff.is_some()),
+        ] {
+            if given {
+                return Err(Error::Invalid(format!(
+                    "{at}.{key}: a light with a measured `profile` takes its intensity and \
+                     angles from the file; leave `{key}` out (`dimmer` scales it)"
+                )));
+            }
+        }
+        if self.intensity_unit != IntensityUnit::Candela {
+            return Err(Error::Invalid(format!(
+                "{at}.intensity_unit: a photometric file gives candela; the scene's unit must be \"cd\""
+            )));
+        }
+        let (file, eulumdat) = spec.file(at)?;
+        let photometry = load_photometry(&folder.join(file), eulumdat)?;
+        let reach = photometry.reach().min(MEASURED_REACH_DEG);
+        Ok((
+            photometry.peak(),
+            reach.to_radians(),
+            Profile::Measured(std::sync::Arc::new(photometry)),
+        ))
+    }
+}
+
+/// The farthest off the axis a measured profile is drawn, degrees: the field of a
+/// spotlight's square light map and shadow map must stay below 90 (`field_deg` below
+/// 180); light a file gives beyond it is left out.
+pub const MEASURED_REACH_DEG: f32 = 85.0;
+
+/// A photometric file: IES LM-63, or EULUMDAT when `eulumdat`.
+fn load_photometry(path: &Path, eulumdat: bool) -> Result<Photometry> {
+    let what = if eulumdat {
+        "EULUMDAT file"
+    } else {
+        "IES file"
+    };
+    let text = crate::files::read_text(path, what, crate::files::TEXT_LIMIT_BYTES)?;
+    let origin = path.display().to_string();
+    if eulumdat {
+        Photometry::from_eulumdat(&text, &origin)
+    } else {
+        Photometry::from_ies(&text, &origin)
     }
 }
 

@@ -10,8 +10,12 @@
 //! circumscribing the field cone; that square carries the gobo image (its top row at
 //! `v = 1`) and the shadow map.
 
+use std::sync::Arc;
+
 use glam::{DVec3, Mat3, Vec3};
 
+use super::photometry::Photometry;
+use super::tables::LightMap;
 use crate::fast::fast_atan;
 
 /// How the intensity falls from full at the beam edge to zero at the field edge.
@@ -87,6 +91,24 @@ impl Gobo {
     }
 }
 
+/// What shapes a spotlight's intensity over its field: `I_l` is
+/// [`Spotlight::intensity`] times the profile (in [0, 1]) times the gobo.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Profile {
+    /// Full inside the beam, zero outside the field, the falloff between.
+    Beam {
+        /// Half the beam angle (full intensity inside), radians, at most the field's.
+        beam_half: f32,
+        /// Edge between beam and field.
+        falloff: Falloff,
+    },
+    /// A measured distribution from a photometric file, divided by its peak (which
+    /// [`Spotlight::intensity`] carries). Zero past the field, which is where the
+    /// file's light ends (or 85 degrees off the axis, the most a spotlight's square
+    /// light map holds).
+    Measured(Arc<Photometry>),
+}
+
 /// One spotlight, validated.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Spotlight {
@@ -94,45 +116,57 @@ pub struct Spotlight {
     pub position: Vec3,
     /// World to light space: rows are the light's `x`, `y` and `z` (beam axis).
     pub light_from_world: Mat3,
-    /// On-axis intensity per channel (colour times intensity): cd or W/sr.
+    /// Intensity per channel where the profile is 1 (colour times intensity, or times
+    /// the measured peak): cd or W/sr.
     pub intensity: Vec3,
-    /// Half the beam angle (full intensity inside), radians.
-    pub beam_half: f32,
     /// Half the field angle (zero outside), radians, below pi/2.
     pub field_half: f32,
-    /// Edge between beam and field.
-    pub falloff: Falloff,
+    /// The intensity's shape over the field.
+    pub profile: Profile,
     /// Projected pattern, if any.
     pub gobo: Option<Gobo>,
-    /// `tan(beam / 2)`.
-    tan_beam: f32,
+    /// The profile tabulated for the plane method (built once with the light).
+    pub light_map: LightMap,
     /// `tan(field / 2)`.
     tan_field: f32,
+    /// `tan(beam / 2)` (0 for a measured profile: no region of constant intensity).
+    tan_beam: f32,
+    /// 1 / the measured peak, 1/cd (1 for a beam).
+    inv_peak: f32,
 }
 
 impl Spotlight {
     /// A spotlight at `position` whose beam is the light-space `z` of
-    /// `light_from_world` (see [`light_frame`]); angles are half angles in radians with
-    /// `0 <= beam_half <= field_half < pi/2`.
+    /// `light_from_world` (see [`light_frame`]); `field_half` in radians in
+    /// `(0, pi/2)`, and for a [`Profile::Beam`] `0 <= beam_half <= field_half`. For a
+    /// measured profile `intensity` is the colour (times any dimmer) times the file's
+    /// peak candela.
     pub fn new(
         position: Vec3,
         light_from_world: Mat3,
         intensity: Vec3,
-        (beam_half, field_half): (f32, f32),
-        falloff: Falloff,
+        field_half: f32,
+        profile: Profile,
         gobo: Option<Gobo>,
     ) -> Spotlight {
-        Spotlight {
+        let (tan_beam, inv_peak) = match &profile {
+            Profile::Beam { beam_half, .. } => (beam_half.tan(), 1.0),
+            Profile::Measured(p) => (0.0, 1.0 / p.peak()),
+        };
+        let mut light = Spotlight {
             position,
             light_from_world,
             intensity,
-            beam_half,
             field_half,
-            falloff,
+            profile,
             gobo,
-            tan_beam: beam_half.tan(),
+            light_map: LightMap::empty(),
             tan_field: field_half.tan(),
-        }
+            tan_beam,
+            inv_peak,
+        };
+        light.light_map = LightMap::new(&light);
+        light
     }
 
     /// `tan(field / 2)`: the half-width of the light's `(u, v)` square at `z = 1`.
@@ -141,7 +175,7 @@ impl Spotlight {
         self.tan_field
     }
 
-    /// `tan(beam / 2)`.
+    /// `tan(beam / 2)`: inside it a beam's profile is 1 (0 for a measured profile).
     #[inline]
     pub fn tan_beam(&self) -> f32 {
         self.tan_beam
@@ -174,8 +208,10 @@ impl Spotlight {
         }
     }
 
-    /// The beam profile at `(u, v)`: 1 inside the beam, 0 outside the field, the
-    /// falloff between; `I_l` is this times [`Spotlight::intensity`] and the gobo.
+    /// The profile at `(u, v)`, exactly (the plane method looks up
+    /// [`Spotlight::light_map`] instead): for a beam 1 inside it, 0 outside the field,
+    /// the falloff between; for a measured profile the file's candela over its peak at
+    /// the direction's vertical angle and half-plane, 0 outside the field.
     #[inline(always)]
     pub fn profile_at(&self, u: f32, v: f32) -> f32 {
         let q = u * u + v * v;
@@ -183,14 +219,23 @@ impl Spotlight {
             return 0.0;
         }
         let r2 = q * self.tan_field * self.tan_field;
-        if r2 <= self.tan_beam * self.tan_beam {
-            return 1.0;
-        }
-        let x = (self.field_half - fast_atan(r2.sqrt())) / (self.field_half - self.beam_half);
-        let x = x.clamp(0.0, 1.0);
-        match self.falloff {
-            Falloff::Linear => x,
-            Falloff::Smooth => x * x * (3.0 - 2.0 * x),
+        match &self.profile {
+            Profile::Beam { beam_half, falloff } => {
+                if r2 <= self.tan_beam * self.tan_beam {
+                    return 1.0;
+                }
+                let x = (self.field_half - fast_atan(r2.sqrt())) / (self.field_half - beam_half);
+                let x = x.clamp(0.0, 1.0);
+                match falloff {
+                    Falloff::Linear => x,
+                    Falloff::Smooth => x * x * (3.0 - 2.0 * x),
+                }
+            }
+            Profile::Measured(photometry) => {
+                let gamma = r2.sqrt().atan().to_degrees();
+                let c = v.atan2(u).to_degrees();
+                photometry.candela_at(gamma, c) * self.inv_peak
+            }
         }
     }
 
@@ -285,8 +330,11 @@ mod tests {
             Vec3::new(0.0, 5.0, 0.0),
             light_frame(Vec3::NEG_Y, Vec3::Z).unwrap(),
             Vec3::new(100.0, 90.0, 80.0),
-            (10f32.to_radians(), 20f32.to_radians()),
-            falloff,
+            20f32.to_radians(),
+            Profile::Beam {
+                beam_half: 10f32.to_radians(),
+                falloff,
+            },
             None,
         )
     }

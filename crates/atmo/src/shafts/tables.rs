@@ -11,8 +11,12 @@
 //!   lamp, where the beam is brightest. Inside a haze box `s` and `t` in the exponent
 //!   are the lengths inside the haze.
 
+use std::sync::Arc;
+
 use super::haze::Haze;
-use super::spotlight::Spotlight;
+use super::photometry::Symmetry;
+use super::spotlight::{Profile, Spotlight};
+use crate::fast::fast_atan2;
 
 /// `F(alpha)`, the haze's phase function in 1/sr, tabulated.
 #[derive(Debug, Clone)]
@@ -52,51 +56,93 @@ fn lerp_1d(values: &[f32], x: f32) -> f32 {
     values[i] + f * (values[i + 1] - values[i])
 }
 
-/// The beam profile of a spotlight as a table over `q = u^2 + v^2` in [0, 1] (the
-/// square of the off-axis tangent over the field's): the radially symmetric part of the
-/// paper's light map (shafts 4.1), looked up at every sub-sample where the exact profile
-/// would need a square root and an arc-tangent. The gobo, if any, stays an image.
-#[derive(Debug, Clone)]
+/// A spotlight's profile as the paper's light map (shafts 4.1), tabulated over
+/// `q = u^2 + v^2` in [0, 1] (the square of the off-axis tangent over the field's) and,
+/// for a measured profile that is not rotationally symmetric, over the half-plane
+/// angle `C`: looked up at every sub-sample where the exact profile needs square roots
+/// and arc-tangents (and for a measured one a search through the file's angles). A
+/// beam's table starts at its edge (inside it the profile is 1); a measured one's at
+/// the axis. The gobo, if any, stays an image.
+#[derive(Debug, Clone, PartialEq)]
 pub struct LightMap {
-    /// The profile at `q = q_beam + k / scale`.
-    pub values: Vec<f32>,
-    /// Below this `q` the profile is 1 (inside the beam).
+    /// `rows` rows of [`LightMap::SIZE`] entries: row `r` is the half-plane at
+    /// `C = 360 r / rows` degrees, entry `k` the profile at `q = q_beam + k / scale`.
+    pub values: Arc<[f32]>,
+    /// Rows: 1 for a profile the same in every half-plane.
+    pub rows: usize,
+    /// Below this `q` the profile is 1 (inside a beam; 0 for a measured profile).
     pub q_beam: f32,
     /// Table entries per unit of `q`.
     pub scale: f32,
 }
 
 impl LightMap {
-    /// Entries between the beam's edge and the field's.
+    /// Entries along `q` in each row.
     pub const SIZE: usize = 1024;
 
-    /// The table of `light`'s profile.
+    /// Rows over `C` of a measured profile without rotational symmetry: 2.5 degrees
+    /// apart, finer than the 5 to 22.5 degree planes photometric files measure.
+    pub const MEASURED_ROWS: usize = 144;
+
+    /// A table of nothing, for a light's map before it is built.
+    pub(crate) fn empty() -> LightMap {
+        LightMap {
+            values: Arc::new([]),
+            rows: 0,
+            q_beam: 0.0,
+            scale: 0.0,
+        }
+    }
+
+    /// The table of `light`'s profile ([`Spotlight::profile_at`]).
     pub fn new(light: &Spotlight) -> LightMap {
-        let ratio = light.beam_half.tan() / light.tan_field();
-        let q_beam = ratio * ratio;
+        let (q_beam, rows) = match &light.profile {
+            Profile::Beam { .. } => {
+                let ratio = light.tan_beam() / light.tan_field();
+                (ratio * ratio, 1)
+            }
+            Profile::Measured(p) if p.symmetry == Symmetry::Rotational => (0.0, 1),
+            Profile::Measured(_) => (0.0, Self::MEASURED_ROWS),
+        };
         let step = (1.0 - q_beam) / (Self::SIZE - 1) as f32;
-        let values = (0..Self::SIZE)
-            .map(|k| {
+        let values = (0..rows * Self::SIZE)
+            .map(|i| {
+                let (r, k) = (i / Self::SIZE, i % Self::SIZE);
                 let q = (q_beam + k as f32 * step).min(1.0 - 1e-7);
-                light.profile_at(q.sqrt(), 0.0)
+                let c = std::f32::consts::TAU * r as f32 / rows as f32;
+                light.profile_at(q.sqrt() * c.cos(), q.sqrt() * c.sin())
             })
             .collect();
         LightMap {
             values,
+            rows,
             q_beam,
             scale: 1.0 / step.max(1e-12),
         }
     }
 
-    /// The profile at `q = u^2 + v^2`: 0 from 1 on.
+    /// The profile at the light-space projection `(u, v)`: 0 from `q = 1` on.
     #[inline(always)]
-    pub fn get(&self, q: f32) -> f32 {
-        if q <= self.q_beam {
+    pub fn get(&self, u: f32, v: f32) -> f32 {
+        let q = u * u + v * v;
+        if q < self.q_beam {
             1.0
         } else if q >= 1.0 {
             0.0
         } else {
-            lerp_1d(&self.values, (q - self.q_beam) * self.scale)
+            let x = (q - self.q_beam) * self.scale;
+            let row = |r: usize| &self.values[r * Self::SIZE..(r + 1) * Self::SIZE];
+            if self.rows == 1 {
+                return lerp_1d(row(0), x);
+            }
+            // Between the rows on either side of the half-plane's C.
+            let rows = self.rows as f32;
+            let t = fast_atan2(v, u) * (rows / std::f32::consts::TAU);
+            let t = if t < 0.0 { t + rows } else { t };
+            let r = (t as usize).min(self.rows - 1);
+            let f = t - r as f32;
+            let (a, b) = (lerp_1d(row(r), x), lerp_1d(row((r + 1) % self.rows), x));
+            a + f * (b - a)
         }
     }
 }
@@ -163,21 +209,74 @@ mod tests {
                 glam::Vec3::ZERO,
                 light_frame(glam::Vec3::Z, glam::Vec3::Y).unwrap(),
                 glam::Vec3::ONE,
-                (12f32.to_radians(), 20f32.to_radians()),
-                falloff,
+                20f32.to_radians(),
+                crate::shafts::spotlight::Profile::Beam {
+                    beam_half: 12f32.to_radians(),
+                    falloff,
+                },
                 None,
             );
-            let map = LightMap::new(&light);
+            let map = &light.light_map;
             for k in 0..=2000 {
                 let r = k as f32 / 1900.0;
                 let want = light.profile_at(r, 0.0);
                 assert!(
-                    (map.get(r * r) - want).abs() < 2e-4,
+                    (map.get(r, 0.0) - want).abs() < 2e-4,
                     "{falloff:?} {r}: {} {want}",
-                    map.get(r * r)
+                    map.get(r, 0.0)
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_measured_light_map_matches_the_exact_profile_in_every_half_plane() {
+        use crate::shafts::photometry::Photometry;
+        use crate::shafts::spotlight::light_frame;
+        // An oval: 30 degrees wide along C = 0, 15 along C = 90, planes 10 degrees apart
+        // over the whole circle; smooth in gamma.
+        let vertical: Vec<f32> = (0..=16).map(|k| 2.5 * k as f32).collect();
+        let horizontal: Vec<f32> = (0..36).map(|k| 10.0 * k as f32).collect();
+        let candela = horizontal
+            .iter()
+            .flat_map(|c| {
+                let a = c.to_radians();
+                let width = 1.0 / ((a.cos() / 30.0).hypot(a.sin() / 15.0));
+                vertical
+                    .iter()
+                    .map(move |g| 5000.0 * (1.0 - (g / width).powi(2)).max(0.0).powi(2))
+            })
+            .collect();
+        let photometry = Photometry {
+            vertical,
+            horizontal,
+            candela,
+            symmetry: crate::shafts::photometry::Symmetry::Full,
+        };
+        let light = Spotlight::new(
+            glam::Vec3::ZERO,
+            light_frame(glam::Vec3::Z, glam::Vec3::Y).unwrap(),
+            glam::Vec3::splat(5000.0),
+            photometry.reach().to_radians(),
+            Profile::Measured(Arc::new(photometry)),
+            None,
+        );
+        let map = &light.light_map;
+        assert_eq!(map.rows, LightMap::MEASURED_ROWS);
+        // The profile peaks at 1 on the axis; 10 degrees off it (tan 0.176) it is
+        // lower along C = 90 than along C = 0.
+        let t = 10f32.to_radians().tan() / light.tan_field();
+        assert!((light.profile_at(0.0, 0.0) - 1.0).abs() < 1e-6);
+        assert!(light.profile_at(0.0, t) < 0.5 * light.profile_at(t, 0.0));
+        let mut worst = 0.0f32;
+        for i in 0..=120 {
+            for j in 0..=120 {
+                let (u, v) = (i as f32 / 60.0 - 1.0, j as f32 / 60.0 - 1.0);
+                worst = worst.max((map.get(u, v) - light.profile_at(u, v)).abs());
+            }
+        }
+        // Rows 2.5 degrees apart over planes 10 apart: within 1 % of the peak.
+        assert!(worst < 0.01, "{worst}");
     }
 
     #[test]
