@@ -332,16 +332,32 @@ fn lit_at(light: u32, u: f32, v: f32, z: f32) -> bool {
     return z < shadow_depth(light, i32(half + u * half), i32(half - v * half));
 }
 
-// Percentage-closer filtered visibility of a light-space point (ShadowMap::visibility).
-fn visibility(light: u32, tan_field: f32, local: vec3<f32>) -> f32 {
+// Whether texel (i, j) of light `light` lets the light reach the receiver whose plane
+// is normal . x = plane (light space), at depth `own` where the texel's ray misses it.
+fn texel_lit(light: u32, tan_field: f32, i: i32, j: i32, normal: vec3<f32>, plane: f32, own: f32) -> f32 {
+    let n = i32(params.shadow_size);
+    let ii = clamp(i, 0, n - 1);
+    let jj = clamp(j, 0, n - 1);
+    let texel = 2.0 / f32(params.shadow_size);
+    let ray = vec3<f32>((f32(ii) + 0.5) * texel - 1.0, 1.0 - (f32(jj) + 0.5) * texel, 0.0) * tan_field
+        + vec3<f32>(0.0, 0.0, 1.0);
+    let facing = dot(normal, ray);
+    let z = select(own, plane / facing, facing < 0.0 && plane < 0.0);
+    return f32(z * (1.0 - RECEIVER_BIAS) < shadow_depth(light, ii, jj));
+}
+
+// Percentage-closer filtered visibility of a light-space point against its plane
+// (ShadowMap::visibility).
+fn visibility(light: u32, tan_field: f32, local: vec3<f32>, normal: vec3<f32>) -> f32 {
     let size = f32(params.shadow_size);
     let scale = 0.5 * size / (local.z * tan_field);
     let c = bilinear(vec2<f32>(0.5 * size + local.x * scale, 0.5 * size - local.y * scale));
+    let plane = dot(normal, local);
     let lit = vec4<f32>(
-        f32(local.z < shadow_depth(light, c.at.x, c.at.y)),
-        f32(local.z < shadow_depth(light, c.at.x + 1, c.at.y)),
-        f32(local.z < shadow_depth(light, c.at.x, c.at.y + 1)),
-        f32(local.z < shadow_depth(light, c.at.x + 1, c.at.y + 1)),
+        texel_lit(light, tan_field, c.at.x, c.at.y, normal, plane, local.z),
+        texel_lit(light, tan_field, c.at.x + 1, c.at.y, normal, plane, local.z),
+        texel_lit(light, tan_field, c.at.x, c.at.y + 1, normal, plane, local.z),
+        texel_lit(light, tan_field, c.at.x + 1, c.at.y + 1, normal, plane, local.z),
     );
     return weigh(vec3<f32>(lit.x), vec3<f32>(lit.y), vec3<f32>(lit.z), vec3<f32>(lit.w), c.w).x;
 }

@@ -9,6 +9,7 @@
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::FOOTPRINT;
 use atmo::clouds::particles::FADE_SCALE;
+use atmo::shafts::shadow_map::RECEIVER_BIAS;
 use atmo::sky::shells::export;
 
 use crate::{Gpu, GpuError};
@@ -123,7 +124,8 @@ const FILES: &[(&str, &str)] = &[
 
 /// The constants WGSL shares with the Rust, generated: `const PHASE_RAYLEIGH: u32 = 0u;`
 /// and the rest of [`PhaseFunction::CODES`], this module's codes, the sky model's
-/// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, and the clouds' `FOOTPRINT` and `FADE_SCALE`.
+/// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, the clouds' `FOOTPRINT` and
+/// `FADE_SCALE`, and the shadow maps' `RECEIVER_BIAS`.
 pub fn prelude() -> String {
     let phases = PhaseFunction::CODES
         .iter()
@@ -144,6 +146,11 @@ pub fn prelude() -> String {
     // and the scale of a faded billboard's column.
     out.push_str(&format!("const FOOTPRINT: f32 = {:?};\n", FOOTPRINT));
     out.push_str(&format!("const FADE_SCALE: f32 = {:?};\n", FADE_SCALE));
+    // How much nearer than a receiver's plane a shadow map's surface must be.
+    out.push_str(&format!(
+        "const RECEIVER_BIAS: f32 = {:?};\n",
+        RECEIVER_BIAS
+    ));
     out
 }
 

@@ -294,19 +294,32 @@ impl Frame {
                 )));
             }
         }
-        let (mut sum, mut max) = (0.0f64, 0.0f64);
-        for (a, b) in self.pixels.iter().zip(&other.pixels) {
+        Ok(self.level_errors_over(other, display, 0..self.pixels.len()))
+    }
+
+    /// [`Frame::level_errors`] over the pixels of index `pixels` only (row-major), for
+    /// pictures of the same size checked to be finite: the error of one kind of pixel
+    /// (surfaces, haze) told apart from the rest.
+    pub fn level_errors_over(
+        &self,
+        other: &Frame,
+        display: Display,
+        pixels: impl IntoIterator<Item = usize>,
+    ) -> LevelErrors {
+        let (mut sum, mut max, mut n) = (0.0f64, 0.0f64, 0usize);
+        for k in pixels {
+            let (a, b) = (self.pixels[k], other.pixels[k]);
             for c in 0..3 {
                 let d = 255.0 * (display.value(a[c]) - display.value(b[c])) as f64;
                 sum += d * d;
                 max = max.max(d.abs());
             }
+            n += 3;
         }
-        let n = 3.0 * self.pixels.len().max(1) as f64;
-        Ok(LevelErrors {
-            rms: (sum / n).sqrt(),
+        LevelErrors {
+            rms: (sum / n.max(1) as f64).sqrt(),
             max,
-        })
+        }
     }
 }
 

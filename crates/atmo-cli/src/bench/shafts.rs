@@ -59,6 +59,19 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
     );
     let error = frame.level_errors(&reference, fig6.display)?;
     let baseline_error = baseline_frame.level_errors(&reference, fig6.display)?;
+    // Surface pixels (shadow edges among them) and haze pixels (the lamp's own among
+    // them) apart.
+    let (surface, haze) = atmo::shafts::surface::pixel_kinds(&fig6);
+    let split = |f: &Frame| {
+        let of = |pixels: &[usize]| {
+            let e = f.level_errors_over(&reference, fig6.display, pixels.iter().copied());
+            json!({"pixels": pixels.len(), "rms_levels": e.rms, "max_levels": e.max})
+        };
+        (of(&surface), of(&haze))
+    };
+    let (surface_error, haze_error) = split(&frame);
+    let equal = equal_error(&fig6, &reference, error.rms, if quick { 1 } else { 3 })?;
+    let equal_error_ratio = equal.map(|(_, equal_ms, _)| equal_ms / ms);
     let params = |scene: &Scene| {
         json!({
             "width": scene.camera.width, "height": scene.camera.height,
@@ -73,13 +86,18 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
             "bench": "shafts.fig6", "params": params(&fig6), "median_ms": ms,
             "baseline": "shafts.ray-march", "baseline_median_ms": baseline_ms,
             "baseline_samples": baseline.samples, "ratio": baseline_ms / ms,
-            "error": {"rms_levels": error.rms, "max_levels": error.max},
+            "error": {"rms_levels": error.rms, "max_levels": error.max,
+                      "surface": surface_error, "haze": haze_error},
             "baseline_error": {"rms_levels": baseline_error.rms, "max_levels": baseline_error.max},
+            "equal_error_ratio": equal_error_ratio,
+            "equal_error": equal.map(|(samples, ms, rms)| json!({"samples": samples, "median_ms": ms, "rms_levels": rms})),
             "reference": {"samples": RayMarcher::CONVERGED.samples, "doubling_change_rms": doubling},
         }),
         format!(
             "shafts.fig6   {ms:>8.2} ms   baseline ({} samples) {baseline_ms:>8.0} ms   ratio {:>6.1}   \
              error rms {:.3} max {:.2} levels (baseline: rms {:.3} max {:.2})\n\
+             error on {} surface pixels rms {:.3} max {:.2}, on {} haze pixels rms {:.3} max {:.2}\n\
+             equal error: {}\n\
              reference: {} samples per ray; doubling them changes it by {}",
             baseline.samples,
             baseline_ms / ms,
@@ -87,6 +105,22 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
             error.max,
             baseline_error.rms,
             baseline_error.max,
+            surface_error["pixels"],
+            surface_error["rms_levels"].as_f64().unwrap_or(0.0),
+            surface_error["max_levels"].as_f64().unwrap_or(0.0),
+            haze_error["pixels"],
+            haze_error["rms_levels"].as_f64().unwrap_or(0.0),
+            haze_error["max_levels"].as_f64().unwrap_or(0.0),
+            match equal {
+                Some((samples, equal_ms, rms)) => format!(
+                    "the ray marcher needs {samples} samples a ray (rms {rms:.3} levels) and \
+                     {equal_ms:.0} ms: ratio {:.1}",
+                    equal_ms / ms
+                ),
+                None => format!(
+                    "the ray marcher does not reach the planes' rms by {EQUAL_ERROR_MAX_SAMPLES} samples a ray"
+                ),
+            },
             RayMarcher::CONVERGED.samples,
             doubling.map_or("(not checked with --quick)".into(), |d| format!("{:.4} % RMS", 100.0 * d)),
         ),
@@ -138,6 +172,62 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
     );
 
     sweep_planes(&fig6, &reference, quick, json, sweep)
+}
+
+/// The most samples a ray [`equal_error`] tries (about 30 times the baseline's time).
+const EQUAL_ERROR_MAX_SAMPLES: u32 = 8192;
+
+/// The fair comparison: the ray marcher with the baseline's sampling (evenly along the
+/// whole ray), its samples doubled from 16 until its RMS error against `reference` is
+/// at most `rms`, then the last doubling halved three times (a count within 1/8 of the
+/// doubling's step of the least that reaches it); that count, its median time over
+/// `runs` renders (ms) and its error, or `None` if [`EQUAL_ERROR_MAX_SAMPLES`] do not
+/// reach it.
+fn equal_error(
+    scene: &Scene,
+    reference: &Frame,
+    rms: f64,
+    runs: usize,
+) -> Result<Option<(u32, f64, f64)>> {
+    let marcher = |samples| RayMarcher {
+        samples,
+        ..RayMarcher::baseline(scene)
+    };
+    let error = |samples| -> Result<f64> {
+        Ok(marcher(samples)
+            .render(scene)
+            .level_errors(reference, scene.display)?
+            .rms)
+    };
+    let mut samples = 16;
+    let mut reached = error(samples)?;
+    while reached > rms {
+        if samples >= EQUAL_ERROR_MAX_SAMPLES {
+            return Ok(None);
+        }
+        samples *= 2;
+        reached = error(samples)?;
+    }
+    // Between the last count that missed and the first that reached.
+    let mut missed = samples / 2;
+    for _ in 0..3 {
+        if samples - missed < 2 {
+            break;
+        }
+        let middle = (missed + samples) / 2;
+        let e = error(middle)?;
+        if e <= rms {
+            (samples, reached) = (middle, e);
+        } else {
+            missed = middle;
+        }
+    }
+    let ms = median(
+        (0..runs)
+            .map(|_| time_ms(|| drop(marcher(samples).render(scene))))
+            .collect(),
+    );
+    Ok(Some((samples, ms, reached)))
 }
 
 /// RMS of the difference relative to the RMS of `b`, linear radiance.

@@ -19,7 +19,7 @@ use crate::geometry::Ray;
 use crate::image::Frame;
 use crate::shafts::render_rays;
 use crate::shafts::spotlight::Spotlight;
-use crate::shafts::surface::{first_hit, surface_radiance, SurfacePoint};
+use crate::shafts::surface::{first_hit, shadow_ray, surface_radiance};
 use crate::shafts::Scene;
 
 /// Which stretch of a camera ray the samples spread over.
@@ -115,17 +115,4 @@ impl RayMarcher {
         }
         sum * dt
     }
-}
-
-/// 1 when nothing lies between the surface point (lifted off its surface by 0.1 mm)
-/// and the lamp, else 0.
-fn shadow_ray(scene: &Scene, light: &Spotlight, point: &SurfacePoint) -> f32 {
-    let origin = point.position + point.normal * 1e-4;
-    let to_lamp = light.position - origin;
-    let s = to_lamp.length();
-    let ray = Ray {
-        origin,
-        dir: to_lamp / s,
-    };
-    (!scene.objects.occluded(&ray, s)) as u8 as f32
 }

@@ -76,3 +76,30 @@ pub fn surface_radiance(
         (-haze.extinction * haze.length_inside(scene.camera.position, point.position)).exp();
     point.albedo * FRAC_1_PI * sum * to_eye
 }
+
+/// 1 when nothing lies between the surface point (lifted off its surface by 0.1 mm)
+/// and the lamp, else 0: the exact visibility, which the reference takes everywhere and
+/// the plane method where a shadow map's filter straddles an edge.
+pub fn shadow_ray(scene: &Scene, light: &Spotlight, point: &SurfacePoint) -> f32 {
+    let origin = point.position + point.normal * 1e-4;
+    let to_lamp = light.position - origin;
+    let s = to_lamp.length();
+    let ray = Ray {
+        origin,
+        dir: to_lamp / s,
+    };
+    (!scene.objects.occluded(&ray, s)) as u8 as f32
+}
+
+/// The pixels (row-major indices) of `scene`'s camera whose centre ray meets a surface,
+/// and the others, where only haze is seen: errors are told apart by kind (a shadow's
+/// edge is among the first, the lamp's own pixel among the second).
+pub fn pixel_kinds(scene: &Scene) -> (Vec<usize>, Vec<usize>) {
+    let camera = &scene.camera;
+    let width = camera.width as usize;
+    (0..width * camera.height as usize).partition(|&k| {
+        let ray = camera.ray((k % width) as f32 + 0.5, (k / width) as f32 + 0.5);
+        let length = ray.length();
+        first_hit(scene, ray / length, camera.far * length).is_some()
+    })
+}
