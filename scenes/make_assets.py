@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Writes the example scenes' assets: gobos/dots.png (the dotted gobo of the stage
-scene, after the paper's Fig. 7), meshes/knot.obj (a trefoil-knot sculpture) and the
+scene, after the paper's Fig. 7), gobos/spokes.png (the turning gobo of the show),
+meshes/knot.obj (a trefoil-knot sculpture) and the
 photometric files of scenes/photometric.toml (photometry/: an ellipsoidal spot and an
 oval wash as IES LM-63 files, a PAR can as EULUMDAT), made up, shaped like real ones.
 Pure standard library, so it runs anywhere: `python3 scenes/make_assets.py`."""
@@ -48,6 +49,27 @@ def dots(size=256, spacing=0.22, radius=0.07):
             d = min(math.hypot(x - cx, y - cy) for cx, cy in centres)
             cover = min(1.0, max(0.0, (radius - d) / texel + 0.5))
             row[c] = round(255 * cover)
+        rows.append(bytes(row))
+    return rows
+
+
+def spokes(size=256, count=6, width=0.22):
+    """A breakup gobo of `count` spokes from the centre, each `width` radians wide at
+    its edge, inside the unit disc; edges anti-aliased over one texel. Turning, it
+    shows which way a gobo rotates."""
+    rows = []
+    texel = 2.0 / size
+    for j in range(size):
+        row = bytearray(size)
+        y = 1.0 - (j + 0.5) * texel
+        for i in range(size):
+            x = (i + 0.5) * texel - 1.0
+            r = math.hypot(x, y)
+            a = math.atan2(y, x) % (2 * math.pi / count)
+            off = min(a, 2 * math.pi / count - a) * max(r, 1e-6)  # distance to a spoke
+            inside = min(1.0, max(0.0, (width * 0.5 * r - off) / texel + 0.5))
+            disc = min(1.0, max(0.0, (0.97 - r) / texel + 0.5))
+            row[i] = int(round(255 * inside * disc))
         rows.append(bytes(row))
     return rows
 
@@ -170,6 +192,7 @@ if __name__ == "__main__":
     os.makedirs(os.path.join(HERE, "gobos"), exist_ok=True)
     os.makedirs(os.path.join(HERE, "meshes"), exist_ok=True)
     write_png_grey(os.path.join(HERE, "gobos", "dots.png"), 256, 256, dots())
+    write_png_grey(os.path.join(HERE, "gobos", "spokes.png"), 256, 256, spokes())
     knot(os.path.join(HERE, "meshes", "knot.obj"))
     os.makedirs(os.path.join(HERE, "photometry"), exist_ok=True)
     ies_spot(os.path.join(HERE, "photometry", "spot.ies"))

@@ -9,12 +9,13 @@ use atmo::Error;
 
 /// Writes the frames `fill` draws (given the frame number and a `size` frame to draw
 /// into) into the folder `folder` as `frame-0000.png` ... and `animation.png`, an
-/// animated PNG at 30 frames/s. They are written into a temporary folder that becomes
+/// animated PNG at `fps` frames/s. They are written into a temporary folder that becomes
 /// `folder` at the end (or whose files move into it, where it exists), so an
 /// interrupted or failed run leaves no partial frames. Returns the animation's path.
 pub fn write_animation(
     folder: &Path,
     frames: usize,
+    fps: u16,
     (width, height): (u32, u32),
     display: Display,
     mut fill: impl FnMut(usize, &mut Frame) -> anyhow::Result<()>,
@@ -40,7 +41,7 @@ pub fn write_animation(
             encoder.set_color(png::ColorType::Rgb);
             encoder.set_depth(png::BitDepth::Eight);
             encoder.set_animated(frames as u32, 0).map_err(png_error)?;
-            encoder.set_frame_delay(1, 30).map_err(png_error)?;
+            encoder.set_frame_delay(1, fps).map_err(png_error)?;
             let mut writer = encoder.write_header().map_err(png_error)?;
             let mut frame = Frame::new(width, height);
             for k in 0..frames {

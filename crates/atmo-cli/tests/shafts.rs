@@ -208,3 +208,72 @@ fn compare_refuses_pictures_with_nan_or_infinity() {
     assert!(o.status.success() && diff.exists());
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn a_show_plays_into_frames_and_an_animated_png() {
+    let dir = scratch("shafts-show");
+    // The example show at 72 x 48, its gobos where they are.
+    let show = std::fs::read_to_string(scene("show.toml"))
+        .unwrap()
+        .replace("width = 720", "width = 72")
+        .replace("height = 480", "height = 48")
+        .replace("\"gobos/", &format!("\"{}/", scene("gobos")));
+    let file = dir.join("show.toml");
+    std::fs::write(&file, &show).unwrap();
+    let out = dir.join("frames");
+    let o = atmo(&[
+        "shafts",
+        file.to_str().unwrap(),
+        "--animate",
+        "--fps",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // 7 s of cues at 2 frames/s: 0, 0.5, ..., 7.
+    assert_eq!(common::files_in(&out), 15 + 1);
+    let first = image::open(out.join("frame-0000.png")).unwrap().to_rgb8();
+    let last = image::open(out.join("frame-0014.png")).unwrap().to_rgb8();
+    assert_eq!(first.dimensions(), (72, 48));
+    assert_ne!(first, last, "the heads moved");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("15 frames") && stderr.contains("shadow maps rebuilt"),
+        "{stderr}"
+    );
+    // The still at 7 s is the last frame.
+    let still = dir.join("end.png");
+    let o = atmo(&[
+        "shafts",
+        file.to_str().unwrap(),
+        "--time",
+        "7",
+        "-o",
+        still.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(image::open(&still).unwrap().to_rgb8(), last);
+
+    // A scene without cues has no show to play; a file name is not a folder.
+    let fig6 = scene("spotlight-sphere.toml");
+    let o = atmo(&[
+        "shafts",
+        &fig6,
+        "--animate",
+        "-o",
+        dir.join("none").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("it has none"));
+    let o = atmo(&[
+        "shafts",
+        file.to_str().unwrap(),
+        "--animate",
+        "-o",
+        dir.join("a.png").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!dir.join("none").exists() && !dir.join("a.png").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

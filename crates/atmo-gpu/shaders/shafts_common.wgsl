@@ -63,8 +63,9 @@ struct GpuLight {
     // The light's map is rows map_row .. map_row + map_rows of light_maps, over C.
     map_row: u32,
     map_rows: u32,
-    pad0: u32,
-    pad1: u32,
+    // The gobo's turn (Gobo::rotation) as its cosine and sine.
+    gobo_cos: f32,
+    gobo_sin: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: ShaftsParams;
@@ -290,8 +291,10 @@ fn gobo_texel(l: GpuLight, i: i32, j: i32) -> vec3<f32> {
     return geometry[l.gobo_at + u32(clamp(j, 0, h - 1) * w + clamp(i, 0, w - 1))].xyz;
 }
 
-// The gobo's colour at (u, v) (Gobo::sample).
-fn gobo_sample(l: GpuLight, u: f32, v: f32) -> vec3<f32> {
+// The gobo's colour at (u, v), the image turned (Gobo::sample).
+fn gobo_sample(l: GpuLight, u_turned: f32, v_turned: f32) -> vec3<f32> {
+    let u = l.gobo_cos * u_turned + l.gobo_sin * v_turned;
+    let v = l.gobo_cos * v_turned - l.gobo_sin * u_turned;
     let x = 0.5 * (u + 1.0) * f32(l.gobo_width);
     let y = 0.5 * (1.0 - v) * f32(l.gobo_height);
     if l.gobo == GOBO_NEAREST {

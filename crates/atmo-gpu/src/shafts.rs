@@ -64,8 +64,8 @@ gpu_struct! {
         cone_count: u32,
         map_row: u32,
         map_rows: u32,
-        pad0: u32,
-        pad1: u32,
+        gobo_cos: f32,
+        gobo_sin: f32,
     }
 }
 
@@ -620,8 +620,8 @@ impl Geometry {
                     cone_count: cone.len() as u32,
                     map_row,
                     map_rows: map.rows as u32,
-                    pad0: 0,
-                    pad1: 0,
+                    gobo_cos: light.gobo.as_ref().map_or(1.0, |g| g.rotation.cos()),
+                    gobo_sin: light.gobo.as_ref().map_or(0.0, |g| g.rotation.sin()),
                 }
             })
             .collect();

@@ -626,3 +626,113 @@ fn obj_indices_out_of_range_are_refused_by_line() {
     let relative = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n";
     assert_eq!(mesh_from_obj(relative, "ok.obj", |p| p).unwrap().len(), 1);
 }
+
+/// A show: two hanging heads (one with a two-gobo wheel) and `cues`, in the small scene.
+fn show_scene(cues: &str) -> String {
+    small_scene(&format!(
+        r#"
+[[fixture]]
+name = "a"
+position = [-1.0, 4.0, 0.5]
+intensity = 800.0
+start = {{ tilt_deg = 10.0, kelvin = 5600 }}
+
+[[fixture]]
+name = "b"
+position = [1.0, 4.0, 0.5]
+intensity = 800.0
+gobo_wheel = ["gobos/dots.png", "gobos/spokes.png"]
+start = {{ gobo = 2 }}
+{cues}"#
+    ))
+}
+
+const CUES: &str = r#"
+[[cue]]
+time_s = 1.0
+fade_s = 1.0
+set.a = { pan_deg = 90.0, tilt_deg = 30.0 }
+set.b = { gobo_speed_dps = 90.0, cmy = [0.0, 1.0, 0.0] }
+"#;
+
+#[test]
+fn moving_heads_follow_their_cues_and_only_moved_lights_rebuild_their_shadow_maps() {
+    let mut scene = parse(&show_scene(CUES)).unwrap();
+    // The spotlight, then the two heads.
+    assert_eq!(scene.lights.len(), 3);
+    assert_eq!(scene.show.duration(), 2.0);
+    let b = &scene.lights[2];
+    assert!(b.gobo.is_some(), "b starts with its wheel's second gobo");
+    let mut maps = atmo::shafts::planes::ShadowMaps::default();
+    maps.update(&scene);
+    assert_eq!(maps.rebuilt, 3);
+    // Half way through the fade: a has turned, b only changed colour and gobo angle.
+    scene.at_time(1.5);
+    let axis = scene.lights[1].light_from_world.row(2);
+    let (want, _) = scene.show.fixtures[0].aim(45.0, 20.0);
+    assert!((axis - want).length() < 1e-5, "{axis:?} {want:?}");
+    let b = &scene.lights[2];
+    assert!(
+        b.intensity.y < 0.6 * b.intensity.x,
+        "magenta fading in: {:?}",
+        b.intensity
+    );
+    let turned = b.gobo.as_ref().unwrap().rotation.to_degrees();
+    // The speed ramps 0 to 45 deg/s over the half second: 11.25 degrees.
+    assert!((turned - 11.25).abs() < 1e-3, "{turned}");
+    let kept = maps.update(&scene).to_vec();
+    assert_eq!(maps.rebuilt, 1, "only the head that moved");
+    // The kept maps give the picture fresh ones give.
+    let fresh = SamplePlanes::new(&scene).render();
+    let reused = SamplePlanes::with_shadow_maps(&scene, &kept).render();
+    assert_eq!(fresh.pixels, reused.pixels);
+    assert_physical(&fresh);
+}
+
+#[test]
+fn bad_shows_are_refused_naming_the_field_and_its_range() {
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "[[cue]]\ntime_s = 1.0\nset.a = { pan_deg = 300.0 }\n",
+            &["cue[0].set.a.pan_deg = 300", "[-270, 270]"],
+        ),
+        (
+            "[[cue]]\ntime_s = 1.0\nset.a = { tilt_deg = -140.0 }\n",
+            &["cue[0].set.a.tilt_deg = -140", "[-135, 135]"],
+        ),
+        (
+            "[[cue]]\ntime_s = 1.0\nset.b = { gobo = 3 }\n",
+            &["cue[0].set.b.gobo = 3", "0 (open) to 2"],
+        ),
+        (
+            "[[cue]]\ntime_s = 2.0\n[[cue]]\ntime_s = 1.0\n",
+            &["cue[1].time_s = 1", "at least cue[0].time_s = 2"],
+        ),
+        (
+            "[[cue]]\ntime_s = 1.0\nset.c = { dimmer = 0.5 }\n",
+            &["cue[0].set.c", "no fixture is named \"c\"", "a, b"],
+        ),
+        (
+            "[[cue]]\ntime_s = 1.0\nset.a = { zoom_deg = 50.0 }\n",
+            &["cue[0].set.a.zoom_deg = 50", "[10, 40]"],
+        ),
+        (
+            "[[cue]]\ntime_s = 1.0\nset.a = { color = [1.0, 0.0, 0.0], kelvin = 3200 }\n",
+            &["cue[0].set.a", "at most one of `color`"],
+        ),
+        (
+            "[[cue]]\ntime_s = 1.0\nfade_s = -1.0\n",
+            &["cue[0].fade_s = -1"],
+        ),
+    ];
+    for (cues, wanted) in cases {
+        let message = error_of(&show_scene(cues));
+        for w in *wanted {
+            assert!(message.contains(w), "{cues}: {message:?} lacks {w:?}");
+        }
+    }
+    let twice = show_scene("").replace("name = \"b\"", "name = \"a\"");
+    assert!(error_of(&twice).contains("fixture[1].name = \"a\" is used twice"));
+    let start = show_scene("").replace("gobo = 2", "gobo = 5");
+    assert!(error_of(&start).contains("fixture[1] (b).start.gobo = 5"));
+}

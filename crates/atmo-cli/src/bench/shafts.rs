@@ -154,6 +154,35 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
         ),
     );
 
+    // A show: the two seconds of scenes/show.toml in which all five heads move and one
+    // gobo turns, frame after frame, shadow maps kept for lights that did not move.
+    let mut show = Scene::from_file(&scenes.join("show.toml"))?;
+    let fps = if quick { 12 } else { 24 };
+    let (mut maps, mut rebuilt) = (atmo::shafts::planes::ShadowMaps::default(), 0);
+    let mut frames = Vec::new();
+    for k in 0..=2 * fps {
+        show.at_time(1.0 + k as f32 / fps as f32);
+        frames.push(time_ms(|| {
+            let kept = maps.update(&show);
+            drop(SamplePlanes::with_shadow_maps(&show, kept).render());
+        }));
+        rebuilt += maps.rebuilt;
+    }
+    let show_ms = median(frames.clone());
+    emit(
+        json,
+        json!({"bench": "shafts.show", "params": params(&show), "median_ms": show_ms,
+               "frames": frames.len(), "fps": fps,
+               "shadow_maps_rebuilt_per_frame": rebuilt as f64 / frames.len() as f64}),
+        format!(
+            "shafts.show   {show_ms:>8.2} ms   ({} heads moving, a gobo turning; {} frames at {fps}/s, {:.1} of {} shadow maps rebuilt a frame)",
+            show.show.fixtures.len(),
+            frames.len(),
+            rebuilt as f64 / frames.len() as f64,
+            show.lights.len()
+        ),
+    );
+
     // Linearity: time against lights (the stage with its first k lights) and planes.
     let mut lines = Vec::new();
     for k in 1..=stage.lights.len() {

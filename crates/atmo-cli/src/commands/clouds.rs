@@ -565,6 +565,7 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
             let apng = write_animation(
                 &args.output,
                 args.frames,
+                30,
                 (args.width, args.height),
                 display,
                 |k, frame| {

@@ -20,9 +20,19 @@ pub struct ShaftsArgs {
     /// Scene file (TOML; see docs/shafts.md and scenes/).
     scene: PathBuf,
     /// Output picture: .png (8-bit sRGB after the scene's exposure and tone map) or .exr
-    /// (linear radiance, in cd/m^2 when intensities are in cd).
+    /// (linear radiance, in cd/m^2 when intensities are in cd); with --animate a folder.
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
+    /// Play the scene's show (its `[[cue]]`s) into the folder -o names: frame-0000.png
+    /// ... and animation.png (an animated PNG), from 0 to the end of the last cue's fade.
+    #[arg(long, conflicts_with = "reference")]
+    animate: bool,
+    /// With --animate: frames per second of show time.
+    #[arg(long, requires = "animate", default_value_t = 24)]
+    fps: u16,
+    /// A still at this time into the show, s (default 0, the show's start).
+    #[arg(long, conflicts_with = "animate")]
+    time: Option<f32>,
     /// Render with the ray-marching reference (shadow rays, exact phase and attenuation)
     /// instead of the sample planes.
     #[arg(long)]
@@ -93,9 +103,15 @@ pub fn load_scene(
 }
 
 pub fn run(args: ShaftsArgs) -> Result<()> {
-    ImageKind::of(&args.output)?;
+    if !args.animate {
+        ImageKind::of(&args.output)?;
+    }
     check_folder(&args.output)?;
     let mut scene = load_scene(&args.scene, args.planes, args.sub_planes, args.shadow_map)?;
+    if let Some(t) = args.time {
+        atmo::error::check_range("--time", t as f64, 0.0, 1e6)?;
+        scene.at_time(t);
+    }
     let inputs: Vec<(&str, &std::path::Path)> = std::iter::once(("the scene", &*args.scene))
         .chain(
             scene
@@ -128,6 +144,9 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
     } else {
         args.device.open()?
     };
+    if args.animate {
+        return animate(&args, scene, display, gpu.as_ref());
+    }
     let start = Instant::now();
     let (frame, method): (Frame, String) = if let Some(gpu) = &gpu {
         let shafts = GpuShafts::new(gpu, &scene).map_err(gpu_error)?;
@@ -184,6 +203,72 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         frame.height,
         scene.lights.len(),
         scene.unit.radiance_unit()
+    );
+    Ok(())
+}
+
+/// `--animate`: the show from 0 to its end at `args.fps`, each frame's moving heads
+/// posed at its time; on the CPU a light's shadow map is rebuilt only when it moved.
+fn animate(
+    args: &ShaftsArgs,
+    mut scene: Scene,
+    display: atmo::image::Display,
+    gpu: Option<&atmo_gpu::Gpu>,
+) -> Result<()> {
+    atmo::error::check_range("--fps", args.fps as f64, 1.0, 240.0)?;
+    let duration = scene.show.duration();
+    if duration <= 0.0 {
+        return Err(atmo::Error::Invalid(format!(
+            "{}: --animate plays the scene's cues, and it has none that take time (add \
+             [[cue]]s with time_s or fade_s > 0)",
+            args.scene.display()
+        ))
+        .into());
+    }
+    let frames = (duration * args.fps as f32).ceil() as usize + 1;
+    let camera = &scene.camera;
+    let size = (camera.width, camera.height);
+    let mut maps = atmo::shafts::planes::ShadowMaps::default();
+    let (mut rebuilt, start) = (0, Instant::now());
+    let apng = crate::output::write_animation(
+        &args.output,
+        frames,
+        args.fps,
+        size,
+        display,
+        |k, frame| {
+            scene.at_time(k as f32 / args.fps as f32);
+            *frame = match gpu {
+                Some(gpu) => {
+                    let shafts = GpuShafts::new(gpu, &scene).map_err(gpu_error)?;
+                    shafts
+                        .render(gpu, args.gpu_method.into())
+                        .map_err(gpu_error)?
+                        .frame
+                }
+                None => {
+                    let kept = maps.update(&scene);
+                    let frame = SamplePlanes::with_shadow_maps(&scene, kept).render();
+                    rebuilt += maps.rebuilt;
+                    frame
+                }
+            };
+            Ok(())
+        },
+    )?;
+    eprintln!(
+        "{}: {frames} frames of {} x {} at {} frames/s ({duration:.2} s of show), {} light(s){}: {:.0} ms a frame",
+        apng.display(),
+        size.0,
+        size.1,
+        args.fps,
+        scene.lights.len(),
+        if gpu.is_some() {
+            " on the GPU".to_string()
+        } else {
+            format!(", {rebuilt} of {} shadow maps rebuilt", frames * scene.lights.len())
+        },
+        start.elapsed().as_secs_f64() * 1e3 / frames as f64
     );
     Ok(())
 }

@@ -171,7 +171,7 @@ pub fn animate(
     }
     let start = Instant::now();
     let size = (view.camera.width, view.camera.height);
-    let apng = write_animation(folder, animation.frames, size, display, |k, frame| {
+    let apng = write_animation(folder, animation.frames, 30, size, display, |k, frame| {
         let (sun, altitude) = frames[k];
         *frame = drawer.frame(sun, altitude, view)?;
         Ok(())

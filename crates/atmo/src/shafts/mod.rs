@@ -18,6 +18,7 @@
 //!   as the projected light map), [`objects`] (planes, rectangles, spheres, boxes, OBJ
 //!   meshes).
 //! - [`photometry`]: measured profiles from IES LM-63 and EULUMDAT files.
+//! - [`show`]: moving heads (pan, tilt, zoom, iris, colour, gobo wheel) and cues.
 //! - [`shadow_map`]: `H` from a depth map per light (shafts 4.1).
 //! - [`tables`]: the `F` and `h` tables of shafts (6).
 //! - [`planes`]: the sample planes and sub-sample planes of shafts (5) and (7)-(9), the
@@ -31,6 +32,7 @@ pub mod photometry;
 pub mod planes;
 pub mod scene;
 pub mod shadow_map;
+pub mod show;
 pub mod spotlight;
 pub mod surface;
 pub mod tables;

@@ -496,6 +496,48 @@ impl Lanes {
     }
 }
 
+/// Shadow maps kept from frame to frame of an animation: a light's map is rebuilt only
+/// when the light moved, turned or changed its field (a gobo, a colour or a dimmer
+/// leaves it as it is). The objects are taken not to move.
+#[derive(Debug, Default)]
+pub struct ShadowMaps {
+    maps: Vec<ShadowMap>,
+    /// What each map was built for: position, frame, field, texels.
+    keys: Vec<(Vec3, glam::Mat3, f32, usize)>,
+    /// How many maps the last [`ShadowMaps::update`] rebuilt.
+    pub rebuilt: usize,
+}
+
+impl ShadowMaps {
+    /// The maps for `scene`'s lights, rebuilding those whose light changed since the
+    /// last call.
+    pub fn update(&mut self, scene: &Scene) -> &[ShadowMap] {
+        let size = scene.planes.shadow_map as usize;
+        let keys: Vec<_> = scene
+            .lights
+            .iter()
+            .map(|l| (l.position, l.light_from_world, l.field_half, size))
+            .collect();
+        self.maps.truncate(keys.len());
+        self.keys.truncate(keys.len());
+        self.rebuilt = 0;
+        for (k, (light, key)) in scene.lights.iter().zip(&keys).enumerate() {
+            if self.keys.get(k) == Some(key) {
+                continue;
+            }
+            let map = ShadowMap::new(light, &scene.objects, size);
+            if k < self.maps.len() {
+                (self.maps[k], self.keys[k]) = (map, *key);
+            } else {
+                self.maps.push(map);
+                self.keys.push(*key);
+            }
+            self.rebuilt += 1;
+        }
+        &self.maps
+    }
+}
+
 /// The shadow map of each light of `scene`, in scene order.
 pub fn shadow_maps(scene: &Scene) -> Vec<ShadowMap> {
     let size = scene.planes.shadow_map as usize;

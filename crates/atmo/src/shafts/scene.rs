@@ -11,6 +11,7 @@ use serde::Deserialize;
 use super::haze::Haze;
 use super::objects::{Object, Objects};
 use super::photometry::Photometry;
+use super::show::{Change, Cue, Fixture, Show, State, CHANNELS};
 use super::spotlight::{light_frame, Falloff, Gobo, Profile, Sampling, Spotlight};
 use super::PlaneSettings;
 use crate::atmosphere::phase::PhaseFunction;
@@ -38,9 +39,12 @@ pub struct Scene {
     pub display: Display,
     /// The unit of the lights' intensities, and so of the pixels' radiance.
     pub unit: IntensityUnit,
-    /// The files the scene names (gobo images, meshes) as they were read, so that a
-    /// command does not write over one of them.
+    /// The files the scene names (gobo images, meshes, photometric files) as they
+    /// were read, so that a command does not write over one of them.
     pub files: Vec<PathBuf>,
+    /// The moving heads and their cues; the heads are the last lights of
+    /// [`Scene::lights`], posed at the time of [`Scene::at_time`] (0 as loaded).
+    pub show: Show,
 }
 
 /// What a light's `intensity` means; pixels are radiance in the same unit per m^2.
@@ -77,6 +81,89 @@ struct SceneSpec {
     spotlight: Vec<SpotlightSpec>,
     #[serde(default)]
     object: Vec<ObjectSpec>,
+    #[serde(default)]
+    fixture: Vec<FixtureSpec>,
+    #[serde(default)]
+    cue: Vec<CueSpec>,
+}
+
+/// A moving head ([`super::show::Fixture`]); angles in degrees.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FixtureSpec {
+    name: String,
+    position: [f32; 3],
+    #[serde(default = "down")]
+    axis: [f32; 3],
+    #[serde(default = "z_front")]
+    front: [f32; 3],
+    intensity: f32,
+    #[serde(default = "default_pan_range")]
+    pan_range_deg: [f32; 2],
+    #[serde(default = "default_tilt_range")]
+    tilt_range_deg: [f32; 2],
+    #[serde(default = "default_zoom_range")]
+    zoom_range_deg: [f32; 2],
+    #[serde(default = "default_field_ratio")]
+    field_ratio: f32,
+    #[serde(default)]
+    falloff: FalloffSpec,
+    #[serde(default)]
+    gobo_wheel: Vec<PathBuf>,
+    #[serde(default)]
+    gobo_sampling: SamplingSpec,
+    #[serde(default)]
+    gobo_rotation_deg: f32,
+    /// The attributes at the show's start (the rest at rest: along the axis, widest,
+    /// open, full, white, no gobo).
+    #[serde(default)]
+    start: AttributesSpec,
+}
+
+fn down() -> [f32; 3] {
+    [0.0, -1.0, 0.0]
+}
+fn z_front() -> [f32; 3] {
+    [0.0, 0.0, 1.0]
+}
+fn default_pan_range() -> [f32; 2] {
+    [-270.0, 270.0]
+}
+fn default_tilt_range() -> [f32; 2] {
+    [-135.0, 135.0]
+}
+fn default_zoom_range() -> [f32; 2] {
+    [10.0, 40.0]
+}
+fn default_field_ratio() -> f32 {
+    1.3
+}
+
+/// A fixture's attributes, as set at the start or by a cue; absent ones unchanged.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct AttributesSpec {
+    pan_deg: Option<f32>,
+    tilt_deg: Option<f32>,
+    zoom_deg: Option<f32>,
+    iris: Option<f32>,
+    dimmer: Option<f32>,
+    color: Option<[f32; 3]>,
+    cmy: Option<[f32; 3]>,
+    kelvin: Option<f32>,
+    gobo: Option<usize>,
+    gobo_speed_dps: Option<f32>,
+}
+
+/// A cue: at `time_s`, the attributes it sets per fixture fade over `fade_s`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CueSpec {
+    time_s: f32,
+    #[serde(default)]
+    fade_s: f32,
+    #[serde(default)]
+    set: std::collections::BTreeMap<String, AttributesSpec>,
 }
 
 #[derive(Deserialize)]
@@ -374,6 +461,10 @@ impl Scene {
             .enumerate()
             .map(|(i, o)| o.validate(&format!("object[{i}]"), folder))
             .collect::<Result<Vec<_>>>()?;
+        let show = show(&spec, folder)?;
+        let mut lights = lights;
+        lights.extend(show.pose(0.0));
+        let wheels = spec.fixture.iter().flat_map(|f| f.gobo_wheel.iter());
         let gobos = spec.spotlight.iter().flat_map(|l| {
             let profile = l
                 .profile
@@ -393,10 +484,23 @@ impl Scene {
             planes,
             display,
             unit,
-            files: gobos.chain(meshes).map(|f| folder.join(f)).collect(),
+            files: gobos
+                .chain(wheels)
+                .chain(meshes)
+                .map(|f| folder.join(f))
+                .collect(),
+            show,
         };
         scene.validate_planes()?;
         Ok(scene)
+    }
+
+    /// The scene at `time_s` seconds into its show: its moving heads posed as its cues
+    /// have them then (the other lights do not change).
+    pub fn at_time(&mut self, time_s: f32) {
+        let first = self.lights.len() - self.show.fixtures.len();
+        self.lights.truncate(first);
+        self.lights.extend(self.show.pose(time_s));
     }
 
     /// Checks the plane settings, and that the shadow maps they make for these lights
@@ -646,6 +750,226 @@ impl SpotlightSpec {
     }
 }
 
+/// The scene's moving heads and cues, validated: ranges, names, gobo slots, cue order.
+fn show(spec: &SceneSpec, folder: &Path) -> Result<Show> {
+    let fixtures = spec
+        .fixture
+        .iter()
+        .enumerate()
+        .map(|(i, f)| f.validate(&format!("fixture[{i}] ({})", f.name), folder))
+        .collect::<Result<Vec<_>>>()?;
+    for (i, f) in fixtures.iter().enumerate() {
+        if fixtures[..i].iter().any(|g| g.name == f.name) {
+            return Err(Error::Invalid(format!(
+                "fixture[{i}].name = {:?} is used twice: cues name fixtures, so names must differ",
+                f.name
+            )));
+        }
+    }
+    let mut cues = Vec::with_capacity(spec.cue.len());
+    for (i, c) in spec.cue.iter().enumerate() {
+        let at = format!("cue[{i}]");
+        check_range(&format!("{at}.time_s"), c.time_s as f64, 0.0, 1e6)?;
+        check_range(&format!("{at}.fade_s"), c.fade_s as f64, 0.0, 1e6)?;
+        if let Some(before) = spec.cue[..i].last() {
+            if c.time_s < before.time_s {
+                return Err(Error::out_of_range(
+                    &format!("{at}.time_s"),
+                    c.time_s,
+                    &format!(
+                        "at least cue[{}].time_s = {}: cues in time order",
+                        i - 1,
+                        before.time_s
+                    ),
+                ));
+            }
+        }
+        let changes = c
+            .set
+            .iter()
+            .map(|(name, attributes)| {
+                let k = fixtures
+                    .iter()
+                    .position(|f| &f.name == name)
+                    .ok_or_else(|| {
+                        Error::Invalid(format!(
+                            "{at}.set.{name}: no fixture is named {name:?} (fixtures: {})",
+                            fixtures
+                                .iter()
+                                .map(|f| f.name.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ))
+                    })?;
+                let change = attributes.validate(&format!("{at}.set.{name}"), &spec.fixture[k])?;
+                Ok((k, change))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        cues.push(Cue {
+            time_s: c.time_s,
+            fade_s: c.fade_s,
+            changes,
+        });
+    }
+    Ok(Show { fixtures, cues })
+}
+
+impl FixtureSpec {
+    fn validate(&self, at: &str, folder: &Path) -> Result<Fixture> {
+        let field = |name: &str| format!("{at}.{name}");
+        let position = vec3(&field("position"), self.position)?;
+        let axis = unit_vector(&field("axis"), self.axis)?;
+        let front = vec3(&field("front"), self.front)?;
+        let front = (front - axis * front.dot(axis))
+            .try_normalize()
+            .ok_or_else(|| Error::Invalid(format!("{at}.front is parallel to its axis")))?;
+        check_positive(&field("intensity"), self.intensity as f64, 1e9)?;
+        for (name, [lo, hi], limit) in [
+            ("pan_range_deg", self.pan_range_deg, 720.0),
+            ("tilt_range_deg", self.tilt_range_deg, 360.0),
+        ] {
+            check_range(&format!("{}[0]", field(name)), lo as f64, -limit, 0.0)?;
+            check_range(&format!("{}[1]", field(name)), hi as f64, 0.0, limit)?;
+        }
+        let [narrow, wide] = self.zoom_range_deg;
+        check_range(
+            &format!("{}[1]", field("zoom_range_deg")),
+            wide as f64,
+            0.5,
+            120.0,
+        )?;
+        check_range(
+            &format!("{}[0]", field("zoom_range_deg")),
+            narrow as f64,
+            0.5,
+            wide as f64,
+        )?;
+        check_range(&field("field_ratio"), self.field_ratio as f64, 1.0, 3.0)?;
+        check_range(
+            &field("gobo_rotation_deg"),
+            self.gobo_rotation_deg as f64,
+            -360.0,
+            360.0,
+        )?;
+        let sampling = match self.gobo_sampling {
+            SamplingSpec::Nearest => Sampling::Nearest,
+            SamplingSpec::Bilinear => Sampling::Bilinear,
+        };
+        let wheel = self
+            .gobo_wheel
+            .iter()
+            .map(|file| load_gobo(&folder.join(file), sampling))
+            .collect::<Result<Vec<_>>>()?;
+        let rest = State {
+            channels: [0.0, 0.0, wide, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0],
+            gobo: 0,
+        };
+        let change = self.start.validate(&format!("{at}.start"), self)?;
+        let start = State {
+            channels: std::array::from_fn(|c| change.channels[c].unwrap_or(rest.channels[c])),
+            gobo: change.gobo.unwrap_or(0),
+        };
+        Ok(Fixture {
+            name: self.name.clone(),
+            position,
+            axis,
+            front,
+            intensity: self.intensity,
+            widest_zoom_deg: wide,
+            field_ratio: self.field_ratio,
+            falloff: match self.falloff {
+                FalloffSpec::Linear => Falloff::Linear,
+                FalloffSpec::Smooth => Falloff::Smooth,
+            },
+            wheel,
+            gobo_rotation_deg: self.gobo_rotation_deg,
+            start,
+        })
+    }
+}
+
+impl AttributesSpec {
+    /// The change these attributes make on `fixture`, each checked against its range.
+    fn validate(&self, at: &str, fixture: &FixtureSpec) -> Result<Change> {
+        let mut change = Change::default();
+        let ranges = [
+            fixture.pan_range_deg,
+            fixture.tilt_range_deg,
+            fixture.zoom_range_deg,
+            [0.05, 1.0],
+            [0.0, 1.0],
+        ];
+        let values = [
+            self.pan_deg,
+            self.tilt_deg,
+            self.zoom_deg,
+            self.iris,
+            self.dimmer,
+        ];
+        for (c, (value, [lo, hi])) in values.iter().zip(ranges).enumerate() {
+            if let Some(v) = value {
+                check_range(
+                    &format!("{at}.{}", CHANNELS[c]),
+                    *v as f64,
+                    lo as f64,
+                    hi as f64,
+                )?;
+                change.channels[c] = Some(*v);
+            }
+        }
+        let colour = match (self.color, self.cmy, self.kelvin) {
+            (None, None, None) => None,
+            (Some(rgb), None, None) => {
+                for (c, v) in rgb.iter().enumerate() {
+                    check_range(&format!("{at}.color[{c}]"), *v as f64, 0.0, 1e6)?;
+                }
+                Some(Vec3::from(rgb))
+            }
+            (None, Some(cmy), None) => {
+                for (c, v) in cmy.iter().enumerate() {
+                    check_range(&format!("{at}.cmy[{c}]"), *v as f64, 0.0, 1.0)?;
+                }
+                Some(Vec3::ONE - Vec3::from(cmy))
+            }
+            (None, None, Some(k)) => {
+                check_range(&format!("{at}.kelvin"), k as f64, 1000.0, 40000.0)?;
+                Some(Vec3::from(blackbody_srgb(k as f64).map(|c| c as f32)))
+            }
+            _ => {
+                return Err(Error::Invalid(format!(
+                    "{at}: give at most one of `color` (linear RGB), `cmy` and `kelvin`"
+                )))
+            }
+        };
+        if let Some(rgb) = colour {
+            for c in 0..3 {
+                change.channels[5 + c] = Some(rgb[c]);
+            }
+        }
+        if let Some(speed) = self.gobo_speed_dps {
+            check_range(
+                &format!("{at}.gobo_speed_dps"),
+                speed as f64,
+                -3600.0,
+                3600.0,
+            )?;
+            change.channels[8] = Some(speed);
+        }
+        if let Some(slot) = self.gobo {
+            let slots = fixture.gobo_wheel.len();
+            if slot > slots {
+                return Err(Error::out_of_range(
+                    &format!("{at}.gobo"),
+                    slot,
+                    &format!("0 (open) to {slots} (the gobo_wheel's images)"),
+                ));
+            }
+            change.gobo = Some(slot);
+        }
+        Ok(change)
+    }
+}
+
 /// The farthest off the axis a measured profile is drawn, degrees: the field of a
 /// spotlight's square light map and shadow map must stay below 90 (`field_deg` below
 /// 180); light a file gives beyond it is left out.
@@ -710,6 +1034,7 @@ pub fn gobo_from_image(bytes: &[u8], origin: &str, sampling: Sampling) -> Result
         height: image.height() as usize,
         srgb: image.pixels().map(|p| p.0).collect(),
         sampling,
+        rotation: 0.0,
     })
 }
 

@@ -49,6 +49,9 @@ pub struct Gobo {
     pub srgb: Vec<[u8; 3]>,
     /// Lookup.
     pub sampling: Sampling,
+    /// How far the gobo is turned in its holder, radians, counterclockwise seen from
+    /// behind the lamp (a rotating gobo of a moving head).
+    pub rotation: f32,
 }
 
 impl Gobo {
@@ -63,9 +66,17 @@ impl Gobo {
         Vec3::new(table[r as usize], table[g as usize], table[b as usize])
     }
 
-    /// The transmittance at `(u, v)` in `[-1, 1]^2` (`v = 1` at the image's top).
+    /// The transmittance at `(u, v)` in `[-1, 1]^2` (`v = 1` at the image's top),
+    /// the image turned by [`Gobo::rotation`].
     #[inline]
     pub fn sample(&self, u: f32, v: f32) -> Vec3 {
+        let (u, v) = if self.rotation == 0.0 {
+            (u, v)
+        } else {
+            // The image's point that the turn brings to (u, v): turned back.
+            let (sin, cos) = self.rotation.sin_cos();
+            (cos * u + sin * v, cos * v - sin * u)
+        };
         let x = (0.5 * (u + 1.0)) * self.width as f32;
         let y = (0.5 * (1.0 - v)) * self.height as f32;
         let (w, h) = (self.width as isize, self.height as isize);
@@ -409,6 +420,7 @@ mod tests {
             height: 2,
             srgb: vec![[255, 0, 0], [0, 255, 0], [0, 0, 255], [255; 3]],
             sampling,
+            rotation: 0.0,
         };
         let g = gobo(Sampling::Nearest);
         assert_eq!(g.sample(-0.5, 0.5), Vec3::X);
@@ -417,5 +429,12 @@ mod tests {
         let b = gobo(Sampling::Bilinear);
         assert!((b.sample(0.0, 0.5) - Vec3::new(0.5, 0.5, 0.0)).length() < 1e-6);
         assert!((b.sample(0.0, 0.0) - Vec3::splat(0.5)).length() < 1e-6);
+        // A quarter turn counterclockwise brings the top-right (green) to the top-left.
+        let turned = Gobo {
+            rotation: std::f32::consts::FRAC_PI_2,
+            ..gobo(Sampling::Nearest)
+        };
+        assert_eq!(turned.sample(-0.5, 0.5), Vec3::Y);
+        assert_eq!(turned.sample(0.5, 0.5), Vec3::ONE);
     }
 }

@@ -1,0 +1,359 @@
+//! Moving heads and cues: the lights of a show over time, as a lighting desk runs them.
+//!
+//! A [`Fixture`] is a moving head: a base where it is hung, a yoke that pans about the
+//! base's axis and a head that tilts, a zoom (the beam angle), an iris, a dimmer, a
+//! colour (RGB, CMY or colour temperature) and a gobo wheel whose gobo turns. Its
+//! attributes change by [`Cue`]s: at a cue's time each attribute it sets starts a
+//! linear fade, over the cue's fade time, from the value it has at that moment (even in
+//! the middle of an earlier fade) to the cue's; a gobo change snaps at the cue's start.
+//! [`Show::pose`] turns the fixtures' state at a time into the [`Spotlight`]s the
+//! renderers draw, so every method (planes, reference, GPU) plays a show unchanged.
+//!
+//! Geometry: at pan 0 and tilt 0 the beam points along the base's `axis` (a hanging
+//! head: down); tilt swings it toward `front`, then pan turns the yoke right-handedly
+//! about `axis` (counterclockwise seen from below a hanging head, looking up). The head is a rigid body: its light frame's `y` (the
+//! gobo's up) is `front` turned with it.
+
+use glam::{Mat3, Quat, Vec3};
+
+use super::spotlight::{light_frame, Falloff, Gobo, Profile, Spotlight};
+
+/// The attributes of a fixture that fade, in this order in a [`State`].
+pub const CHANNELS: [&str; 9] = [
+    "pan_deg",
+    "tilt_deg",
+    "zoom_deg",
+    "iris",
+    "dimmer",
+    "red",
+    "green",
+    "blue",
+    "gobo_speed_dps",
+];
+
+/// Index of a channel in [`CHANNELS`].
+const PAN: usize = 0;
+const TILT: usize = 1;
+const ZOOM: usize = 2;
+const IRIS: usize = 3;
+const DIMMER: usize = 4;
+const RED: usize = 5;
+const SPEED: usize = 8;
+
+/// A fixture's attributes at one moment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct State {
+    /// The fading attributes, as [`CHANNELS`] names them: pan and tilt (degrees), zoom
+    /// (the beam's full angle, degrees), iris (0-1 of the aperture), dimmer (0-1),
+    /// colour (linear RGB) and the gobo's turning speed (degrees per second).
+    pub channels: [f32; 9],
+    /// The gobo wheel's slot: 0 open, `k` the wheel's `k`-th gobo.
+    pub gobo: usize,
+}
+
+/// What a cue sets on one fixture; `None` leaves an attribute as it is.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Change {
+    /// New values of the fading attributes ([`CHANNELS`]).
+    pub channels: [Option<f32>; 9],
+    /// A new gobo slot.
+    pub gobo: Option<usize>,
+}
+
+/// A cue: at `time_s` the changes start, fading over `fade_s`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cue {
+    /// When it starts, s from the show's start.
+    pub time_s: f32,
+    /// How long its fades take, s (0: a snap).
+    pub fade_s: f32,
+    /// Per fixture (index into [`Show::fixtures`]) what it sets.
+    pub changes: Vec<(usize, Change)>,
+}
+
+/// A moving head, validated.
+#[derive(Debug, Clone)]
+pub struct Fixture {
+    /// Its name in the scene file, for cues and messages.
+    pub name: String,
+    /// The head's centre (where the beam starts), m.
+    pub position: Vec3,
+    /// The pan axis (unit): the beam's direction at pan 0 and tilt 0.
+    pub axis: Vec3,
+    /// Unit, perpendicular to `axis`: where a positive tilt swings the beam at pan 0,
+    /// and the gobo's up.
+    pub front: Vec3,
+    /// On-axis intensity at the widest zoom, cd (or W/sr); a narrower zoom gathers the
+    /// same flux into a smaller cone.
+    pub intensity: f32,
+    /// The widest zoom, degrees.
+    pub widest_zoom_deg: f32,
+    /// Field angle over beam angle (> 1: the soft edge's width).
+    pub field_ratio: f32,
+    /// Edge between beam and field.
+    pub falloff: Falloff,
+    /// The gobo wheel's gobos (slot 1 is the first).
+    pub wheel: Vec<Gobo>,
+    /// The gobo's turn at the show's start, degrees.
+    pub gobo_rotation_deg: f32,
+    /// The attributes before any cue.
+    pub start: State,
+}
+
+/// Fixtures and their cues.
+#[derive(Debug, Clone, Default)]
+pub struct Show {
+    /// The moving heads; in a [`super::Scene`] they are the last lights, in this order.
+    pub fixtures: Vec<Fixture>,
+    /// The cues, in time order.
+    pub cues: Vec<Cue>,
+}
+
+/// One attribute's course through the cues: the fade running at the latest cue that
+/// set it.
+#[derive(Debug, Clone, Copy)]
+struct Fade {
+    from: f32,
+    to: f32,
+    start: f32,
+    length: f32,
+}
+
+impl Fade {
+    fn at(&self, t: f32) -> f32 {
+        if self.length <= 0.0 || t >= self.start + self.length {
+            self.to
+        } else {
+            let w = ((t - self.start) / self.length).max(0.0);
+            self.from + (self.to - self.from) * w
+        }
+    }
+}
+
+impl Show {
+    /// The time the last cue's fades end, s (0 without cues).
+    pub fn duration(&self) -> f32 {
+        self.cues
+            .iter()
+            .map(|c| c.time_s + c.fade_s)
+            .fold(0.0, f32::max)
+    }
+
+    /// Fixture `f`'s fade of `channel` as it runs at time `t` (every cue up to `t`).
+    fn fade(&self, f: usize, channel: usize, t: f32) -> Fade {
+        let start = self.fixtures[f].start.channels[channel];
+        let mut fade = Fade {
+            from: start,
+            to: start,
+            start: 0.0,
+            length: 0.0,
+        };
+        for cue in self.cues.iter().take_while(|c| c.time_s <= t) {
+            for (_, change) in cue.changes.iter().filter(|(k, _)| *k == f) {
+                if let Some(to) = change.channels[channel] {
+                    fade = Fade {
+                        from: fade.at(cue.time_s),
+                        to,
+                        start: cue.time_s,
+                        length: cue.fade_s,
+                    };
+                }
+            }
+        }
+        fade
+    }
+
+    /// Fixture `f`'s attributes at time `t`, s.
+    pub fn state(&self, f: usize, t: f32) -> State {
+        let mut gobo = self.fixtures[f].start.gobo;
+        for cue in self.cues.iter().take_while(|c| c.time_s <= t) {
+            for (_, change) in cue.changes.iter().filter(|(k, _)| *k == f) {
+                gobo = change.gobo.unwrap_or(gobo);
+            }
+        }
+        State {
+            channels: std::array::from_fn(|c| self.fade(f, c, t).at(t)),
+            gobo,
+        }
+    }
+
+    /// How far fixture `f`'s gobo has turned by time `t`, degrees: its start plus the
+    /// integral of its speed, which is linear between cue starts and fade ends, so the
+    /// trapezoid rule over those times is exact.
+    pub fn gobo_angle_deg(&self, f: usize, t: f32) -> f32 {
+        let mut times: Vec<f32> = vec![0.0, t.max(0.0)];
+        for cue in self.cues.iter().take_while(|c| c.time_s <= t) {
+            if cue
+                .changes
+                .iter()
+                .any(|(k, c)| *k == f && c.channels[SPEED].is_some())
+            {
+                times.push(cue.time_s);
+                times.push((cue.time_s + cue.fade_s).min(t));
+            }
+        }
+        times.sort_by(f32::total_cmp);
+        times.dedup();
+        let speed = |at: f32| self.fade(f, SPEED, at).at(at);
+        let turned: f32 = times
+            .windows(2)
+            .map(|w| 0.5 * (speed(w[0]) + speed(w[1])) * (w[1] - w[0]))
+            .sum();
+        self.fixtures[f].gobo_rotation_deg + turned
+    }
+
+    /// The spotlights of the fixtures at time `t`, s, in fixture order.
+    pub fn pose(&self, t: f32) -> Vec<Spotlight> {
+        (0..self.fixtures.len())
+            .map(|f| self.fixtures[f].light(&self.state(f, t), self.gobo_angle_deg(f, t)))
+            .collect()
+    }
+}
+
+impl Fixture {
+    /// The beam's direction and the head's up (unit) at `pan` and `tilt`, degrees.
+    pub fn aim(&self, pan_deg: f32, tilt_deg: f32) -> (Vec3, Vec3) {
+        let tilt_axis = self.axis.cross(self.front);
+        let turn = Quat::from_axis_angle(self.axis, pan_deg.to_radians())
+            * Quat::from_axis_angle(tilt_axis, tilt_deg.to_radians());
+        (turn * self.axis, turn * self.front)
+    }
+
+    /// The spotlight this fixture is in `state`, its gobo turned `gobo_deg`.
+    pub fn light(&self, state: &State, gobo_deg: f32) -> Spotlight {
+        let c = &state.channels;
+        let (beam, up) = self.aim(c[PAN], c[TILT]);
+        let frame: Mat3 = light_frame(beam, up).expect("up is perpendicular to the beam");
+        // The same flux in a narrower cone: the on-axis intensity grows as the cone's
+        // cross-section shrinks. The iris cuts the cone, not the intensity on the axis.
+        let gather = (half_tan(self.widest_zoom_deg) / half_tan(c[ZOOM])).powi(2);
+        let colour = Vec3::new(c[RED], c[RED + 1], c[RED + 2]);
+        let beam_half = 0.5 * (c[ZOOM] * c[IRIS]).to_radians();
+        let field_half = (beam_half * self.field_ratio).min(85f32.to_radians());
+        let gobo = match state.gobo {
+            0 => None,
+            k => Some(Gobo {
+                rotation: gobo_deg.to_radians(),
+                ..self.wheel[k - 1].clone()
+            }),
+        };
+        Spotlight::new(
+            self.position,
+            frame,
+            colour * (self.intensity * gather * c[DIMMER]),
+            field_half,
+            Profile::Beam {
+                beam_half,
+                falloff: self.falloff,
+            },
+            gobo,
+        )
+    }
+}
+
+/// `tan(angle / 2)` of a full angle in degrees.
+fn half_tan(full_deg: f32) -> f32 {
+    (0.5 * full_deg.to_radians()).tan()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn head() -> Fixture {
+        Fixture {
+            name: "head".into(),
+            position: Vec3::new(0.0, 6.0, 0.0),
+            axis: Vec3::NEG_Y,
+            front: Vec3::Z,
+            intensity: 1000.0,
+            widest_zoom_deg: 40.0,
+            field_ratio: 1.25,
+            falloff: Falloff::Smooth,
+            wheel: Vec::new(),
+            gobo_rotation_deg: 10.0,
+            start: State {
+                channels: [0.0, 0.0, 40.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0],
+                gobo: 0,
+            },
+        }
+    }
+
+    fn set(pairs: &[(usize, f32)]) -> Change {
+        let mut change = Change::default();
+        for (c, v) in pairs {
+            change.channels[*c] = Some(*v);
+        }
+        change
+    }
+
+    #[test]
+    fn pan_and_tilt_aim_a_hanging_head() {
+        let f = head();
+        let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+        assert!(close(f.aim(0.0, 0.0).0, Vec3::NEG_Y));
+        // Tilt 90 at pan 0: toward front; then pan 90 about the (downward) axis.
+        assert!(close(f.aim(0.0, 90.0).0, Vec3::Z));
+        let panned = f.aim(90.0, 90.0).0;
+        assert!(close(
+            panned,
+            Quat::from_axis_angle(Vec3::NEG_Y, 90f32.to_radians()) * Vec3::Z
+        ));
+        // Tilt 45: halfway between down and front; the head's up stays perpendicular.
+        let (beam, up) = f.aim(30.0, 45.0);
+        assert!((beam.y + 0.5f32.sqrt()).abs() < 1e-5);
+        assert!(beam.dot(up).abs() < 1e-6);
+    }
+
+    #[test]
+    fn cues_fade_from_where_the_attribute_is_and_gobos_turn_by_their_speed() {
+        let show = Show {
+            fixtures: vec![head()],
+            cues: vec![
+                Cue {
+                    time_s: 1.0,
+                    fade_s: 2.0,
+                    changes: vec![(0, set(&[(PAN, 90.0), (DIMMER, 0.0), (SPEED, 30.0)]))],
+                },
+                Cue {
+                    // Starts in the middle of the first cue's fade.
+                    time_s: 2.0,
+                    fade_s: 0.0,
+                    changes: vec![(0, set(&[(PAN, -10.0)]))],
+                },
+            ],
+        };
+        assert_eq!(show.duration(), 3.0);
+        assert_eq!(show.state(0, 0.5).channels[PAN], 0.0);
+        assert!((show.state(0, 1.5).channels[PAN] - 22.5).abs() < 1e-4);
+        // The second cue snaps pan; the first's dimmer fade runs on.
+        assert_eq!(show.state(0, 2.0).channels[PAN], -10.0);
+        assert!((show.state(0, 2.5).channels[DIMMER] - 0.25).abs() < 1e-5);
+        assert_eq!(show.state(0, 9.0).channels[DIMMER], 0.0);
+        // The speed ramps from 0 to 30 deg/s over 1-3 s: 30 degrees turned by 3 s, then
+        // 30 a second.
+        assert!((show.gobo_angle_deg(0, 1.0) - 10.0).abs() < 1e-4);
+        assert!((show.gobo_angle_deg(0, 3.0) - 40.0).abs() < 1e-3);
+        assert!((show.gobo_angle_deg(0, 5.0) - 100.0).abs() < 1e-3);
+        // Posed: a dark head at the end, pointing where pan -10 puts it.
+        let lights = show.pose(3.0);
+        assert_eq!(lights[0].intensity, Vec3::ZERO);
+    }
+
+    #[test]
+    fn a_narrower_zoom_gathers_the_flux_and_the_iris_cuts_the_cone() {
+        let f = head();
+        let mut state = f.start;
+        let wide = f.light(&state, 0.0);
+        state.channels[ZOOM] = 20.0;
+        let narrow = f.light(&state, 0.0);
+        let ratio = narrow.intensity.x / wide.intensity.x;
+        let want = (20f32.to_radians().tan() / 10f32.to_radians().tan()).powi(2);
+        assert!((ratio - want).abs() < 1e-3 * want, "{ratio} {want}");
+        state.channels[IRIS] = 0.5;
+        let irised = f.light(&state, 0.0);
+        assert_eq!(irised.intensity, narrow.intensity);
+        assert!((irised.field_half - 0.5 * narrow.field_half).abs() < 1e-6);
+        assert!((narrow.field_half - 1.25 * 10f32.to_radians()).abs() < 1e-6);
+    }
+}
