@@ -13,7 +13,7 @@ seconds=${1:-60}
 shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(atmosphere_toml scene_toml sky_table particles obj gobo probe_csv photometry)
+  targets=(atmosphere_toml scene_toml sky_table particles obj gobo probe_csv photometry gdtf)
 fi
 command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked --version 0.13.2
 cargo +nightly fuzz build 2>&1 | tail -n 1

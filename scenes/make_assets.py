@@ -3,12 +3,14 @@
 scene, after the paper's Fig. 7), gobos/spokes.png (the turning gobo of the show),
 meshes/knot.obj (a trefoil-knot sculpture) and the
 photometric files of scenes/photometric.toml (photometry/: an ellipsoidal spot and an
-oval wash as IES LM-63 files, a PAR can as EULUMDAT), made up, shaped like real ones.
+oval wash as IES LM-63 files, a PAR can as EULUMDAT) and fixtures/atmo-spot.gdtf (a
+moving spot as GDTF), made up, shaped like real ones.
 Pure standard library, so it runs anywhere: `python3 scenes/make_assets.py`."""
 
 import math
 import os
 import struct
+import zipfile
 import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -188,6 +190,117 @@ def ldt_par(path):
     write_lines(path, lines)
 
 
+GDTF_DESCRIPTION = """<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
+<GDTF DataVersion="1.2">
+  <FixtureType Name="atmo Spot 300" ShortName="Spot300" LongName="atmo example moving head spot"
+      Manufacturer="atmo" Description="Made up for atmo's example scenes"
+      FixtureTypeID="6C1A4A5E-5B1F-4C3E-9E2B-1D4E2F0A7B31" Thumbnail="" RefFT="">
+    <AttributeDefinitions>
+      <ActivationGroups><ActivationGroup Name="PanTilt"/><ActivationGroup Name="Gobo1"/></ActivationGroups>
+      <FeatureGroups>
+        <FeatureGroup Name="Position" Pretty="Position"><Feature Name="PanTilt"/></FeatureGroup>
+        <FeatureGroup Name="Gobo" Pretty="Gobo"><Feature Name="Gobo"/></FeatureGroup>
+        <FeatureGroup Name="Beam" Pretty="Beam"><Feature Name="Beam"/></FeatureGroup>
+        <FeatureGroup Name="Dimmer" Pretty="Dimmer"><Feature Name="Dimmer"/></FeatureGroup>
+      </FeatureGroups>
+      <Attributes>
+        <Attribute Name="Pan" Pretty="P" ActivationGroup="PanTilt" Feature="Position.PanTilt" PhysicalUnit="Angle"/>
+        <Attribute Name="Tilt" Pretty="T" ActivationGroup="PanTilt" Feature="Position.PanTilt" PhysicalUnit="Angle"/>
+        <Attribute Name="Gobo1" Pretty="G1" ActivationGroup="Gobo1" Feature="Gobo.Gobo" PhysicalUnit="None"/>
+        <Attribute Name="Zoom" Pretty="Zoom" Feature="Beam.Beam" PhysicalUnit="Angle"/>
+        <Attribute Name="Dimmer" Pretty="Dim" Feature="Dimmer.Dimmer" PhysicalUnit="LuminousIntensity"/>
+      </Attributes>
+    </AttributeDefinitions>
+    <Wheels>
+      <Wheel Name="Gobo1">
+        <Slot Name="Open" Color="0.312700,0.329000,100.000000"/>
+        <Slot Name="Spokes" Color="0.312700,0.329000,100.000000" MediaFileName="spokes"/>
+        <Slot Name="Dots" Color="0.312700,0.329000,100.000000" MediaFileName="dots"/>
+      </Wheel>
+    </Wheels>
+    <PhysicalDescriptions/>
+    <Models>
+      <Model Name="Base" Length="0.40" Width="0.30" Height="0.12" PrimitiveType="Cube"/>
+      <Model Name="Yoke" Length="0.40" Width="0.10" Height="0.35" PrimitiveType="Cube"/>
+      <Model Name="Head" Length="0.25" Width="0.25" Height="0.35" PrimitiveType="Cylinder"/>
+    </Models>
+    <Geometries>
+      <Geometry Name="Base" Model="Base" Position="{1,0,0,0}{0,1,0,0}{0,0,1,0}{0,0,0,1}">
+        <Axis Name="Yoke" Model="Yoke" Position="{1,0,0,0}{0,1,0,0}{0,0,1,-0.06}{0,0,0,1}">
+          <Axis Name="Head" Model="Head" Position="{1,0,0,0}{0,1,0,0}{0,0,1,-0.25}{0,0,0,1}">
+            <Beam Name="Beam" Model="Head" Position="{1,0,0,0}{0,1,0,0}{0,0,1,-0.17}{0,0,0,1}"
+                LampType="LED" PowerConsumption="300" LuminousFlux="12000" ColorTemperature="6500"
+                BeamAngle="18" FieldAngle="24" BeamRadius="0.06" BeamType="Spot" ColorRenderingIndex="80"/>
+          </Axis>
+        </Axis>
+      </Geometry>
+    </Geometries>
+    <DMXModes>
+      <DMXMode Name="Standard" Geometry="Base">
+        <DMXChannels>
+          <DMXChannel DMXBreak="1" Offset="1,2" InitialFunction="Yoke_Pan.Pan.Pan 1" Highlight="None" Geometry="Yoke">
+            <LogicalChannel Attribute="Pan" Snap="No" Master="None" MibFade="0" DMXChangeTimeLimit="0">
+              <ChannelFunction Name="Pan 1" Attribute="Pan" DMXFrom="0/2" Default="32768/2" PhysicalFrom="-270" PhysicalTo="270"/>
+            </LogicalChannel>
+          </DMXChannel>
+          <DMXChannel DMXBreak="1" Offset="3,4" InitialFunction="Head_Tilt.Tilt.Tilt 1" Highlight="None" Geometry="Head">
+            <LogicalChannel Attribute="Tilt" Snap="No" Master="None" MibFade="0" DMXChangeTimeLimit="0">
+              <ChannelFunction Name="Tilt 1" Attribute="Tilt" DMXFrom="0/2" Default="32768/2" PhysicalFrom="-135" PhysicalTo="135"/>
+            </LogicalChannel>
+          </DMXChannel>
+          <DMXChannel DMXBreak="1" Offset="5" InitialFunction="Beam_Zoom.Zoom.Zoom 1" Highlight="None" Geometry="Beam">
+            <LogicalChannel Attribute="Zoom" Snap="No" Master="None" MibFade="0" DMXChangeTimeLimit="0">
+              <ChannelFunction Name="Zoom 1" Attribute="Zoom" DMXFrom="0/1" Default="0/1" PhysicalFrom="8" PhysicalTo="36"/>
+            </LogicalChannel>
+          </DMXChannel>
+          <DMXChannel DMXBreak="1" Offset="6" InitialFunction="Head_Gobo1.Gobo1.Gobo 1" Highlight="None" Geometry="Head">
+            <LogicalChannel Attribute="Gobo1" Snap="Yes" Master="None" MibFade="0" DMXChangeTimeLimit="0">
+              <ChannelFunction Name="Gobo 1" Attribute="Gobo1" DMXFrom="0/1" Default="0/1" Wheel="Gobo1" PhysicalFrom="0" PhysicalTo="1"/>
+            </LogicalChannel>
+          </DMXChannel>
+          <DMXChannel DMXBreak="1" Offset="7" InitialFunction="Beam_Dimmer.Dimmer.Dimmer 1" Highlight="255/1" Geometry="Beam">
+            <LogicalChannel Attribute="Dimmer" Snap="No" Master="Grand" MibFade="0" DMXChangeTimeLimit="0">
+              <ChannelFunction Name="Dimmer 1" Attribute="Dimmer" DMXFrom="0/1" Default="0/1" PhysicalFrom="0" PhysicalTo="1"/>
+            </LogicalChannel>
+          </DMXChannel>
+        </DMXChannels>
+      </DMXMode>
+      <DMXMode Name="Basic" Geometry="Base">
+        <DMXChannels>
+          <DMXChannel DMXBreak="1" Offset="1" InitialFunction="Yoke_Pan.Pan.Pan 1" Highlight="None" Geometry="Yoke">
+            <LogicalChannel Attribute="Pan" Snap="No" Master="None" MibFade="0" DMXChangeTimeLimit="0">
+              <ChannelFunction Name="Pan 1" Attribute="Pan" DMXFrom="0/1" Default="128/1" PhysicalFrom="-180" PhysicalTo="180"/>
+            </LogicalChannel>
+          </DMXChannel>
+          <DMXChannel DMXBreak="1" Offset="2" InitialFunction="Head_Tilt.Tilt.Tilt 1" Highlight="None" Geometry="Head">
+            <LogicalChannel Attribute="Tilt" Snap="No" Master="None" MibFade="0" DMXChangeTimeLimit="0">
+              <ChannelFunction Name="Tilt 1" Attribute="Tilt" DMXFrom="0/1" Default="128/1" PhysicalFrom="-90" PhysicalTo="90"/>
+            </LogicalChannel>
+          </DMXChannel>
+        </DMXChannels>
+      </DMXMode>
+    </DMXModes>
+  </FixtureType>
+</GDTF>
+"""
+
+
+def gdtf_spot(path):
+    """A GDTF fixture of a moving spot: description.xml (a beam of 12,000 lm at 6500 K,
+    18 degrees to half and 24 to a tenth, a zoom of 8-36 degrees, pan -270-270, tilt
+    -135-135, a gobo wheel with the spokes and the dots; a second, basic mode) and the
+    wheel's images. Fixed timestamps, so the file is the same byte for byte."""
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        def put(name, data):
+            info = zipfile.ZipInfo(name, date_time=(2026, 12, 2, 0, 0, 0))
+            info.compress_type = zipfile.ZIP_DEFLATED
+            z.writestr(info, data)
+        put("description.xml", GDTF_DESCRIPTION)
+        for gobo in ("spokes", "dots"):
+            with open(os.path.join(HERE, "gobos", gobo + ".png"), "rb") as f:
+                put("wheels/%s.png" % gobo, f.read())
+
+
 if __name__ == "__main__":
     os.makedirs(os.path.join(HERE, "gobos"), exist_ok=True)
     os.makedirs(os.path.join(HERE, "meshes"), exist_ok=True)
@@ -198,3 +311,5 @@ if __name__ == "__main__":
     ies_spot(os.path.join(HERE, "photometry", "spot.ies"))
     ies_oval(os.path.join(HERE, "photometry", "oval-wash.ies"))
     ldt_par(os.path.join(HERE, "photometry", "par.ldt"))
+    os.makedirs(os.path.join(HERE, "fixtures"), exist_ok=True)
+    gdtf_spot(os.path.join(HERE, "fixtures", "atmo-spot.gdtf"))

@@ -736,3 +736,88 @@ fn bad_shows_are_refused_naming_the_field_and_its_range() {
     let start = show_scene("").replace("gobo = 2", "gobo = 5");
     assert!(error_of(&start).contains("fixture[1] (b).start.gobo = 5"));
 }
+
+/// `integral I dOmega` of `light`'s luminance, lm (cd sr): its luminous flux.
+fn flux(light: &atmo::shafts::spotlight::Spotlight) -> f64 {
+    let (n, m) = (600, 360);
+    let d_theta = light.field_half as f64 / n as f64;
+    let d_phi = std::f64::consts::TAU / m as f64;
+    let mut sum = 0.0;
+    for i in 0..n {
+        let theta = (i as f64 + 0.5) * d_theta;
+        for j in 0..m {
+            let phi = (j as f64 + 0.5) * d_phi;
+            let local = Vec3::new(
+                (theta.sin() * phi.cos()) as f32,
+                (theta.sin() * phi.sin()) as f32,
+                theta.cos() as f32,
+            );
+            let i = light.intensity_toward(local);
+            let luminance = 0.2126 * i.x + 0.7152 * i.y + 0.0722 * i.z;
+            sum += luminance as f64 * theta.sin() * d_theta * d_phi;
+        }
+    }
+    sum
+}
+
+#[test]
+fn a_gdtf_fixture_sends_its_flux_and_keeps_its_modes_ranges() {
+    let text = std::fs::read_to_string(scenes().join("gdtf-heads.toml")).unwrap();
+    // The left head open at its widest and its narrowest zoom: the file's 12,000 lm.
+    for zoom in ["36.0", "8.0"] {
+        let open = text.replace("zoom_deg = 20.0, gobo = 1", &format!("zoom_deg = {zoom}"));
+        let scene = parse(&open).unwrap();
+        let lumens = flux(&scene.lights[0]);
+        assert!(
+            (lumens - 12_000.0).abs() < 0.02 * 12_000.0,
+            "zoom {zoom}: {lumens} lm"
+        );
+    }
+    let scene = parse(&text).unwrap();
+    assert_eq!(
+        scene.show.fixtures[2].wheel.len(),
+        0,
+        "the basic mode has no gobo"
+    );
+    assert_eq!(scene.show.fixtures[0].wheel.len(), 2);
+    let cases: &[(&str, &str, &[&str])] = &[
+        // The basic mode pans -180 to 180.
+        (
+            "set.right = { pan_deg = -20.0",
+            "set.right = { pan_deg = -200.0",
+            &["cue[0].set.right.pan_deg = -200", "[-180, 180]"],
+        ),
+        (
+            "cmy = [0.0, 0.4, 0.9] }",
+            "gobo = 1 }",
+            &["fixture[2] (right).start.gobo = 1", "0 (open) to 0"],
+        ),
+        (
+            "mode = \"Basic\"",
+            "mode = \"Wide\"",
+            &["no DMX mode \"Wide\"", "Standard, Basic"],
+        ),
+        (
+            "mode = \"Basic\"",
+            "",
+            &["fixture[2] (right)", "`mode` is missing"],
+        ),
+        (
+            "mode = \"Basic\"",
+            "mode = \"Basic\"\nintensity = 100.0",
+            &["fixture[2] (right).intensity", "leave `intensity` out"],
+        ),
+        (
+            "atmo-spot.gdtf\"\nmode = \"Basic\"",
+            "nothing.gdtf\"\nmode = \"Basic\"",
+            &["nothing.gdtf"],
+        ),
+    ];
+    for (from, to, wanted) in cases {
+        assert!(text.contains(from), "{from}");
+        let message = error_of(&text.replacen(from, to, 1));
+        for w in *wanted {
+            assert!(message.contains(w), "{to}: {message:?} lacks {w:?}");
+        }
+    }
+}

@@ -18,6 +18,7 @@
 //!   as the projected light map), [`objects`] (planes, rectangles, spheres, boxes, OBJ
 //!   meshes).
 //! - [`photometry`]: measured profiles from IES LM-63 and EULUMDAT files.
+//! - [`gdtf`]: fixtures from GDTF files (read with the `gdtf` feature).
 //! - [`show`]: moving heads (pan, tilt, zoom, iris, colour, gobo wheel) and cues.
 //! - [`shadow_map`]: `H` from a depth map per light (shafts 4.1).
 //! - [`tables`]: the `F` and `h` tables of shafts (6).
@@ -26,6 +27,7 @@
 //! - [`surface`]: the first term of shafts (1), shared by the fast method and the
 //!   reference ([`crate::reference::shafts`]).
 
+pub mod gdtf;
 pub mod haze;
 pub mod objects;
 pub mod photometry;

@@ -8,10 +8,11 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use serde::Deserialize;
 
+use super::gdtf;
 use super::haze::Haze;
 use super::objects::{Object, Objects};
 use super::photometry::Photometry;
-use super::show::{Change, Cue, Fixture, Show, State, CHANNELS};
+use super::show::{profile_solid_angle, Change, Cue, Fixture, Show, State, CHANNELS};
 use super::spotlight::{light_frame, Falloff, Gobo, Profile, Sampling, Spotlight};
 use super::PlaneSettings;
 use crate::atmosphere::phase::PhaseFunction;
@@ -87,7 +88,8 @@ struct SceneSpec {
     cue: Vec<CueSpec>,
 }
 
-/// A moving head ([`super::show::Fixture`]); angles in degrees.
+/// A moving head ([`super::show::Fixture`]); angles in degrees. With `gdtf` the file
+/// gives the intensity, the ranges, the field ratio and the gobo wheel.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FixtureSpec {
@@ -97,19 +99,16 @@ struct FixtureSpec {
     axis: [f32; 3],
     #[serde(default = "z_front")]
     front: [f32; 3],
-    intensity: f32,
-    #[serde(default = "default_pan_range")]
-    pan_range_deg: [f32; 2],
-    #[serde(default = "default_tilt_range")]
-    tilt_range_deg: [f32; 2],
-    #[serde(default = "default_zoom_range")]
-    zoom_range_deg: [f32; 2],
-    #[serde(default = "default_field_ratio")]
-    field_ratio: f32,
+    gdtf: Option<PathBuf>,
+    mode: Option<String>,
+    intensity: Option<f32>,
+    pan_range_deg: Option<[f32; 2]>,
+    tilt_range_deg: Option<[f32; 2]>,
+    zoom_range_deg: Option<[f32; 2]>,
+    field_ratio: Option<f32>,
     #[serde(default)]
     falloff: FalloffSpec,
-    #[serde(default)]
-    gobo_wheel: Vec<PathBuf>,
+    gobo_wheel: Option<Vec<PathBuf>>,
     #[serde(default)]
     gobo_sampling: SamplingSpec,
     #[serde(default)]
@@ -120,24 +119,36 @@ struct FixtureSpec {
     start: AttributesSpec,
 }
 
+/// What a fixture's attributes may be: pan, tilt and zoom ranges (degrees) and the
+/// gobo wheel's slots.
+struct Limits {
+    pan: [f32; 2],
+    tilt: [f32; 2],
+    zoom: [f32; 2],
+    slots: usize,
+}
+
+/// A fixture's light as its keys or its GDTF file give it.
+struct Light {
+    intensity: f32,
+    zoom_scale: f32,
+    field_ratio: f32,
+    wheel: Vec<Gobo>,
+    kelvin: Option<f32>,
+    limits: Limits,
+}
+
 fn down() -> [f32; 3] {
     [0.0, -1.0, 0.0]
 }
 fn z_front() -> [f32; 3] {
     [0.0, 0.0, 1.0]
 }
-fn default_pan_range() -> [f32; 2] {
-    [-270.0, 270.0]
-}
-fn default_tilt_range() -> [f32; 2] {
-    [-135.0, 135.0]
-}
-fn default_zoom_range() -> [f32; 2] {
-    [10.0, 40.0]
-}
-fn default_field_ratio() -> f32 {
-    1.3
-}
+/// A fixture's ranges and field ratio where neither its keys nor a file give them.
+const DEFAULT_PAN: [f32; 2] = [-270.0, 270.0];
+const DEFAULT_TILT: [f32; 2] = [-135.0, 135.0];
+const DEFAULT_ZOOM: [f32; 2] = [10.0, 40.0];
+const DEFAULT_FIELD_RATIO: f32 = 1.3;
 
 /// A fixture's attributes, as set at the start or by a cue; absent ones unchanged.
 #[derive(Deserialize, Default)]
@@ -353,12 +364,30 @@ impl ProfileSpec {
     }
 }
 
+impl From<FalloffSpec> for Falloff {
+    fn from(f: FalloffSpec) -> Falloff {
+        match f {
+            FalloffSpec::Linear => Falloff::Linear,
+            FalloffSpec::Smooth => Falloff::Smooth,
+        }
+    }
+}
+
 #[derive(Deserialize, Default, Clone, Copy)]
 #[serde(rename_all = "lowercase")]
 enum FalloffSpec {
     Linear,
     #[default]
     Smooth,
+}
+
+impl From<SamplingSpec> for Sampling {
+    fn from(s: SamplingSpec) -> Sampling {
+        match s {
+            SamplingSpec::Nearest => Sampling::Nearest,
+            SamplingSpec::Bilinear => Sampling::Bilinear,
+        }
+    }
 }
 
 #[derive(Deserialize, Default, Clone, Copy)]
@@ -461,10 +490,13 @@ impl Scene {
             .enumerate()
             .map(|(i, o)| o.validate(&format!("object[{i}]"), folder))
             .collect::<Result<Vec<_>>>()?;
-        let show = show(&spec, folder)?;
+        let show = show(&spec, unit, folder)?;
         let mut lights = lights;
         lights.extend(show.pose(0.0));
-        let wheels = spec.fixture.iter().flat_map(|f| f.gobo_wheel.iter());
+        let wheels = spec
+            .fixture
+            .iter()
+            .flat_map(|f| f.gobo_wheel.iter().flatten().chain(f.gdtf.iter()));
         let gobos = spec.spotlight.iter().flat_map(|l| {
             let profile = l
                 .profile
@@ -663,13 +695,7 @@ impl SpotlightSpec {
         };
         let gobo = match &self.gobo {
             None => None,
-            Some(file) => Some(load_gobo(
-                &folder.join(file),
-                match self.gobo_sampling {
-                    SamplingSpec::Nearest => Sampling::Nearest,
-                    SamplingSpec::Bilinear => Sampling::Bilinear,
-                },
-            )?),
+            Some(file) => Some(load_gobo(&folder.join(file), self.gobo_sampling.into())?),
         };
         Ok(Spotlight::new(
             position,
@@ -704,10 +730,7 @@ impl SpotlightSpec {
             0.0,
             field_deg as f64,
         )?;
-        let falloff = match self.falloff.unwrap_or_default() {
-            FalloffSpec::Linear => Falloff::Linear,
-            FalloffSpec::Smooth => Falloff::Smooth,
-        };
+        let falloff = self.falloff.unwrap_or_default().into();
         Ok((
             intensity,
             0.5 * field_deg.to_radians(),
@@ -751,13 +774,15 @@ impl SpotlightSpec {
 }
 
 /// The scene's moving heads and cues, validated: ranges, names, gobo slots, cue order.
-fn show(spec: &SceneSpec, folder: &Path) -> Result<Show> {
-    let fixtures = spec
+fn show(spec: &SceneSpec, unit: IntensityUnit, folder: &Path) -> Result<Show> {
+    let (fixtures, limits): (Vec<Fixture>, Vec<Limits>) = spec
         .fixture
         .iter()
         .enumerate()
-        .map(|(i, f)| f.validate(&format!("fixture[{i}] ({})", f.name), folder))
-        .collect::<Result<Vec<_>>>()?;
+        .map(|(i, f)| f.validate(&format!("fixture[{i}] ({})", f.name), unit, folder))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .unzip();
     for (i, f) in fixtures.iter().enumerate() {
         if fixtures[..i].iter().any(|g| g.name == f.name) {
             return Err(Error::Invalid(format!(
@@ -801,7 +826,7 @@ fn show(spec: &SceneSpec, folder: &Path) -> Result<Show> {
                                 .join(", ")
                         ))
                     })?;
-                let change = attributes.validate(&format!("{at}.set.{name}"), &spec.fixture[k])?;
+                let change = attributes.validate(&format!("{at}.set.{name}"), &limits[k])?;
                 Ok((k, change))
             })
             .collect::<Result<Vec<_>>>()?;
@@ -815,7 +840,7 @@ fn show(spec: &SceneSpec, folder: &Path) -> Result<Show> {
 }
 
 impl FixtureSpec {
-    fn validate(&self, at: &str, folder: &Path) -> Result<Fixture> {
+    fn validate(&self, at: &str, unit: IntensityUnit, folder: &Path) -> Result<(Fixture, Limits)> {
         let field = |name: &str| format!("{at}.{name}");
         let position = vec3(&field("position"), self.position)?;
         let axis = unit_vector(&field("axis"), self.axis)?;
@@ -823,15 +848,26 @@ impl FixtureSpec {
         let front = (front - axis * front.dot(axis))
             .try_normalize()
             .ok_or_else(|| Error::Invalid(format!("{at}.front is parallel to its axis")))?;
-        check_positive(&field("intensity"), self.intensity as f64, 1e9)?;
+        check_range(
+            &field("gobo_rotation_deg"),
+            self.gobo_rotation_deg as f64,
+            -360.0,
+            360.0,
+        )?;
+        let sampling = self.gobo_sampling.into();
+        let light = match &self.gdtf {
+            None => self.keyed(at, folder, sampling)?,
+            Some(file) => self.gdtf_light(at, unit, &folder.join(file), sampling)?,
+        };
+        let limits = &light.limits;
         for (name, [lo, hi], limit) in [
-            ("pan_range_deg", self.pan_range_deg, 720.0),
-            ("tilt_range_deg", self.tilt_range_deg, 360.0),
+            ("pan_range_deg", limits.pan, 720.0),
+            ("tilt_range_deg", limits.tilt, 360.0),
         ] {
-            check_range(&format!("{}[0]", field(name)), lo as f64, -limit, 0.0)?;
-            check_range(&format!("{}[1]", field(name)), hi as f64, 0.0, limit)?;
+            check_range(&format!("{}[0]", field(name)), lo as f64, -limit, limit)?;
+            check_range(&format!("{}[1]", field(name)), hi as f64, lo as f64, limit)?;
         }
-        let [narrow, wide] = self.zoom_range_deg;
+        let [narrow, wide] = limits.zoom;
         check_range(
             &format!("{}[1]", field("zoom_range_deg")),
             wide as f64,
@@ -844,58 +880,175 @@ impl FixtureSpec {
             0.5,
             wide as f64,
         )?;
-        check_range(&field("field_ratio"), self.field_ratio as f64, 1.0, 3.0)?;
-        check_range(
-            &field("gobo_rotation_deg"),
-            self.gobo_rotation_deg as f64,
-            -360.0,
-            360.0,
-        )?;
-        let sampling = match self.gobo_sampling {
-            SamplingSpec::Nearest => Sampling::Nearest,
-            SamplingSpec::Bilinear => Sampling::Bilinear,
-        };
-        let wheel = self
-            .gobo_wheel
-            .iter()
-            .map(|file| load_gobo(&folder.join(file), sampling))
-            .collect::<Result<Vec<_>>>()?;
+        check_range(&field("field_ratio"), light.field_ratio as f64, 1.0, 3.0)?;
+        check_positive(&field("intensity"), light.intensity as f64, 1e9)?;
+        // At rest: pan and tilt 0 (or the nearest the ranges allow), widest, open,
+        // full, the file's colour temperature or white.
+        let white = light.kelvin.map_or(Vec3::ONE, |k| {
+            Vec3::from(blackbody_srgb(k as f64).map(|c| c as f32))
+        });
         let rest = State {
-            channels: [0.0, 0.0, wide, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0],
+            channels: [
+                0f32.clamp(limits.pan[0], limits.pan[1]),
+                0f32.clamp(limits.tilt[0], limits.tilt[1]),
+                wide,
+                1.0,
+                1.0,
+                white.x,
+                white.y,
+                white.z,
+                0.0,
+            ],
             gobo: 0,
         };
-        let change = self.start.validate(&format!("{at}.start"), self)?;
+        let change = self.start.validate(&format!("{at}.start"), limits)?;
         let start = State {
             channels: std::array::from_fn(|c| change.channels[c].unwrap_or(rest.channels[c])),
             gobo: change.gobo.unwrap_or(0),
         };
-        Ok(Fixture {
+        let fixture = Fixture {
             name: self.name.clone(),
             position,
             axis,
             front,
-            intensity: self.intensity,
+            intensity: light.intensity,
             widest_zoom_deg: wide,
-            field_ratio: self.field_ratio,
-            falloff: match self.falloff {
-                FalloffSpec::Linear => Falloff::Linear,
-                FalloffSpec::Smooth => Falloff::Smooth,
-            },
-            wheel,
+            zoom_scale: light.zoom_scale,
+            field_ratio: light.field_ratio,
+            falloff: self.falloff.into(),
+            wheel: light.wheel,
             gobo_rotation_deg: self.gobo_rotation_deg,
             start,
+        };
+        Ok((fixture, light.limits))
+    }
+
+    /// The light as the fixture's own keys give it.
+    fn keyed(&self, at: &str, folder: &Path, sampling: Sampling) -> Result<Light> {
+        if self.mode.is_some() {
+            return Err(Error::Invalid(format!(
+                "{at}.mode names a DMX mode of a GDTF file; give `gdtf` with it"
+            )));
+        }
+        let intensity = self.intensity.ok_or_else(|| {
+            Error::Invalid(format!(
+                "{at}: `intensity` is missing (or give a `gdtf` file, which has it)"
+            ))
+        })?;
+        let wheel = self
+            .gobo_wheel
+            .iter()
+            .flatten()
+            .map(|file| load_gobo(&folder.join(file), sampling))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Light {
+            intensity,
+            zoom_scale: 1.0,
+            field_ratio: self.field_ratio.unwrap_or(DEFAULT_FIELD_RATIO),
+            limits: Limits {
+                pan: self.pan_range_deg.unwrap_or(DEFAULT_PAN),
+                tilt: self.tilt_range_deg.unwrap_or(DEFAULT_TILT),
+                zoom: self.zoom_range_deg.unwrap_or(DEFAULT_ZOOM),
+                slots: wheel.len(),
+            },
+            wheel,
+            kelvin: None,
+        })
+    }
+
+    /// The light as the GDTF file `path` gives it in the fixture's `mode`: GDTF's beam
+    /// and field angles (half and a tenth of the peak) turned into atmo's smooth edge,
+    /// the intensity from the beam's luminous flux spread over that profile at the
+    /// widest zoom.
+    fn gdtf_light(
+        &self,
+        at: &str,
+        unit: IntensityUnit,
+        path: &Path,
+        sampling: Sampling,
+    ) -> Result<Light> {
+        for (key, given) in [
+            ("intensity", self.intensity.is_some()),
+            ("pan_range_deg", self.pan_range_deg.is_some()),
+            ("tilt_range_deg", self.tilt_range_deg.is_some()),
+            ("zoom_range_deg", self.zoom_range_deg.is_some()),
+            ("field_ratio", self.field_ratio.is_some()),
+            ("gobo_wheel", self.gobo_wheel.is_some()),
+        ] {
+            if given {
+                return Err(Error::Invalid(format!(
+                    "{at}.{key}: a fixture from a GDTF file takes it from the file; leave `{key}` out"
+                )));
+            }
+        }
+        if unit != IntensityUnit::Candela {
+            return Err(Error::Invalid(format!(
+                "{at}.gdtf: a GDTF beam gives lumens, so the scene's unit must be \"cd\""
+            )));
+        }
+        let mode = self.mode.as_deref().ok_or_else(|| {
+            Error::Invalid(format!(
+                "{at}: `mode` is missing: the GDTF file's DMX mode to use"
+            ))
+        })?;
+        let file = read_gdtf(path, mode, sampling)?;
+        let (beam, field) = gdtf::to_smooth_edge(file.beam_deg, file.field_deg);
+        // atmo's beam at least a third of its field (the field ratio's limit).
+        let beam = beam.max(field / 3.0).max(0.5);
+        let field_ratio = (field / beam).max(1.0);
+        // The zoom stays in the file's terms (its half-intensity beam angle).
+        let zoom_scale = beam / file.beam_deg.max(1e-3);
+        let zoom = file.zoom_range_deg.unwrap_or([file.beam_deg; 2]);
+        let widest = zoom[1] * zoom_scale;
+        let intensity = file.luminous_flux_lm
+            / profile_solid_angle(
+                0.5 * widest.to_radians(),
+                (0.5 * widest * field_ratio)
+                    .min(MEASURED_REACH_DEG)
+                    .to_radians(),
+                self.falloff.into(),
+            );
+        Ok(Light {
+            intensity,
+            zoom_scale,
+            field_ratio,
+            limits: Limits {
+                pan: file.pan_range_deg.unwrap_or([0.0, 0.0]),
+                tilt: file.tilt_range_deg.unwrap_or([0.0, 0.0]),
+                zoom,
+                slots: file.wheel.len(),
+            },
+            wheel: file.wheel,
+            kelvin: Some(file.kelvin),
         })
     }
 }
 
+/// A GDTF file's fixture in `mode`.
+#[cfg(feature = "gdtf")]
+fn read_gdtf(path: &Path, mode: &str, sampling: Sampling) -> Result<gdtf::GdtfFixture> {
+    let bytes = crate::files::read_bounded(path, "GDTF file", crate::files::DATA_LIMIT_BYTES)?;
+    gdtf::read(&bytes, &path.display().to_string(), mode, sampling)
+}
+
+/// Without atmo's `gdtf` feature, GDTF files are refused with a message saying so.
+#[cfg(not(feature = "gdtf"))]
+fn read_gdtf(path: &Path, _mode: &str, _sampling: Sampling) -> Result<gdtf::GdtfFixture> {
+    Err(Error::Invalid(format!(
+        "GDTF file {}: fixtures from GDTF files need atmo's `gdtf` feature, which this build leaves out",
+        path.display()
+    )))
+}
+
 impl AttributesSpec {
-    /// The change these attributes make on `fixture`, each checked against its range.
-    fn validate(&self, at: &str, fixture: &FixtureSpec) -> Result<Change> {
+    /// The change these attributes make on a fixture of `limits`, each checked
+    /// against its range.
+    fn validate(&self, at: &str, limits: &Limits) -> Result<Change> {
         let mut change = Change::default();
         let ranges = [
-            fixture.pan_range_deg,
-            fixture.tilt_range_deg,
-            fixture.zoom_range_deg,
+            limits.pan,
+            limits.tilt,
+            limits.zoom,
             [0.05, 1.0],
             [0.0, 1.0],
         ];
@@ -956,7 +1109,7 @@ impl AttributesSpec {
             change.channels[8] = Some(speed);
         }
         if let Some(slot) = self.gobo {
-            let slots = fixture.gobo_wheel.len();
+            let slots = limits.slots;
             if slot > slots {
                 return Err(Error::out_of_range(
                     &format!("{at}.gobo"),

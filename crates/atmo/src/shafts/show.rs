@@ -88,6 +88,10 @@ pub struct Fixture {
     pub intensity: f32,
     /// The widest zoom, degrees.
     pub widest_zoom_deg: f32,
+    /// atmo's beam angle (full intensity) per degree of zoom: 1, or for a GDTF
+    /// fixture, whose zoom is its half-intensity angle, the ratio of the smooth edge's
+    /// beam to it ([`super::gdtf::to_smooth_edge`]).
+    pub zoom_scale: f32,
     /// Field angle over beam angle (> 1: the soft edge's width).
     pub field_ratio: f32,
     /// Edge between beam and field.
@@ -224,11 +228,11 @@ impl Fixture {
         let c = &state.channels;
         let (beam, up) = self.aim(c[PAN], c[TILT]);
         let frame: Mat3 = light_frame(beam, up).expect("up is perpendicular to the beam");
-        // The same flux in a narrower cone: the on-axis intensity grows as the cone's
-        // cross-section shrinks. The iris cuts the cone, not the intensity on the axis.
-        let gather = (half_tan(self.widest_zoom_deg) / half_tan(c[ZOOM])).powi(2);
+        // The same flux in a narrower cone: the on-axis intensity grows as the profile's
+        // solid angle shrinks. The iris cuts the cone, not the intensity on the axis.
+        let gather = self.solid_angle(self.widest_zoom_deg) / self.solid_angle(c[ZOOM]);
         let colour = Vec3::new(c[RED], c[RED + 1], c[RED + 2]);
-        let beam_half = 0.5 * (c[ZOOM] * c[IRIS]).to_radians();
+        let beam_half = 0.5 * (c[ZOOM] * self.zoom_scale * c[IRIS]).to_radians();
         let field_half = (beam_half * self.field_ratio).min(85f32.to_radians());
         let gobo = match state.gobo {
             0 => None,
@@ -251,9 +255,34 @@ impl Fixture {
     }
 }
 
-/// `tan(angle / 2)` of a full angle in degrees.
-fn half_tan(full_deg: f32) -> f32 {
-    (0.5 * full_deg.to_radians()).tan()
+impl Fixture {
+    /// `integral profile dOmega` at zoom `zoom_deg` with the iris open, sr: the solid
+    /// angle the on-axis intensity would fill, so flux = intensity times it.
+    pub fn solid_angle(&self, zoom_deg: f32) -> f32 {
+        let beam_half = 0.5 * (zoom_deg * self.zoom_scale).to_radians();
+        let field_half = (beam_half * self.field_ratio).min(85f32.to_radians());
+        profile_solid_angle(beam_half, field_half, self.falloff)
+    }
+}
+
+/// `integral profile dOmega` of a beam full inside `beam_half`, falling by `falloff`
+/// in angle to zero at `field_half` (radians), sr (midpoint rule, 2,000 steps: 1e-6).
+pub fn profile_solid_angle(beam_half: f32, field_half: f32, falloff: Falloff) -> f32 {
+    let steps = 2000;
+    let d = field_half as f64 / steps as f64;
+    let width = (field_half - beam_half).max(1e-9) as f64;
+    let sum: f64 = (0..steps)
+        .map(|k| {
+            let theta = (k as f64 + 0.5) * d;
+            let x = ((field_half as f64 - theta) / width).clamp(0.0, 1.0);
+            let profile = match falloff {
+                Falloff::Linear => x,
+                Falloff::Smooth => x * x * (3.0 - 2.0 * x),
+            };
+            profile * theta.sin()
+        })
+        .sum();
+    (std::f64::consts::TAU * sum * d) as f32
 }
 
 #[cfg(test)]
@@ -268,6 +297,7 @@ mod tests {
             front: Vec3::Z,
             intensity: 1000.0,
             widest_zoom_deg: 40.0,
+            zoom_scale: 1.0,
             field_ratio: 1.25,
             falloff: Falloff::Smooth,
             wheel: Vec::new(),
@@ -347,9 +377,16 @@ mod tests {
         let wide = f.light(&state, 0.0);
         state.channels[ZOOM] = 20.0;
         let narrow = f.light(&state, 0.0);
+        // The same flux: the ratio of the profiles' solid angles, near the ratio of
+        // the cones' cross-sections (7 % off it at these angles).
         let ratio = narrow.intensity.x / wide.intensity.x;
-        let want = (20f32.to_radians().tan() / 10f32.to_radians().tan()).powi(2);
-        assert!((ratio - want).abs() < 1e-3 * want, "{ratio} {want}");
+        let want = f.solid_angle(40.0) / f.solid_angle(20.0);
+        assert!((ratio - want).abs() < 1e-4 * want, "{ratio} {want}");
+        let small_angles = (20f32.to_radians().tan() / 10f32.to_radians().tan()).powi(2);
+        assert!(
+            (ratio - small_angles).abs() < 0.1 * small_angles,
+            "{ratio} {small_angles}"
+        );
         state.channels[IRIS] = 0.5;
         let irised = f.light(&state, 0.0);
         assert_eq!(irised.intensity, narrow.intensity);

@@ -1,0 +1,26 @@
+//! GDTF fixture files (a zip of description.xml and wheel images): no panic, no
+//! allocation past the budget (entries are checked against it before they are read);
+//! an accepted fixture has finite angles, flux and colour temperature and ordered
+//! ranges.
+#![no_main]
+use atmo::shafts::spotlight::Sampling;
+use libfuzzer_sys::fuzz_target;
+
+mod common;
+
+fuzz_target!(|data: &[u8]| {
+    common::small_budget();
+    for mode in ["Standard", "Basic"] {
+        let Ok(f) = atmo::shafts::gdtf::read(data, "fuzz", mode, Sampling::Nearest) else {
+            continue;
+        };
+        assert!(f.beam_deg.is_finite() && f.field_deg.is_finite());
+        assert!(f.luminous_flux_lm.is_finite() && f.kelvin.is_finite());
+        for [lo, hi] in [f.pan_range_deg, f.tilt_range_deg, f.zoom_range_deg].into_iter().flatten() {
+            assert!(lo <= hi);
+        }
+        for g in &f.wheel {
+            assert_eq!(g.srgb.len(), g.width * g.height);
+        }
+    }
+});
