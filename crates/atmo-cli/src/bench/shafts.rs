@@ -62,14 +62,9 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
     // Surface pixels (shadow edges among them) and haze pixels (the lamp's own among
     // them) apart.
     let (surface, haze) = atmo::shafts::surface::pixel_kinds(&fig6);
-    let split = |f: &Frame| {
-        let of = |pixels: &[usize]| {
-            let e = f.level_errors_over(&reference, fig6.display, pixels.iter().copied());
-            json!({"pixels": pixels.len(), "rms_levels": e.rms, "max_levels": e.max})
-        };
-        (of(&surface), of(&haze))
-    };
-    let (surface_error, haze_error) = split(&frame);
+    let [surface_error, haze_error] = [&surface, &haze]
+        .map(|pixels| frame.level_errors_over(&reference, fig6.display, pixels.iter().copied()));
+    let kind = |pixels: &[usize], e: &atmo::image::LevelErrors| json!({"pixels": pixels.len(), "rms_levels": e.rms, "max_levels": e.max});
     let equal = equal_error(&fig6, &reference, error.rms, if quick { 1 } else { 3 })?;
     let equal_error_ratio = equal.map(|(_, equal_ms, _)| equal_ms / ms);
     let params = |scene: &Scene| {
@@ -87,7 +82,7 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
             "baseline": "shafts.ray-march", "baseline_median_ms": baseline_ms,
             "baseline_samples": baseline.samples, "ratio": baseline_ms / ms,
             "error": {"rms_levels": error.rms, "max_levels": error.max,
-                      "surface": surface_error, "haze": haze_error},
+                      "surface": kind(&surface, &surface_error), "haze": kind(&haze, &haze_error)},
             "baseline_error": {"rms_levels": baseline_error.rms, "max_levels": baseline_error.max},
             "equal_error_ratio": equal_error_ratio,
             "equal_error": equal.map(|(samples, ms, rms)| json!({"samples": samples, "median_ms": ms, "rms_levels": rms})),
@@ -105,12 +100,12 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
             error.max,
             baseline_error.rms,
             baseline_error.max,
-            surface_error["pixels"],
-            surface_error["rms_levels"].as_f64().unwrap_or(0.0),
-            surface_error["max_levels"].as_f64().unwrap_or(0.0),
-            haze_error["pixels"],
-            haze_error["rms_levels"].as_f64().unwrap_or(0.0),
-            haze_error["max_levels"].as_f64().unwrap_or(0.0),
+            surface.len(),
+            surface_error.rms,
+            surface_error.max,
+            haze.len(),
+            haze_error.rms,
+            haze_error.max,
             match equal {
                 Some((samples, equal_ms, rms)) => format!(
                     "the ray marcher needs {samples} samples a ray (rms {rms:.3} levels) and \
@@ -162,10 +157,7 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
     let mut frames = Vec::new();
     for k in 0..=2 * fps {
         show.at_time(1.0 + k as f32 / fps as f32);
-        frames.push(time_ms(|| {
-            let kept = maps.update(&show);
-            drop(SamplePlanes::with_shadow_maps(&show, kept).render());
-        }));
+        frames.push(time_ms(|| drop(maps.render(&show))));
         rebuilt += maps.rebuilt;
     }
     let show_ms = median(frames.clone());

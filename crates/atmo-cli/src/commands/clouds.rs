@@ -171,8 +171,9 @@ pub struct CloudsArgs {
 /// the line and the key for anything else.
 pub fn scene_arguments(path: &std::path::Path, long_flags: &[&str]) -> atmo::Result<Vec<String>> {
     let name = path.display();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| atmo::Error::Invalid(format!("--scene {name}: {e}")))?;
+    // Through the bounded reader, as every file a user names.
+    let text = atmo::files::read_text(path, "cloud scene file", atmo::files::TEXT_LIMIT_BYTES)
+        .map_err(|e| atmo::Error::Invalid(format!("--scene {e}")))?;
     let table: toml::Table = text
         .parse()
         .map_err(|e| atmo::Error::Invalid(format!("--scene {name}: {e}")))?;

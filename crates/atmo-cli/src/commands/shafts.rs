@@ -247,8 +247,7 @@ fn animate(
                         .frame
                 }
                 None => {
-                    let kept = maps.update(&scene);
-                    let frame = SamplePlanes::with_shadow_maps(&scene, kept).render();
+                    let frame = maps.render(&scene);
                     rebuilt += maps.rebuilt;
                     frame
                 }

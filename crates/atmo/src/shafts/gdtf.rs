@@ -236,7 +236,7 @@ mod tests {
 
     #[test]
     fn the_smooth_edge_puts_half_and_tenth_where_gdtf_does() {
-        let smooth = |x: f32| x * x * (3.0 - 2.0 * x);
+        let smooth = |x: f32| super::super::spotlight::Falloff::Smooth.shape(x);
         for (beam, field) in [(20.0, 30.0), (10.0, 12.0), (25.0, 25.0)] {
             let (b, f) = to_smooth_edge(beam, field);
             let profile = |full: f32| {

@@ -213,6 +213,25 @@ impl Photometry {
     }
 }
 
+/// `word` as a finite number, or why not (`what` names it).
+fn parse_number(word: &str, what: &str) -> std::result::Result<f32, String> {
+    match word.parse::<f32>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        _ => Err(format!("the {what} is `{word}`, not a number")),
+    }
+}
+
+/// `x` as a count in `[lo, hi]`, or why not (`what` names it).
+fn whole(x: f32, what: &str, lo: usize, hi: usize) -> std::result::Result<usize, String> {
+    if x.fract() != 0.0 || x < lo as f32 || x > hi as f32 {
+        Err(format!(
+            "the {what} is {x}: allowed a whole number in [{lo}, {hi}]"
+        ))
+    } else {
+        Ok(x as usize)
+    }
+}
+
 /// Checks that `angles` rise strictly within `[lo, hi]`.
 fn increasing(angles: &[f32], what: &str, lo: f32, hi: f32) -> std::result::Result<(), String> {
     for (k, &a) in angles.iter().enumerate() {
@@ -268,27 +287,13 @@ impl<'a> Numbers<'a> {
             ));
         };
         self.last_line = line;
-        match word.parse::<f32>() {
-            Ok(x) if x.is_finite() => Ok(x),
-            _ => Err(ies_error(
-                self.origin,
-                line,
-                format!("the {what} is `{word}`, not a number"),
-            )),
-        }
+        parse_number(word, what).map_err(|why| ies_error(self.origin, line, why))
     }
 
     /// The next number as a count in `[lo, hi]`.
     fn count(&mut self, what: &str, lo: usize, hi: usize) -> Result<usize> {
         let x = self.number(what)?;
-        if x.fract() != 0.0 || x < lo as f32 || x > hi as f32 {
-            return Err(ies_error(
-                self.origin,
-                self.last_line,
-                format!("the {what} is {x}: allowed a whole number in [{lo}, {hi}]"),
-            ));
-        }
-        Ok(x as usize)
+        whole(x, what, lo, hi).map_err(|why| ies_error(self.origin, self.last_line, why))
     }
 
     /// The next `n` numbers.
@@ -507,20 +512,11 @@ impl Photometry {
         // A number; some writers use a decimal comma.
         let number = |n: usize, what: &str| -> Result<f32> {
             let word = field(n)?;
-            match word.replace(',', ".").parse::<f32>() {
-                Ok(x) if x.is_finite() => Ok(x),
-                _ => Err(fail(n, format!("the {what} is `{word}`, not a number"))),
-            }
+            parse_number(&word.replace(',', "."), what)
+                .map_err(|_| fail(n, format!("the {what} is `{word}`, not a number")))
         };
         let count = |n: usize, what: &str, lo: usize, hi: usize| -> Result<usize> {
-            let x = number(n, what)?;
-            if x.fract() != 0.0 || x < lo as f32 || x > hi as f32 {
-                return Err(fail(
-                    n,
-                    format!("the {what} is {x}: allowed a whole number in [{lo}, {hi}]"),
-                ));
-            }
-            Ok(x as usize)
+            whole(number(n, what)?, what, lo, hi).map_err(|why| fail(n, why))
         };
         let isym = count(3, "symmetry indicator Isym", 0, 4)?;
         let mc = count(4, "number of C planes Mc", 1, MAX_ANGLES)?;

@@ -536,6 +536,12 @@ impl ShadowMaps {
         }
         &self.maps
     }
+
+    /// `scene`'s picture by the plane method with the maps kept from the frames
+    /// before ([`ShadowMaps::update`]): one frame of an animation.
+    pub fn render(&mut self, scene: &Scene) -> Frame {
+        SamplePlanes::with_shadow_maps(scene, self.update(scene)).render()
+    }
 }
 
 /// The shadow map of each light of `scene`, in scene order.

@@ -554,6 +554,57 @@ impl Scene {
     }
 }
 
+/// A light's colour from at most one of `color` (linear RGB), `cmy` (0-1 each; the
+/// colour is `1 - cmy`; only where `has_cmy`, the light having that key) and `kelvin`,
+/// checked; `None` when none is given.
+fn colour(
+    at: &str,
+    color: Option<[f32; 3]>,
+    (has_cmy, cmy): (bool, Option<[f32; 3]>),
+    kelvin: Option<f32>,
+) -> Result<Option<Vec3>> {
+    let checked = |key: &str, v: [f32; 3], max: f64| -> Result<Vec3> {
+        for (c, x) in v.iter().enumerate() {
+            check_range(&format!("{at}.{key}[{c}]"), *x as f64, 0.0, max)?;
+        }
+        Ok(Vec3::from(v))
+    };
+    Ok(match (color, cmy, kelvin) {
+        (None, None, None) => None,
+        (Some(rgb), None, None) => Some(checked("color", rgb, 1e6)?),
+        (None, Some(cmy), None) => Some(Vec3::ONE - checked("cmy", cmy, 1.0)?),
+        (None, None, Some(k)) => {
+            check_range(&format!("{at}.kelvin"), k as f64, 1000.0, 40000.0)?;
+            Some(kelvin_colour(k))
+        }
+        _ if !has_cmy => {
+            return Err(Error::Invalid(format!(
+                "{at}: give at most one of `color` (linear RGB) and `kelvin`"
+            )))
+        }
+        _ => {
+            return Err(Error::Invalid(format!(
+                "{at}: give at most one of `color` (linear RGB), `cmy` and `kelvin`"
+            )))
+        }
+    })
+}
+
+/// The colour of a black body at `kelvin`, normalised to luminance 1, linear sRGB.
+fn kelvin_colour(kelvin: f32) -> Vec3 {
+    Vec3::from(blackbody_srgb(kelvin as f64).map(|c| c as f32))
+}
+
+/// Refuses the keys of `given` that are set: `why` says where their values come from.
+fn refuse_given(at: &str, given: &[(&str, bool)], why: &str) -> Result<()> {
+    match given.iter().find(|(_, set)| *set) {
+        Some((key, _)) => Err(Error::Invalid(format!(
+            "{at}.{key}: {why}; leave `{key}` out"
+        ))),
+        None => Ok(()),
+    }
+}
+
 fn vec3(field: &str, v: [f32; 3]) -> Result<Vec3> {
     let v = Vec3::from(v);
     if v.is_finite() {
@@ -665,24 +716,7 @@ impl SpotlightSpec {
         };
         let light_from_world = light_frame(axis, up)
             .ok_or_else(|| Error::Invalid(format!("{at}.up is parallel to the beam axis")))?;
-        let colour = match (self.color, self.kelvin) {
-            (Some(rgb), None) => {
-                for (c, v) in rgb.iter().enumerate() {
-                    check_range(&format!("{at}.color[{c}]"), *v as f64, 0.0, 1e6)?;
-                }
-                Vec3::from(rgb)
-            }
-            (None, Some(k)) => {
-                check_range(&format!("{at}.kelvin"), k as f64, 1000.0, 40000.0)?;
-                Vec3::from(blackbody_srgb(k as f64).map(|c| c as f32))
-            }
-            (None, None) => Vec3::ONE,
-            (Some(_), Some(_)) => {
-                return Err(Error::Invalid(format!(
-                    "{at}: give at most one of `color` (linear RGB) and `kelvin`"
-                )))
-            }
-        };
+        let colour = colour(at, self.color, (false, None), self.kelvin)?.unwrap_or(Vec3::ONE);
         check_range(&format!("{at}.dimmer"), self.dimmer as f64, 0.0, 1.0)?;
         if self.intensity_unit != unit {
             return Err(Error::Invalid(format!(
@@ -744,19 +778,17 @@ impl SpotlightSpec {
     /// A light with a measured profile: its peak candela, half field angle (rad: where
     /// the file's light ends, at most [`MEASURED_REACH_DEG`]) and profile.
     fn measured(&self, at: &str, spec: &ProfileSpec, folder: &Path) -> Result<(f32, f32, Profile)> {
-        for (key, given) in [
-            ("intensity", self.intensity.is_some()),
-            ("beam_deg", self.beam_deg.is_some()),
-            ("field_deg", self.field_deg.is_some()),
-            ("falloff", self.falloff.is_some()),
-        ] {
-            if given {
-                return Err(Error::Invalid(format!(
-                    "{at}.{key}: a light with a measured `profile` takes its intensity and \
-                     angles from the file; leave `{key}` out (`dimmer` scales it)"
-                )));
-            }
-        }
+        refuse_given(
+            at,
+            &[
+                ("intensity", self.intensity.is_some()),
+                ("beam_deg", self.beam_deg.is_some()),
+                ("field_deg", self.field_deg.is_some()),
+                ("falloff", self.falloff.is_some()),
+            ],
+            "a light with a measured `profile` takes its intensity and angles from the \
+             file (`dimmer` scales it)",
+        )?;
         if self.intensity_unit != IntensityUnit::Candela {
             return Err(Error::Invalid(format!(
                 "{at}.intensity_unit: a photometric file gives candela; the scene's unit must be \"cd\""
@@ -884,9 +916,7 @@ impl FixtureSpec {
         check_positive(&field("intensity"), light.intensity as f64, 1e9)?;
         // At rest: pan and tilt 0 (or the nearest the ranges allow), widest, open,
         // full, the file's colour temperature or white.
-        let white = light.kelvin.map_or(Vec3::ONE, |k| {
-            Vec3::from(blackbody_srgb(k as f64).map(|c| c as f32))
-        });
+        let white = light.kelvin.map_or(Vec3::ONE, kelvin_colour);
         let rest = State {
             channels: [
                 0f32.clamp(limits.pan[0], limits.pan[1]),
@@ -967,20 +997,18 @@ impl FixtureSpec {
         path: &Path,
         sampling: Sampling,
     ) -> Result<Light> {
-        for (key, given) in [
-            ("intensity", self.intensity.is_some()),
-            ("pan_range_deg", self.pan_range_deg.is_some()),
-            ("tilt_range_deg", self.tilt_range_deg.is_some()),
-            ("zoom_range_deg", self.zoom_range_deg.is_some()),
-            ("field_ratio", self.field_ratio.is_some()),
-            ("gobo_wheel", self.gobo_wheel.is_some()),
-        ] {
-            if given {
-                return Err(Error::Invalid(format!(
-                    "{at}.{key}: a fixture from a GDTF file takes it from the file; leave `{key}` out"
-                )));
-            }
-        }
+        refuse_given(
+            at,
+            &[
+                ("intensity", self.intensity.is_some()),
+                ("pan_range_deg", self.pan_range_deg.is_some()),
+                ("tilt_range_deg", self.tilt_range_deg.is_some()),
+                ("zoom_range_deg", self.zoom_range_deg.is_some()),
+                ("field_ratio", self.field_ratio.is_some()),
+                ("gobo_wheel", self.gobo_wheel.is_some()),
+            ],
+            "a fixture from a GDTF file takes it from the file",
+        )?;
         if unit != IntensityUnit::Candela {
             return Err(Error::Invalid(format!(
                 "{at}.gdtf: a GDTF beam gives lumens, so the scene's unit must be \"cd\""
@@ -1070,30 +1098,7 @@ impl AttributesSpec {
                 change.channels[c] = Some(*v);
             }
         }
-        let colour = match (self.color, self.cmy, self.kelvin) {
-            (None, None, None) => None,
-            (Some(rgb), None, None) => {
-                for (c, v) in rgb.iter().enumerate() {
-                    check_range(&format!("{at}.color[{c}]"), *v as f64, 0.0, 1e6)?;
-                }
-                Some(Vec3::from(rgb))
-            }
-            (None, Some(cmy), None) => {
-                for (c, v) in cmy.iter().enumerate() {
-                    check_range(&format!("{at}.cmy[{c}]"), *v as f64, 0.0, 1.0)?;
-                }
-                Some(Vec3::ONE - Vec3::from(cmy))
-            }
-            (None, None, Some(k)) => {
-                check_range(&format!("{at}.kelvin"), k as f64, 1000.0, 40000.0)?;
-                Some(Vec3::from(blackbody_srgb(k as f64).map(|c| c as f32)))
-            }
-            _ => {
-                return Err(Error::Invalid(format!(
-                    "{at}: give at most one of `color` (linear RGB), `cmy` and `kelvin`"
-                )))
-            }
-        };
+        let colour = colour(at, self.color, (true, self.cmy), self.kelvin)?;
         if let Some(rgb) = colour {
             for c in 0..3 {
                 change.channels[5 + c] = Some(rgb[c]);

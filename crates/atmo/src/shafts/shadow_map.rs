@@ -33,9 +33,9 @@ impl ShadowMap {
             .par_chunks_mut(size)
             .enumerate()
             .for_each(|(row, out)| {
-                let v = 1.0 - 2.0 * (row as f32 + 0.5) / size as f32;
+                let v = -texel_centre(row, size);
                 for (col, d) in out.iter_mut().enumerate() {
-                    let u = 2.0 * (col as f32 + 0.5) / size as f32 - 1.0;
+                    let u = texel_centre(col, size);
                     if !touches_disc(u, v, size) {
                         continue;
                     }
@@ -100,7 +100,6 @@ impl ShadowMap {
         let (i, j) = (fx.floor(), fy.floor());
         let (a, b) = (fx - i, fy - j);
         let last = self.size as isize - 1;
-        let texel = 2.0 / self.size as f32;
         let plane = normal.dot(local);
         let lit = |di: isize, dj: isize| {
             let ii = (i as isize + di).clamp(0, last);
@@ -108,8 +107,8 @@ impl ShadowMap {
             // The texel centre's ray (light-space z = 1) and where it meets the plane;
             // where it does not (it grazes or passes the plane), the point's own depth.
             let ray = Vec3::new(
-                ((ii as f32 + 0.5) * texel - 1.0) * self.tan_field,
-                (1.0 - (jj as f32 + 0.5) * texel) * self.tan_field,
+                texel_centre(ii as usize, self.size) * self.tan_field,
+                -texel_centre(jj as usize, self.size) * self.tan_field,
                 1.0,
             );
             let facing = normal.dot(ray);
@@ -125,12 +124,6 @@ impl ShadowMap {
             + (lit(0, 1) * (1.0 - a) + lit(1, 1) * a) * b
     }
 
-    /// The width of one texel at light-space depth `z`, m.
-    #[inline]
-    pub fn texel_size(&self, z: f32) -> f32 {
-        2.0 * z * self.tan_field / self.size as f32
-    }
-
     /// World positions where the rays of the texels of `row` end: at the surface they
     /// meet, or at light-space depth `reach` m where they meet nothing. Texels outside
     /// the field cone are left out. With the lamp, the ends of all rows bound the lit
@@ -142,14 +135,14 @@ impl ShadowMap {
         row: usize,
     ) -> impl Iterator<Item = Vec3> + 'a {
         let n = self.size;
-        let v = 1.0 - 2.0 * (row as f32 + 0.5) / n as f32;
+        let v = -texel_centre(row, n);
         // The texel directions along a row are affine in u.
         let (left, right) = (
             light.world_direction(-1.0, v),
             light.world_direction(1.0, v),
         );
         (0..n).filter_map(move |col| {
-            let u = 2.0 * (col as f32 + 0.5) / n as f32 - 1.0;
+            let u = texel_centre(col, n);
             if !touches_disc(u, v, n) {
                 return None;
             }
@@ -165,6 +158,13 @@ impl ShadowMap {
 /// seen through 6 mm texels sags 1e-4 of 5 m), below any gap a scene shows (2.5 mm at
 /// 5 m).
 pub const RECEIVER_BIAS: f32 = 5e-4;
+
+/// The `u` of the centre of column `index` of a `size`-texel map, in [-1, 1]; the `v`
+/// of row `index` is its negative (the top row first).
+#[inline]
+fn texel_centre(index: usize, size: usize) -> f32 {
+    2.0 * (index as f32 + 0.5) / size as f32 - 1.0
+}
 
 /// Whether the texel centred at `(u, v)` of a `size`-texel map touches the unit disc
 /// (the field cone): only those can be lit.

@@ -143,6 +143,19 @@ impl Show {
             .fold(0.0, f32::max)
     }
 
+    /// What the cues up to time `t` set on fixture `f`, in order, each with its cue.
+    fn changes(&self, f: usize, t: f32) -> impl Iterator<Item = (&Cue, &Change)> {
+        self.cues
+            .iter()
+            .take_while(move |c| c.time_s <= t)
+            .flat_map(move |cue| {
+                cue.changes
+                    .iter()
+                    .filter(move |(k, _)| *k == f)
+                    .map(move |(_, change)| (cue, change))
+            })
+    }
+
     /// Fixture `f`'s fade of `channel` as it runs at time `t` (every cue up to `t`).
     fn fade(&self, f: usize, channel: usize, t: f32) -> Fade {
         let start = self.fixtures[f].start.channels[channel];
@@ -152,16 +165,14 @@ impl Show {
             start: 0.0,
             length: 0.0,
         };
-        for cue in self.cues.iter().take_while(|c| c.time_s <= t) {
-            for (_, change) in cue.changes.iter().filter(|(k, _)| *k == f) {
-                if let Some(to) = change.channels[channel] {
-                    fade = Fade {
-                        from: fade.at(cue.time_s),
-                        to,
-                        start: cue.time_s,
-                        length: cue.fade_s,
-                    };
-                }
+        for (cue, change) in self.changes(f, t) {
+            if let Some(to) = change.channels[channel] {
+                fade = Fade {
+                    from: fade.at(cue.time_s),
+                    to,
+                    start: cue.time_s,
+                    length: cue.fade_s,
+                };
             }
         }
         fade
@@ -169,12 +180,11 @@ impl Show {
 
     /// Fixture `f`'s attributes at time `t`, s.
     pub fn state(&self, f: usize, t: f32) -> State {
-        let mut gobo = self.fixtures[f].start.gobo;
-        for cue in self.cues.iter().take_while(|c| c.time_s <= t) {
-            for (_, change) in cue.changes.iter().filter(|(k, _)| *k == f) {
-                gobo = change.gobo.unwrap_or(gobo);
-            }
-        }
+        let gobo = self
+            .changes(f, t)
+            .filter_map(|(_, change)| change.gobo)
+            .last()
+            .unwrap_or(self.fixtures[f].start.gobo);
         State {
             channels: std::array::from_fn(|c| self.fade(f, c, t).at(t)),
             gobo,
@@ -186,15 +196,12 @@ impl Show {
     /// trapezoid rule over those times is exact.
     pub fn gobo_angle_deg(&self, f: usize, t: f32) -> f32 {
         let mut times: Vec<f32> = vec![0.0, t.max(0.0)];
-        for cue in self.cues.iter().take_while(|c| c.time_s <= t) {
-            if cue
-                .changes
-                .iter()
-                .any(|(k, c)| *k == f && c.channels[SPEED].is_some())
-            {
-                times.push(cue.time_s);
-                times.push((cue.time_s + cue.fade_s).min(t));
-            }
+        for (cue, _) in self
+            .changes(f, t)
+            .filter(|(_, change)| change.channels[SPEED].is_some())
+        {
+            times.push(cue.time_s);
+            times.push((cue.time_s + cue.fade_s).min(t));
         }
         times.sort_by(f32::total_cmp);
         times.dedup();
@@ -275,11 +282,7 @@ pub fn profile_solid_angle(beam_half: f32, field_half: f32, falloff: Falloff) ->
         .map(|k| {
             let theta = (k as f64 + 0.5) * d;
             let x = ((field_half as f64 - theta) / width).clamp(0.0, 1.0);
-            let profile = match falloff {
-                Falloff::Linear => x,
-                Falloff::Smooth => x * x * (3.0 - 2.0 * x),
-            };
-            profile * theta.sin()
+            falloff.shape(x as f32) as f64 * theta.sin()
         })
         .sum();
     (std::f64::consts::TAU * sum * d) as f32

@@ -27,6 +27,18 @@ pub enum Falloff {
     Smooth,
 }
 
+impl Falloff {
+    /// The edge's profile at `x` in [0, 1], the fraction of the way from the field's
+    /// edge (0) to the beam's (1).
+    #[inline(always)]
+    pub fn shape(self, x: f32) -> f32 {
+        match self {
+            Falloff::Linear => x,
+            Falloff::Smooth => x * x * (3.0 - 2.0 * x),
+        }
+    }
+}
+
 /// How a gobo image is looked up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Sampling {
@@ -236,11 +248,7 @@ impl Spotlight {
                     return 1.0;
                 }
                 let x = (self.field_half - fast_atan(r2.sqrt())) / (self.field_half - beam_half);
-                let x = x.clamp(0.0, 1.0);
-                match falloff {
-                    Falloff::Linear => x,
-                    Falloff::Smooth => x * x * (3.0 - 2.0 * x),
-                }
+                falloff.shape(x.clamp(0.0, 1.0))
             }
             Profile::Measured(photometry) => {
                 let gamma = r2.sqrt().atan().to_degrees();
