@@ -193,6 +193,14 @@ fn parallelogram(ray: &Ray, corner: Vec3, edge_a: Vec3, edge_b: Vec3) -> Option<
     Some((t, a, b))
 }
 
+/// Where `ray` meets the triangle `[a, b - a, c - a]` (as [`Mesh::triangles`] holds
+/// it), with `t` in `(RAY_EPSILON, t_max)`.
+#[inline]
+pub fn triangle_hit(ray: &Ray, tri: &[Vec3; 3], t_max: f32) -> Option<f32> {
+    let (t, a, b) = parallelogram(ray, tri[0], tri[1], tri[2])?;
+    (t > RAY_EPSILON && t < t_max && a >= 0.0 && b >= 0.0 && a + b <= 1.0).then_some(t)
+}
+
 /// A triangle mesh with a bounding volume hierarchy (binary, split at the median
 /// centroid along the longest axis; at most [`Mesh::LEAF_SIZE`] triangles a leaf).
 /// Written here rather than taken from a crate: it is 60 lines, and the crates for it
@@ -305,11 +313,9 @@ impl Mesh {
                 continue;
             }
             for tri in &self.triangles[node.start as usize..(node.start + node.count) as usize] {
-                if let Some((t, a, b)) = parallelogram(ray, tri[0], tri[1], tri[2]) {
-                    if t > RAY_EPSILON && t < t_best && a >= 0.0 && b >= 0.0 && a + b <= 1.0 {
-                        t_best = t;
-                        best = Some((t, tri[1].cross(tri[2]).normalize()));
-                    }
+                if let Some(t) = triangle_hit(ray, tri, t_best) {
+                    t_best = t;
+                    best = Some((t, tri[1].cross(tri[2]).normalize()));
                 }
             }
         }
