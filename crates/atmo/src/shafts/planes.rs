@@ -27,7 +27,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::shadow_map::{ShadowMap, Stretch};
-use super::spotlight::Spotlight;
+use super::spotlight::{Gobo, Spotlight};
 use super::surface::{first_hit, shadow_ray, surface_radiance, SurfacePoint};
 use super::tables::{AttenuationTable, PhaseTable};
 use super::Scene;
@@ -294,6 +294,7 @@ impl<'a> SamplePlanes<'a> {
         let shadow = &planes.shadow;
         // J_i per lane: the profile alone (in `x`), or with the gobo's colour.
         let mut j_sums = [Vec3::ZERO; LANES];
+        let turn = light.gobo.as_ref().map_or((0.0, 1.0), Gobo::turn);
         for plane in first / m..last.div_ceil(m) {
             let slice = (plane * m).max(first)..((plane + 1) * m).min(last);
             let lookups = Lookups::of_slice(light, shadow, lanes, slice.clone());
@@ -330,7 +331,9 @@ impl<'a> SamplePlanes<'a> {
                 for (l, weight) in weights.into_iter().enumerate().take(lanes.count) {
                     match &light.gobo {
                         None => j_sums[l].x += weight,
-                        Some(gobo) if weight > 0.0 => j_sums[l] += weight * gobo.sample(u[l], v[l]),
+                        Some(gobo) if weight > 0.0 => {
+                            j_sums[l] += weight * gobo.sample_turned(u[l], v[l], turn)
+                        }
                         Some(_) => {}
                     }
                 }

@@ -82,13 +82,21 @@ impl Gobo {
     /// the image turned by [`Gobo::rotation`].
     #[inline]
     pub fn sample(&self, u: f32, v: f32) -> Vec3 {
-        let (u, v) = if self.rotation == 0.0 {
-            (u, v)
-        } else {
-            // The image's point that the turn brings to (u, v): turned back.
-            let (sin, cos) = self.rotation.sin_cos();
-            (cos * u + sin * v, cos * v - sin * u)
-        };
+        self.sample_turned(u, v, self.turn())
+    }
+
+    /// `(sin, cos)` of [`Gobo::rotation`], for [`Gobo::sample_turned`]: a caller that
+    /// samples many points of one frame takes them once.
+    pub fn turn(&self) -> (f32, f32) {
+        self.rotation.sin_cos()
+    }
+
+    /// [`Gobo::sample`] with the rotation's `(sin, cos)` from [`Gobo::turn`].
+    #[inline]
+    pub fn sample_turned(&self, u: f32, v: f32, (sin, cos): (f32, f32)) -> Vec3 {
+        // The image's point that the turn brings to (u, v): turned back (unturned, the
+        // same u and v to the bit).
+        let (u, v) = (cos * u + sin * v, cos * v - sin * u);
         let x = (0.5 * (u + 1.0)) * self.width as f32;
         let y = (0.5 * (1.0 - v)) * self.height as f32;
         let (w, h) = (self.width as isize, self.height as isize);
