@@ -82,6 +82,85 @@ pub enum ShaftsMethod {
 /// Floats per light in the `derived` buffer (planes), then 4 table scales.
 const PLANE_FLOATS: u64 = 12;
 
+/// The shafts' compiled passes, which depend on no scene: made once a device and
+/// shared by every [`GpuShafts`] made from them (an animation's frames, a viewer's
+/// edits), since compiling them is most of what setting up a scene costs.
+pub struct ShaftsPipelines {
+    /// The bindings of the compute passes (writable) and of the planes' render pass
+    /// (read-only).
+    compute_layout: wgpu::BindGroupLayout,
+    render_layout: wgpu::BindGroupLayout,
+    shadow: wgpu::ComputePipeline,
+    prepare: wgpu::ComputePipeline,
+    attenuation: wgpu::ComputePipeline,
+    surface: wgpu::ComputePipeline,
+    compute: wgpu::ComputePipeline,
+    planes: wgpu::RenderPipeline,
+    composite: wgpu::ComputePipeline,
+}
+
+impl ShaftsPipelines {
+    /// Compiles the passes for `gpu`'s device.
+    pub fn new(gpu: &Gpu) -> Result<std::sync::Arc<Self>, GpuError> {
+        // The compute passes write the frame's buffers; the render pass only reads them,
+        // through the same bindings declared read-only (so its vertex stage may too).
+        let [(compute_layout, compute_pipeline_layout), (render_layout, render_pipeline_layout)] =
+            [false, true].map(|read_only| {
+                let layout = bind_group_layout(gpu, read_only);
+                let pipeline_layout =
+                    gpu.device
+                        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                            label: Some("shafts"),
+                            bind_group_layouts: &[Some(&layout)],
+                            immediate_size: 0,
+                        });
+                (layout, pipeline_layout)
+            });
+        // Compute passes see the working buffers writable, the planes' render pass
+        // read-only: the same declarations in two files (see shafts_common.wgsl).
+        let module = |pass: &str| {
+            wgsl::module(
+                gpu,
+                &format!("shafts_writable.wgsl shafts_common.wgsl {pass}"),
+            )
+        };
+        let shadow = module("shafts_shadow.wgsl")?;
+        let prepare = module("shafts_prepare.wgsl")?;
+        let surface = module("shafts_surface.wgsl")?;
+        let compute = module("shafts_compute.wgsl")?;
+        let planes = wgsl::module(
+            gpu,
+            "shafts_readable.wgsl shafts_common.wgsl shafts_planes.wgsl",
+        )?;
+        let composite = wgsl::module(gpu, "shafts_composite.wgsl")?;
+        let with = Some(&compute_pipeline_layout);
+        // The table's own pass, with its own bindings: the texture is written there and
+        // read (as a texture) by every pass after it.
+        let table = module("shafts_attenuation.wgsl")?;
+        Ok(std::sync::Arc::new(ShaftsPipelines {
+            shadow: gpu.compute_pipeline(&shadow, "main", with)?,
+            prepare: gpu.compute_pipeline(&prepare, "planes", with)?,
+            attenuation: gpu.compute_pipeline(&table, "main", None)?,
+            surface: gpu.compute_pipeline(&surface, "main", with)?,
+            compute: gpu.compute_pipeline(&compute, "main", with)?,
+            // Additive: the planes' terms sum up (shafts (7)).
+            planes: gpu.blended_pipeline(
+                &planes,
+                Some(&render_pipeline_layout),
+                wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                },
+                1,
+            )?,
+            composite: gpu.compute_pipeline(&composite, "main", None)?,
+            compute_layout,
+            render_layout,
+        }))
+    }
+}
+
 /// A scene uploaded, with its passes.
 pub struct GpuShafts {
     params: ShaftsParams,
@@ -92,23 +171,34 @@ pub struct GpuShafts {
     group: wgpu::BindGroup,
     /// The same resources, read-only, for the planes' render pass.
     render_group: wgpu::BindGroup,
-    shadow: wgpu::ComputePipeline,
-    prepare: wgpu::ComputePipeline,
-    attenuation: wgpu::ComputePipeline,
     /// The attenuation pass's own bindings (it writes the table the others read).
     attenuation_group: wgpu::BindGroup,
-    surface: wgpu::ComputePipeline,
-    compute: wgpu::ComputePipeline,
-    planes: wgpu::RenderPipeline,
-    composite: wgpu::ComputePipeline,
+    pipelines: std::sync::Arc<ShaftsPipelines>,
     /// The planes' render target.
     target: wgpu::Texture,
 }
 
 impl GpuShafts {
     /// Uploads `scene` (objects, lights, gobos, the phase table and light maps) and
-    /// allocates the frame's buffers, each checked against the device's limits first.
+    /// allocates the frame's buffers, each checked against the device's limits first,
+    /// and compiles the passes ([`ShaftsPipelines`]).
     pub fn new(gpu: &Gpu, scene: &Scene) -> Result<Self, GpuError> {
+        GpuShafts::with_pipelines(gpu, scene, ShaftsPipelines::new(gpu)?)
+    }
+
+    /// The passes this scene draws with, to make the next scene's [`GpuShafts`] from
+    /// ([`GpuShafts::with_pipelines`]).
+    pub fn pipelines(&self) -> std::sync::Arc<ShaftsPipelines> {
+        self.pipelines.clone()
+    }
+
+    /// As [`GpuShafts::new`] with passes compiled before: what changes from frame to
+    /// frame of an animation (the lights, their gobos) is uploaded, nothing compiled.
+    pub fn with_pipelines(
+        gpu: &Gpu,
+        scene: &Scene,
+        pipelines: std::sync::Arc<ShaftsPipelines>,
+    ) -> Result<Self, GpuError> {
         let camera = &scene.camera;
         let (w, h, k) = (camera.width, camera.height, camera.supersampling);
         let (tan_half_width, tan_half_height) = camera.pinhole("the sample planes")?;
@@ -232,14 +322,11 @@ impl GpuShafts {
         });
         let phase_view = phase_texture.create_view(&Default::default());
         let map_view = map_texture.create_view(&Default::default());
-        // The compute passes write the frame's buffers; the render pass only reads them,
-        // through the same bindings declared read-only (so its vertex stage may too).
-        let [(compute_layout, group), (render_layout, render_group)] =
-            [false, true].map(|read_only| {
-                let layout = bind_group_layout(gpu, read_only);
-                let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let [group, render_group] =
+            [&pipelines.compute_layout, &pipelines.render_layout].map(|layout| {
+                gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("shafts"),
-                    layout: &layout,
+                    layout,
                     entries: &[
                         entry(0, uniform.as_entire_binding()),
                         entry(1, light_records.as_entire_binding()),
@@ -253,41 +340,11 @@ impl GpuShafts {
                         entry(9, out.as_entire_binding()),
                         entry(10, wgpu::BindingResource::TextureView(&attenuation_view)),
                     ],
-                });
-                let layout = gpu
-                    .device
-                    .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                        label: Some("shafts"),
-                        bind_group_layouts: &[Some(&layout)],
-                        immediate_size: 0,
-                    });
-                (layout, group)
+                })
             });
-        // Compute passes see the working buffers writable, the planes' render pass
-        // read-only: the same declarations in two files (see shafts_common.wgsl).
-        let module = |pass: &str| {
-            wgsl::module(
-                gpu,
-                &format!("shafts_writable.wgsl shafts_common.wgsl {pass}"),
-            )
-        };
-        let shadow = module("shafts_shadow.wgsl")?;
-        let prepare = module("shafts_prepare.wgsl")?;
-        let surface = module("shafts_surface.wgsl")?;
-        let compute = module("shafts_compute.wgsl")?;
-        let planes = wgsl::module(
-            gpu,
-            "shafts_readable.wgsl shafts_common.wgsl shafts_planes.wgsl",
-        )?;
-        let composite = wgsl::module(gpu, "shafts_composite.wgsl")?;
-        let with = Some(&compute_layout);
-        // The table's own pass, with its own bindings: the texture is written there and
-        // read (as a texture) by every pass after it.
-        let table = module("shafts_attenuation.wgsl")?;
-        let attenuation = gpu.compute_pipeline(&table, "main", None)?;
         let attenuation_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("the attenuation table"),
-            layout: &attenuation.get_bind_group_layout(0),
+            layout: &pipelines.attenuation.get_bind_group_layout(0),
             entries: &[
                 entry(0, uniform.as_entire_binding()),
                 entry(7, derived.as_entire_binding()),
@@ -310,24 +367,8 @@ impl GpuShafts {
             out,
             group,
             render_group,
-            shadow: gpu.compute_pipeline(&shadow, "main", with)?,
-            prepare: gpu.compute_pipeline(&prepare, "planes", with)?,
-            attenuation,
             attenuation_group,
-            surface: gpu.compute_pipeline(&surface, "main", with)?,
-            compute: gpu.compute_pipeline(&compute, "main", with)?,
-            // Additive: the planes' terms sum up (shafts (7)).
-            planes: gpu.blended_pipeline(
-                &planes,
-                Some(&render_layout),
-                wgpu::BlendComponent {
-                    src_factor: wgpu::BlendFactor::One,
-                    dst_factor: wgpu::BlendFactor::One,
-                    operation: wgpu::BlendOperation::Add,
-                },
-                1,
-            )?,
-            composite: gpu.compute_pipeline(&composite, "main", None)?,
+            pipelines,
             target,
         })
     }
@@ -339,7 +380,7 @@ impl GpuShafts {
             .write_buffer(&self.extents, 0, bytemuck::cast_slice(&self.extents_init));
         let view = self.target.create_view(&Default::default());
         let composite_group = gpu.bind_group(
-            &self.composite.get_bind_group_layout(0),
+            &self.pipelines.composite.get_bind_group_layout(0),
             &[
                 wgpu::BindingResource::TextureView(&view),
                 self.out.as_entire_binding(),
@@ -350,21 +391,21 @@ impl GpuShafts {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
                 pass.set_bind_group(0, &self.group, &[]);
                 if p.lights > 0 {
-                    pass.set_pipeline(&self.shadow);
+                    pass.set_pipeline(&self.pipelines.shadow);
                     let groups = p.shadow_size.div_ceil(8);
                     pass.dispatch_workgroups(groups, groups, p.lights);
                 }
-                pass.set_pipeline(&self.prepare);
+                pass.set_pipeline(&self.pipelines.prepare);
                 pass.dispatch_workgroups(1, 1, 1);
-                pass.set_pipeline(&self.attenuation);
+                pass.set_pipeline(&self.pipelines.attenuation);
                 pass.set_bind_group(0, &self.attenuation_group, &[]);
                 let groups = p.attenuation_size.div_ceil(16);
                 pass.dispatch_workgroups(groups, groups, 1);
                 pass.set_bind_group(0, &self.group, &[]);
-                pass.set_pipeline(&self.surface);
+                pass.set_pipeline(&self.pipelines.surface);
                 pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
                 if method == ShaftsMethod::Compute {
-                    pass.set_pipeline(&self.compute);
+                    pass.set_pipeline(&self.pipelines.compute);
                     pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
                 }
             }
@@ -383,13 +424,13 @@ impl GpuShafts {
                         })],
                         ..Default::default()
                     });
-                    pass.set_pipeline(&self.planes);
+                    pass.set_pipeline(&self.pipelines.planes);
                     pass.set_bind_group(0, &self.render_group, &[]);
                     let quads = p.lights * p.planes * p.supersampling * p.supersampling;
                     pass.draw(0..6, 0..quads);
                 }
                 let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.composite);
+                pass.set_pipeline(&self.pipelines.composite);
                 pass.set_bind_group(0, &composite_group, &[]);
                 pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
             }

@@ -67,3 +67,31 @@ fn an_image_wider_than_the_device_allows_is_refused_before_allocation() {
         "{err}"
     );
 }
+
+#[test]
+fn a_show_played_on_one_set_of_passes_matches_the_cpu_frame_by_frame() {
+    // The animation's path: the passes compiled once, each frame's lights uploaded.
+    let Some(gpu) = gpu() else { return };
+    let mut show = scene("show.toml", 1);
+    let mut pipelines = None;
+    for time in [0.0, 4.5] {
+        show.at_time(time);
+        let shafts = match pipelines.take() {
+            None => GpuShafts::new(&gpu, &show).unwrap(),
+            Some(p) => GpuShafts::with_pipelines(&gpu, &show, p).unwrap(),
+        };
+        let out = shafts.render(&gpu, ShaftsMethod::Planes).unwrap().frame;
+        let cpu = SamplePlanes::new(&show).render();
+        assert!(
+            mean_level(&out, show.display.exposure) > 10.0,
+            "{time} s: dark"
+        );
+        assert_close(
+            &out,
+            &cpu,
+            show.display.exposure,
+            &format!("show at {time} s"),
+        );
+        pipelines = Some(shafts.pipelines());
+    }
+}

@@ -9,7 +9,7 @@ use atmo::files::check_folder;
 use atmo::image::{Frame, ImageKind};
 use atmo::reference::shafts::RayMarcher;
 use atmo::shafts::{SamplePlanes, Scene};
-use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};
+use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPipelines};
 use clap::{Args, ValueEnum};
 
 use crate::args::ToneMapArg;
@@ -208,7 +208,8 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
 }
 
 /// `--animate`: the show from 0 to its end at `args.fps`, each frame's moving heads
-/// posed at its time; on the CPU a light's shadow map is rebuilt only when it moved.
+/// posed at its time; on the CPU a light's shadow map is rebuilt only when it moved, on
+/// the GPU the passes are compiled once for all frames.
 fn animate(
     args: &ShaftsArgs,
     mut scene: Scene,
@@ -229,6 +230,10 @@ fn animate(
     let camera = &scene.camera;
     let size = (camera.width, camera.height);
     let mut maps = atmo::shafts::planes::ShadowMaps::default();
+    // On the GPU the passes are compiled once; each frame uploads its lights.
+    let pipelines = gpu
+        .map(|gpu| ShaftsPipelines::new(gpu).map_err(gpu_error))
+        .transpose()?;
     let (mut rebuilt, start) = (0, Instant::now());
     let apng = crate::output::write_animation(
         &args.output,
@@ -238,9 +243,10 @@ fn animate(
         display,
         |k, frame| {
             scene.at_time(k as f32 / args.fps as f32);
-            *frame = match gpu {
-                Some(gpu) => {
-                    let shafts = GpuShafts::new(gpu, &scene).map_err(gpu_error)?;
+            *frame = match gpu.zip(pipelines.as_ref()) {
+                Some((gpu, pipelines)) => {
+                    let shafts = GpuShafts::with_pipelines(gpu, &scene, pipelines.clone())
+                        .map_err(gpu_error)?;
                     shafts
                         .render(gpu, args.gpu_method.into())
                         .map_err(gpu_error)?
