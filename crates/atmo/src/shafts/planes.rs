@@ -7,8 +7,11 @@
 //! pixels at a time, in vector loops), and skips only what cannot contribute:
 //! sub-samples where `I_l = 0` (outside the light's field cone, found per ray by
 //! [`Spotlight::cone_interval`]), beyond the surface the ray meets (the GPU's depth
-//! test), outside the haze, and planes whose whole interval is such. The result is the
-//! same sum; the work follows the lit part of each ray.
+//! test), outside the haze, and planes whose whole interval is such; and the lookups
+//! whose answer is known beforehand: a min-max chain over each shadow map tells a plane's
+//! slice of sixteen rays wholly lit or wholly dark, and the beam's core has profile 1
+//! (see `SamplePlanes::scattered`). The result is the same sum, to the bit; the work
+//! follows the lit part of each ray.
 //!
 //! For light `l`, with planes at camera depths `z_i = z_near + (i + 1/2) dz`
 //! (`i < n`) and sub-planes at `z_ij = z_near + (i + (j + 1/2)/m) dz` (`j < m`), a
