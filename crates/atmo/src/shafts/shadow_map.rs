@@ -1,8 +1,10 @@
 //! The shadow map of a spotlight (shafts 4.1): for each texel of the light's `(u, v)`
 //! square, the light-space depth `z` of the nearest surface. A point is lit when it is
 //! nearer than that: `H` of shafts (2) on the sample and sub-sample planes, and the
-//! shadows on surfaces. The map is made by casting one ray through each texel centre,
-//! which is what a rasteriser's depth buffer holds at that texel.
+//! shadows on surfaces. The map holds what one ray through each texel centre meets,
+//! which is what a rasteriser's depth buffer holds at that texel (meshes are drawn
+//! triangle by triangle over their footprints, the rest ray cast). A min-max chain over
+//! it answers for a whole box of points at once ([`ShadowMap::region`]).
 
 use glam::Vec3;
 use rayon::prelude::*;
