@@ -289,17 +289,12 @@ impl<'a> SamplePlanes<'a> {
     /// exactly those values, so the sum is the same to the bit.
     fn scattered(&self, light: &Spotlight, planes: &LightPlanes, lanes: &Lanes) -> [Vec3; LANES] {
         let mut sum = [Vec3::ZERO; LANES];
-        let (first, last) = lanes.k_range();
-        if first >= last {
-            return sum;
-        }
         let m = self.scene.planes.sub_planes as usize;
         let shadow = &planes.shadow;
         // J_i per lane: the profile alone (in `x`), or with the gobo's colour.
         let mut j_sums = [Vec3::ZERO; LANES];
         let turn = light.gobo.as_ref().map_or((0.0, 1.0), Gobo::turn);
-        for plane in first / m..last.div_ceil(m) {
-            let slice = (plane * m).max(first)..((plane + 1) * m).min(last);
+        for (plane, slice) in lanes.slices(m) {
             let lookups = Lookups::of_slice(light, shadow, lanes, slice.clone());
             if lookups == Lookups::None {
                 continue;
@@ -522,6 +517,18 @@ impl Lanes {
         ]
     }
 
+    /// The planes whose slices hold sub-samples some lane needs, each with those of its
+    /// sub-samples (`m` a plane) from the smallest first to the largest last.
+    fn slices(&self, m: usize) -> impl Iterator<Item = (usize, std::ops::Range<usize>)> {
+        let (first, last) = self.k_range();
+        let planes = if first < last {
+            first / m..last.div_ceil(m)
+        } else {
+            0..0
+        };
+        planes.map(move |plane| (plane, (plane * m).max(first)..((plane + 1) * m).min(last)))
+    }
+
     /// The sub-samples any lane needs: from the smallest first to the largest last.
     fn k_range(&self) -> (usize, usize) {
         let mut range = (usize::MAX, 0);
@@ -711,9 +718,7 @@ mod tests {
                     }
                     for (light, planes) in scene.lights.iter().zip(&method.lights) {
                         let lanes = Lanes::new(&method, light, planes, &rays, &offsets, &ends);
-                        let (first, last) = lanes.k_range();
-                        for plane in first / m..last.div_ceil(m).max(first / m) {
-                            let slice = (plane * m).max(first)..((plane + 1) * m).min(last);
+                        for (_, slice) in lanes.slices(m) {
                             let lookups =
                                 Lookups::of_slice(light, &planes.shadow, &lanes, slice.clone());
                             seen[lookups as usize] += 1;

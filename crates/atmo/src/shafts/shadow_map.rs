@@ -9,7 +9,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::objects::{nearest_hit, Object, Objects};
+use super::objects::{nearest_hit, Objects};
 use super::spotlight::Spotlight;
 use crate::geometry::{triangle_hit, Ray, Shape};
 
@@ -51,19 +51,17 @@ impl ShadowMap {
     /// box. Every other shape is ray cast texel by texel.
     pub fn new(light: &Spotlight, objects: &Objects, size: usize) -> ShadowMap {
         let mut depth = vec![f32::INFINITY; size * size];
-        let (meshes, others): (Vec<&Object>, Vec<&Object>) = objects
-            .in_cone(light)
-            .into_iter()
-            .partition(|o| matches!(o.shape, Shape::Mesh(_)));
-        let triangles: Vec<_> = meshes
-            .iter()
-            .filter_map(|o| match &o.shape {
-                Shape::Mesh(mesh) => Some(mesh.triangles()),
-                _ => None,
-            })
-            .flatten()
-            .filter_map(|tri| Some((tri, footprint(light, tri, size)?)))
-            .collect();
+        let (mut triangles, mut others) = (Vec::new(), Vec::new());
+        for object in objects.in_cone(light) {
+            match &object.shape {
+                Shape::Mesh(mesh) => triangles.extend(
+                    mesh.triangles()
+                        .iter()
+                        .filter_map(|tri| Some((tri, footprint(light, tri, size)?))),
+                ),
+                _ => others.push(object),
+            }
+        }
         depth
             .par_chunks_mut(size * BAND)
             .enumerate()
@@ -116,14 +114,7 @@ impl ShadowMap {
     /// The texel that [`ShadowMap::lit_at`] reads for `(u, v)`, as column and row.
     #[inline(always)]
     fn texel(&self, u: f32, v: f32) -> (i32, i32) {
-        let half = 0.5 * self.size as f32;
-        let last = (self.size - 1) as i32;
-        // Through i32: a float to usize conversion costs several instructions more, and
-        // this is the innermost loop of the plane method.
-        (
-            ((half + u * half) as i32).clamp(0, last),
-            ((half - v * half) as i32).clamp(0, last),
-        )
+        texel_of(u, v, self.size)
     }
 
     /// `H` at every point whose projection and light-space depth `(u, v, z)` (as
@@ -270,12 +261,10 @@ fn footprint(light: &Spotlight, tri: &[Vec3; 3], size: usize) -> Option<[usize; 
     if corners.iter().any(|c| c.z <= 1e-6) {
         return Some([0, last as usize, 0, last as usize]);
     }
-    let half = 0.5 * size as f32;
-    let scale = half / light.tan_field();
+    let scale = 1.0 / light.tan_field();
     let (mut lo, mut hi) = ([i32::MAX; 2], [i32::MIN; 2]);
     for c in corners {
-        let (x, y) = (half + c.x / c.z * scale, half - c.y / c.z * scale);
-        let (i, j) = (x.floor() as i32, y.floor() as i32);
+        let (i, j) = texel_of(c.x / c.z * scale, c.y / c.z * scale, size);
         (lo, hi) = ([lo[0].min(i), lo[1].min(j)], [hi[0].max(i), hi[1].max(j)]);
     }
     let clamp = |k: i32| k.clamp(0, last) as usize;
@@ -285,6 +274,19 @@ fn footprint(light: &Spotlight, tri: &[Vec3; 3], size: usize) -> Option<[usize; 
         clamp(lo[1] - 1),
         clamp(hi[1] + 1),
     ])
+}
+
+/// The texel of a `size`-texel map under `(u, v)` (column, row), clamped to the map.
+#[inline(always)]
+fn texel_of(u: f32, v: f32, size: usize) -> (i32, i32) {
+    let half = 0.5 * size as f32;
+    let last = size as i32 - 1;
+    // Through i32: a float to usize conversion costs several instructions more, and
+    // this is the innermost loop of the plane method.
+    (
+        ((half + u * half) as i32).clamp(0, last),
+        ((half - v * half) as i32).clamp(0, last),
+    )
 }
 
 /// The min-max chain of a `size`-texel depth map: level 0 holds `[least, greatest]`
@@ -347,6 +349,7 @@ fn touches_disc(u: f32, v: f32, size: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shafts::objects::Object;
     use crate::shafts::spotlight::{light_frame, Falloff, Profile};
 
     /// The paper's Fig. 6: a lamp up and to the side, a sphere on the floor.
