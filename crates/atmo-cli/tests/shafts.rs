@@ -118,6 +118,24 @@ fn bad_shafts_input_exits_2_and_writes_nothing() {
         assert!(stderr.contains(wanted), "{name}: {stderr}");
         assert!(!out.exists(), "{name}");
     }
+    // Edits by --set are validated as the file is.
+    let fig6 = scene("spotlight-sphere.toml");
+    for (edit, wanted) in [
+        (
+            "spotlight[3].dimmer=1",
+            "has 1 [[spotlight]], not one at index 3",
+        ),
+        ("spotlight[0].dimmer=2", "spotlight[0].dimmer"),
+        ("camera.lens=7", "lens"),
+        ("dimmer", "give KEY=VALUE"),
+    ] {
+        let args = [fig6.as_str(), "--set", edit];
+        let o = atmo(&[&["shafts"][..], &args, &["-o", out.to_str().unwrap()]].concat());
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{edit}: {stderr}");
+        assert!(stderr.contains(wanted), "{edit}: {stderr}");
+        assert!(!out.exists(), "{edit}");
+    }
     // An output over the scene's own gobo is refused before anything is written.
     let scenes = dir.join("scenes");
     std::fs::create_dir_all(scenes.join("gobos")).unwrap();

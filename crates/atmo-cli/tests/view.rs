@@ -31,17 +31,23 @@ fn windowed(args: &[&str]) -> Option<Output> {
     Some(output)
 }
 
-/// Runs the still command a screenshot printed (its last line of stdout), writing to
-/// `still` instead, and returns that command.
-fn run_still(viewer: &Output, still: &Path) -> String {
+/// Runs the still command a screenshot printed (its last line of stdout) through the
+/// shell, writing to `still` instead of the screenshot `shot`, and returns that command.
+fn run_still(viewer: &Output, command_name: &str, shot: &Path, still: &Path) -> String {
     let stdout = String::from_utf8_lossy(&viewer.stdout);
     let command = stdout.lines().last().expect("a still command").to_string();
-    let mut words: Vec<&str> = command.split_whitespace().collect();
-    assert_eq!(words[..2], ["atmo", "sky"], "{command}");
-    let o = words.iter().position(|w| *w == "-o").expect("-o");
-    let still = still.to_str().unwrap();
-    words[o + 1] = still;
-    let out = atmo(&words[1..]);
+    let rest = command
+        .strip_prefix(&format!("atmo {command_name} "))
+        .unwrap_or_else(|| panic!("not atmo {command_name}: {command}"));
+    let (shot, still) = (shot.to_str().unwrap(), still.to_str().unwrap());
+    assert!(rest.ends_with(&format!(" -o {shot}")), "{command}");
+    let rest = format!("{} -o {still}", &rest[..rest.len() - shot.len() - 4]);
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(format!("\"$0\" {command_name} {rest}"))
+        .arg(env!("CARGO_BIN_EXE_atmo"))
+        .output()
+        .expect("sh runs");
     assert!(
         out.status.success(),
         "{command}: {}",
@@ -50,43 +56,68 @@ fn run_still(viewer: &Output, still: &Path) -> String {
     command
 }
 
-/// Level errors (RMS, max) of two EXR files after the sky's display.
-fn levels(a: &Path, b: &Path) -> (f64, f64) {
+/// Level errors (RMS, max) of two EXR files after `display`.
+fn levels(a: &Path, b: &Path, display: Display) -> (f64, f64) {
     let (a, b) = (Frame::read_exr(a).unwrap(), Frame::read_exr(b).unwrap());
-    let display = Display {
-        exposure: 0.15,
-        tone: ToneMap::Exponential,
-    };
     let e = a.level_errors(&b, display).unwrap();
     (e.rms, e.max)
 }
 
-/// The viewer with `args` and `script`, then its still; returns the still command.
-fn shot_and_still(dir: &Path, name: &str, args: &[&str], script: &str) -> Option<String> {
+/// The sky's display.
+const SKY: Display = Display {
+    exposure: 0.15,
+    tone: ToneMap::Exponential,
+};
+
+/// `atmo view MODE...` (`args` from the mode on) for 5 frames at 96 x 64 with
+/// `script`, the last frame saved as `name`.exr; `None` where there is no Xvfb.
+fn viewer_run(dir: &Path, name: &str, args: &[&str], script: &str) -> Option<Output> {
     let script_path = dir.join(format!("{name}.txt"));
     std::fs::write(&script_path, script).unwrap();
     let shot = dir.join(format!("{name}.exr"));
-    let mut all = vec![
-        "view", "sky", "--width", "96", "--height", "64", "--frames", "4",
-    ];
+    let mut all = vec!["view"];
+    all.extend(args);
+    all.extend(["--width", "96", "--height", "64", "--frames", "5"]);
     all.extend(["--screenshot", shot.to_str().unwrap()]);
     all.extend(["--script", script_path.to_str().unwrap()]);
-    all.extend(args);
     let o = windowed(&all)?;
     assert!(
         o.status.success(),
         "{name}: {}",
         String::from_utf8_lossy(&o.stderr)
     );
-    let still = dir.join(format!("{name}-still.exr"));
-    let command = run_still(&o, &still);
-    let (rms, max) = levels(&shot, &still);
+    Some(o)
+}
+
+/// The screenshot of `name` against the picture of the still command (`atmo
+/// COMMAND_NAME ...`) the viewer printed, after `display`; returns that command.
+fn matches_its_still(
+    dir: &Path,
+    name: &str,
+    o: &Output,
+    command_name: &str,
+    display: Display,
+) -> String {
+    let (shot, still) = (
+        dir.join(format!("{name}.exr")),
+        dir.join(format!("{name}-still.exr")),
+    );
+    let command = run_still(o, command_name, &shot, &still);
+    let (rms, max) = levels(&shot, &still, display);
     eprintln!("{name}: window vs still RMS {rms:.3}, max {max:.3} levels");
     assert!(
         rms <= 0.5,
         "{name}: window vs still RMS {rms} levels ({command})"
     );
-    Some(command)
+    command
+}
+
+/// The sky viewer with `args` and `script`, then its still; returns the still command.
+fn shot_and_still(dir: &Path, name: &str, args: &[&str], script: &str) -> Option<String> {
+    let mut all = vec!["sky"];
+    all.extend(args);
+    let o = viewer_run(dir, name, &all, script)?;
+    Some(matches_its_still(dir, name, &o, "sky", SKY))
 }
 
 #[test]
@@ -200,5 +231,112 @@ fn bad_input_before_the_window_exits_2_with_a_message() {
         assert!(stderr.contains("no-such-gpu"), "{stderr}");
     }
     assert!(!shot.exists(), "a failed run wrote {}", shot.display());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The repository's scenes folder.
+fn scenes() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
+}
+
+/// `atmo view stage SCENE` with 128^2 shadow maps (see [`viewer_run`]).
+fn stage_run(dir: &Path, name: &str, scene: &Path, args: &[&str], script: &str) -> Option<Output> {
+    let mut all = vec![
+        "stage",
+        scene.to_str().unwrap(),
+        "--set",
+        "render.shadow_map=128",
+    ];
+    all.extend(args);
+    viewer_run(dir, name, &all, script)
+}
+
+#[test]
+fn scripted_stage_windows_give_the_pictures_of_their_still_commands() {
+    let dir = scratch("view-stage");
+    let mut backends = vec!["cpu"];
+    if has_gpu() {
+        backends.push("gpu");
+    }
+    // The camera orbited, a gel changed, a light aimed by the mouse, the exposure.
+    let script = "1 drag 40 -10\n2 set spotlight[2].color [1, 0.2, 0.1]\n2 aim 1 40 52\n\
+                  3 set display.exposure 1.5\n";
+    let display = Display {
+        exposure: 1.5,
+        tone: ToneMap::Exponential,
+    };
+    for backend in backends {
+        let name = format!("stage-{backend}");
+        let scene = scenes().join("stage.toml");
+        let Some(o) = stage_run(&dir, &name, &scene, &["--backend", backend], script) else {
+            return;
+        };
+        let still = matches_its_still(&dir, &name, &o, "shafts", display);
+        for part in [
+            "--set camera.position=[",
+            "--set 'spotlight[2].color=[1, 0.2, 0.1]'",
+            "--set spotlight[1].aim=[",
+            "--set display.exposure=1.5",
+            "--set camera.width=96",
+        ] {
+            assert!(still.contains(part), "{name}: {part} missing from {still}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_refused_stage_edit_keeps_the_last_good_scene_and_save_writes_the_file() {
+    let dir = scratch("view-stage-save");
+    let scene = dir.join("lamp.toml");
+    let text = std::fs::read_to_string(scenes().join("spotlight-sphere.toml")).unwrap();
+    std::fs::write(&scene, &text).unwrap();
+    let script = "1 set spotlight[0].intensity -5\n2 set spotlight[0].intensity 900\n3 key s\n";
+    let Some(o) = stage_run(&dir, "save", &scene, &["--backend", "cpu"], script) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("spotlight[0].intensity"), "{stderr}");
+    // Saved: the new intensity, and the file's comments and the window's other edit.
+    let saved = std::fs::read_to_string(&scene).unwrap();
+    assert!(saved.contains("intensity = 900"), "{saved}");
+    let comments = |t: &str| t.lines().filter(|l| l.contains('#')).count();
+    assert_eq!(comments(&saved), comments(&text));
+    assert!(saved.contains("shadow_map = 128"), "{saved}");
+    // The still command is the saved file at the window's size, nothing more.
+    let display = atmo::shafts::Scene::from_file(&scene).unwrap().display;
+    let still = matches_its_still(&dir, "save", &o, "shafts", display);
+    assert!(!still.contains("intensity"), "{still}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_stage_input_before_the_window_exits_2_naming_it() {
+    let dir = scratch("view-stage-bad");
+    let stage = scenes().join("stage.toml");
+    let stage = stage.to_str().unwrap();
+    let shot = dir.join("x.png");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["no-such-scene.toml"], "no-such-scene.toml"),
+        (
+            vec![stage, "--set", "spotlight[9].dimmer=1"],
+            "not one at index 9",
+        ),
+        (
+            vec![stage, "--set", "haze.extinction=-1"],
+            "haze.extinction",
+        ),
+        (vec![stage, "--time", "-1"], "time"),
+        (vec![stage, "--width", "0"], "--width"),
+    ];
+    for (args, says) in cases {
+        let mut all = vec!["view", "stage"];
+        all.extend(&args);
+        all.extend(["--frames", "1", "--screenshot", shot.to_str().unwrap()]);
+        let o = atmo(&all);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -18,22 +18,14 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use crate::input::{Input, Key};
-use crate::sky::{unknown_parameter, SkyMode, SkyParams};
-use crate::{Backend, Options, Picture};
+use crate::{Backend, Mode, Options, Picture};
 
 /// Opens the window and runs until it is closed or [`Options::frames`] are drawn. Bad
-/// input found before the window is up (a script naming a parameter the sky lacks,
+/// input found before the window is up (a script naming a parameter the mode lacks,
 /// no display, no adapter) is an `atmo::Error`; once it is up, a refused edit is shown
 /// in the window and the last good state stays.
-pub fn run(options: Options, mode: SkyMode) -> Result<Timings> {
-    let names: Vec<&str> = SkyParams::default()
-        .fields()
-        .iter()
-        .map(|(n, _)| *n)
-        .collect();
-    if let Some(name) = options.script.parameters().find(|n| !names.contains(n)) {
-        return Err(unknown_parameter(name).into());
-    }
+pub fn run(options: Options, mode: Box<dyn Mode>) -> Result<Timings> {
+    mode.check_script(&options.script)?;
     if let Some(path) = &options.screenshot {
         atmo::image::ImageKind::of(path)?;
     }
@@ -69,7 +61,7 @@ pub struct Timings {
 struct App {
     options: Options,
     /// The mode, until the window is up.
-    mode: Option<SkyMode>,
+    mode: Option<Box<dyn Mode>>,
     window: Option<Running>,
     /// What ended the run, reported once the loop returns.
     error: Option<anyhow::Error>,
@@ -82,7 +74,7 @@ struct Running {
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
     gpu: Gpu,
-    mode: SkyMode,
+    mode: Box<dyn Mode>,
     picture: Picture,
     display: DisplayPass,
     egui: egui_winit::State,
@@ -91,6 +83,8 @@ struct Running {
     pending: Vec<Input>,
     /// Where the left button went down over the picture, while it is down.
     drag_from: Option<(f64, f64)>,
+    /// The light the right button aims, while it is down.
+    aiming: Option<usize>,
     cursor: (f64, f64),
     frame: u64,
     show_panel: bool,
@@ -164,8 +158,27 @@ impl ApplicationHandler for App {
                     && !r.egui.egui_ctx().egui_wants_pointer_input())
                 .then_some(r.cursor);
             }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Right,
+                ..
+            } => {
+                let free = !r.egui.egui_ctx().egui_wants_pointer_input();
+                r.aiming = r
+                    .mode
+                    .aimed_light()
+                    .filter(|_| free && state == ElementState::Pressed);
+                if let Some(light) = r.aiming {
+                    r.pending
+                        .push(Input::Aim(light, r.cursor.0 as f32, r.cursor.1 as f32));
+                }
+            }
             WindowEvent::CursorMoved { position, .. } => {
                 r.cursor = (position.x, position.y);
+                if let Some(light) = r.aiming {
+                    r.pending
+                        .push(Input::Aim(light, position.x as f32, position.y as f32));
+                }
                 if let Some((x, y)) = r.drag_from {
                     r.pending.push(Input::Drag(
                         (position.x - x) as f32,
@@ -197,6 +210,7 @@ fn key_of(code: KeyCode) -> Option<Key> {
         KeyCode::ArrowUp => Key::SunUp,
         KeyCode::ArrowDown => Key::SunDown,
         KeyCode::Space => Key::Animate,
+        KeyCode::KeyS => Key::Save,
         KeyCode::KeyP => Key::Screenshot,
         KeyCode::Tab => Key::Panel,
         _ => return None,
@@ -215,7 +229,11 @@ fn opening(e: GpuError) -> anyhow::Error {
 }
 
 /// The window, its surface and device, the mode and the panel.
-fn open(event_loop: &ActiveEventLoop, options: &Options, mut mode: SkyMode) -> Result<Running> {
+fn open(
+    event_loop: &ActiveEventLoop,
+    options: &Options,
+    mut mode: Box<dyn Mode>,
+) -> Result<Running> {
     let (width, height) = options.size;
     let attributes = Window::default_attributes()
         .with_title("atmo view")
@@ -240,7 +258,7 @@ fn open(event_loop: &ActiveEventLoop, options: &Options, mut mode: SkyMode) -> R
         Backend::Auto => !gpu.is_software(),
     };
     eprintln!(
-        "atmo: the window on {}; the sky drawn on the {}",
+        "atmo: the window on {}; the picture drawn on the {}",
         gpu.describe(),
         if on_gpu { "GPU" } else { "CPU" }
     );
@@ -278,6 +296,7 @@ fn open(event_loop: &ActiveEventLoop, options: &Options, mut mode: SkyMode) -> R
         egui_renderer,
         pending: Vec::new(),
         drag_from: None,
+        aiming: None,
         cursor: (0.0, 0.0),
         frame: 0,
         show_panel: true,
@@ -314,7 +333,9 @@ impl Running {
         for input in inputs {
             self.apply(&input);
         }
-        self.mode.update();
+        if let Err(e) = self.mode.update() {
+            self.refuse(e);
+        }
         let mut encoder = self
             .gpu
             .device
@@ -369,8 +390,8 @@ impl Running {
     /// that command on stdout.
     fn screenshot(&mut self, path: &Path) -> Result<()> {
         let frame = self.picture.read(&self.gpu)?;
-        let p = &self.mode.params;
-        frame.write(path, p.exposure, p.tone)?;
+        let display = self.mode.display();
+        frame.write(path, display.exposure, display.tone)?;
         let still = self.mode.still_command(path, self.picture.size);
         println!("{still}");
         self.still = Some(still);
@@ -395,11 +416,7 @@ impl Running {
             }
         };
         let target = texture.texture.create_view(&Default::default());
-        let p = &self.mode.params;
-        self.display.display = atmo::image::Display {
-            exposure: p.exposure,
-            tone: p.tone,
-        };
+        self.display.display = self.mode.display();
         self.display.prepare(&self.gpu, &self.picture.view);
         let raw = self.egui.take_egui_input(&self.window);
         let context = self.egui.egui_ctx().clone();
@@ -451,9 +468,9 @@ impl Running {
     }
 
     /// The panel: the mode's parameters, the times, the last message and still command.
-    fn panel(&self, ctx: &egui::Context) -> Vec<Input> {
+    fn panel(&mut self, ctx: &egui::Context) -> Vec<Input> {
         let mut edits = Vec::new();
-        egui::Window::new("atmo sky")
+        egui::Window::new(self.mode.title())
             .default_width(300.0)
             .show(ctx, |ui| {
                 edits = self.mode.panel(ui);
@@ -473,7 +490,7 @@ impl Running {
                 if let Some(message) = &self.message {
                     ui.colored_label(egui::Color32::from_rgb(255, 120, 100), message);
                 }
-                ui.label("drag: look; arrows: sun; R / F: climb; space: time of day; Tab: panel");
+                ui.label(format!("{}; P: screenshot; Tab: panel", self.mode.help()));
             });
         edits
     }

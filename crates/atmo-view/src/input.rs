@@ -13,30 +13,39 @@ pub enum Input {
     Key(Key),
     /// The mouse dragged over the picture by (x right, y down) pixels.
     Drag(f32, f32),
+    /// Light `.0` aimed at what the picture shows at pixel (x right, y down) from its
+    /// top-left corner (the stage; a right-button drag).
+    Aim(usize, f32, f32),
     /// A panel edit: the parameter that the still command's flag `--NAME` sets, to the
-    /// value as the flag would read it (`set sun-elevation 12.5`).
+    /// value as the flag would read it (`set sun-elevation 12.5`); on the stage a key of
+    /// the scene file to a TOML value, as `--set` takes it (`set
+    /// spotlight[0].intensity 5000`), or `time`.
     Set(String, String),
 }
 
-/// The keys the viewer answers.
+/// The keys the viewer answers; the stage reads the sky's keys its own way (see each).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Key {
-    /// R: climb one step.
+    /// R: climb one step; on the stage, the camera a step nearer what it looks at.
     Climb,
-    /// F: descend one step.
+    /// F: descend one step; on the stage, a step farther.
     Descend,
     /// `+` (or `=`): double the step.
     Faster,
     /// `-`: halve the step.
     Slower,
-    /// Left and Right arrows: the sun's azimuth by -5 and +5 deg.
+    /// Left and Right arrows: the sun's azimuth by -5 and +5 deg; on the stage, the
+    /// camera orbits by -5 and +5 deg.
     SunLeft,
     SunRight,
-    /// Up and Down arrows: the sun's elevation by +1 and -1 deg.
+    /// Up and Down arrows: the sun's elevation by +1 and -1 deg; on the stage, the
+    /// camera's orbit up and down by 5 deg.
     SunUp,
     SunDown,
-    /// Space: the time-of-day animation on or off.
+    /// Space: the time-of-day animation on or off; on the stage, the show played.
     Animate,
+    /// S: the stage's scene, edited, saved to its file.
+    Save,
     /// P: a screenshot and its still command.
     Screenshot,
     /// Tab: the panel shown or hidden.
@@ -55,6 +64,7 @@ impl Key {
         ("up", Key::SunUp),
         ("down", Key::SunDown),
         ("space", Key::Animate),
+        ("s", Key::Save),
         ("p", Key::Screenshot),
         ("tab", Key::Panel),
     ];
@@ -68,7 +78,8 @@ impl Key {
 }
 
 /// Input events replayed at given frames: one a line, `FRAME key NAME`,
-/// `FRAME drag DX DY` or `FRAME set PARAMETER VALUE`; `#` starts a comment.
+/// `FRAME drag DX DY`, `FRAME aim LIGHT X Y` or `FRAME set PARAMETER VALUE` (the value
+/// the rest of the line); `#` starts a comment.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Script {
     /// (frame, input), in the file's order.
@@ -110,11 +121,20 @@ impl Script {
                     bad(format!("no key '{name}'; keys: {}", names.join(", ")))
                 })?),
                 ["drag", dx, dy] => Input::Drag(number(dx)?, number(dy)?),
-                ["set", name, value] => Input::Set(name.to_string(), value.to_string()),
+                ["aim", light, x, y] => Input::Aim(
+                    light
+                        .parse()
+                        .map_err(|_| bad(format!("'{light}' is not a light's index")))?,
+                    number(x)?,
+                    number(y)?,
+                ),
+                ["set", name, ref value @ ..] if !value.is_empty() => {
+                    Input::Set(name.to_string(), value.join(" "))
+                }
                 _ => {
                     return Err(bad(format!(
-                        "'{line}' is not 'FRAME key NAME', 'FRAME drag DX DY' or \
-                         'FRAME set PARAMETER VALUE'"
+                        "'{line}' is not 'FRAME key NAME', 'FRAME drag DX DY', \
+                         'FRAME aim LIGHT X Y' or 'FRAME set PARAMETER VALUE'"
                     )))
                 }
             };
@@ -148,7 +168,8 @@ mod tests {
     #[test]
     fn a_script_reads_keys_drags_and_edits_by_frame() {
         let script = Script::parse(
-            "# a climb\n0 key r\n0 drag 10 -4.5\n\n3 set sun-elevation 12.5 # dusk\n",
+            "# a climb\n0 key r\n0 drag 10 -4.5\n\n3 set sun-elevation 12.5 # dusk\n\
+             4 aim 2 10.5 20\n4 set camera.position [1, 2, 3]\n",
             "s",
         )
         .unwrap();
@@ -159,7 +180,18 @@ mod tests {
             script.at(3).next(),
             Some(&Input::Set("sun-elevation".into(), "12.5".into()))
         );
-        assert_eq!(script.parameters().collect::<Vec<_>>(), ["sun-elevation"]);
+        let fourth: Vec<&Input> = script.at(4).collect();
+        assert_eq!(
+            fourth,
+            [
+                &Input::Aim(2, 10.5, 20.0),
+                &Input::Set("camera.position".into(), "[1, 2, 3]".into())
+            ]
+        );
+        assert_eq!(
+            script.parameters().collect::<Vec<_>>(),
+            ["sun-elevation", "camera.position"]
+        );
     }
 
     #[test]
@@ -169,6 +201,8 @@ mod tests {
             ("1 key q", "no key 'q'"),
             ("1 drag 1 nan", "not a finite number"),
             ("1 jump", "is not 'FRAME key NAME'"),
+            ("1 set time", "is not 'FRAME key NAME'"),
+            ("1 aim x 1 2", "not a light's index"),
         ] {
             let e = Script::parse(&format!("# ok\n{text}"), "run.txt")
                 .unwrap_err()

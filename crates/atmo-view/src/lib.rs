@@ -1,12 +1,14 @@
-//! atmo's viewer: a window (winit + wgpu) that draws the sky every frame as the sun,
-//! the altitude and the camera change, with a panel (egui) holding every parameter of
-//! the still command `atmo sky`, so that what a user finds in the window is written
-//! back as the still command that reproduces it.
+//! atmo's viewer: a window (winit + wgpu) that draws a [`Mode`] every frame as its
+//! parameters change, with a panel (egui) holding them, so that what a user finds in
+//! the window is written back as the still command that reproduces it. The modes: the
+//! sky ([`sky`], the parameters of `atmo sky`: sun, altitude, camera) and the stage
+//! ([`stage`], a shafts scene file whose lights and camera are edited live, the edits
+//! those of `atmo shafts --set`).
 //!
 //! The picture is drawn into an RGBA f32 texture ([`Picture`]) by the same code as the
-//! stills: on the GPU through `atmo_gpu`'s embedding API (the sky's [`SkyPass`]
-//! recorded into this program's encoder), or on the CPU by `atmo`'s methods and
-//! uploaded; then `atmo_gpu`'s display pass tone-maps it onto the window's surface.
+//! stills: on the GPU through `atmo_gpu` (the sky's [`SkyPass`] recorded into this
+//! program's encoder), or on the CPU by `atmo`'s methods and uploaded; then
+//! `atmo_gpu`'s display pass tone-maps it onto the window's surface.
 //! A screenshot reads the picture back and writes it as the stills do, so a
 //! screenshot and the still command's file can be compared level for level.
 //!
@@ -19,16 +21,52 @@
 mod app;
 pub mod input;
 pub mod sky;
+pub mod stage;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use atmo::image::Frame;
+use atmo::image::{Display, Frame};
 use atmo_gpu::display::{cleared_pass, picture_texture};
 use atmo_gpu::{Gpu, GpuError};
 
 pub use app::{run, Timings};
 pub use input::{Input, Key, Script};
+
+/// What the window shows, and how a user changes it.
+pub trait Mode {
+    /// The panel's title, the still command's name (`atmo sky`).
+    fn title(&self) -> &'static str;
+    /// Refuses, before the window opens, a script's edit the mode can never take.
+    fn check_script(&self, script: &Script) -> atmo::Result<()>;
+    /// Draws with the GPU's method if `on_gpu`, else the CPU's.
+    fn draw_on_gpu(&mut self, on_gpu: bool);
+    /// Applies `input`; an input that would make the parameters invalid is refused
+    /// (the error says why) and the last good ones stay.
+    fn apply(&mut self, input: &Input) -> Result<()>;
+    /// Advances a frame: an animation, a file changed on disk. An error is shown and
+    /// the last good state stays.
+    fn update(&mut self) -> Result<()>;
+    /// Draws the picture into `picture`, on the mode's backend.
+    fn draw(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        picture: &Picture,
+    ) -> Result<()>;
+    /// How the picture is shown (and written as PNG).
+    fn display(&self) -> Display;
+    /// The still command that draws this picture to `output` at `size`.
+    fn still_command(&self, output: &Path, size: (u32, u32)) -> String;
+    /// The panel's widgets; edits come back as inputs, applied like any other.
+    fn panel(&mut self, ui: &mut egui::Ui) -> Vec<Input>;
+    /// The keys and mouse, in a line.
+    fn help(&self) -> &'static str;
+    /// The light a right-button drag aims ([`Input::Aim`]), if the mode has lights.
+    fn aimed_light(&self) -> Option<usize> {
+        None
+    }
+}
 
 /// Where the method runs; the window itself always shows through the GPU's surface.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use anyhow::Result;
-use atmo::image::{Frame, ToneMap};
+use atmo::image::{Display, Frame, ToneMap};
 use atmo::sky::table::SkylightTable;
 use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
@@ -15,8 +15,8 @@ use atmo_gpu::sky::{GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget};
 use atmo_gpu::Gpu;
 use glam::Vec3;
 
-use crate::input::{Input, Key};
-use crate::Picture;
+use crate::input::{Input, Key, Script};
+use crate::{Mode, Picture};
 
 /// What `atmo sky` draws from.
 pub enum SkySource {
@@ -245,14 +245,6 @@ impl SkyMode {
         Ok(mode)
     }
 
-    /// Draws with the GPU's method if `on_gpu`, else the CPU's.
-    pub fn draw_on_gpu(&mut self, on_gpu: bool) {
-        if on_gpu != self.on_gpu {
-            self.on_gpu = on_gpu;
-            self.drawer = None;
-        }
-    }
-
     /// The sun's elevation range, degrees: the table's, or the whole sky's.
     pub fn sun_range(&self) -> (f64, f64) {
         match &self.source {
@@ -293,9 +285,56 @@ impl SkyMode {
         Ok(())
     }
 
-    /// Applies `input`; parameters it would make invalid are refused (the error says
-    /// why) and the last good ones stay.
-    pub fn apply(&mut self, input: &Input) -> Result<()> {
+    fn make_drawer(&self, gpu: &Gpu) -> Result<Drawer> {
+        let pass = || SkyPass::new(gpu, SkyTarget::HEADLESS);
+        Ok(match (&self.source, self.on_gpu) {
+            (SkySource::Table(t), false) => Drawer::CpuTable(t.clone(), Frame::new(1, 1)),
+            (SkySource::Table(t), true) => {
+                Drawer::GpuTable(GpuSkyTable::new(gpu, t.clone())?, pass()?)
+            }
+            (
+                SkySource::Shells {
+                    atmosphere,
+                    settings,
+                },
+                on_gpu,
+            ) => {
+                let model = SkyModel::new(atmosphere, settings, self.params.altitude_m)?;
+                if on_gpu {
+                    Drawer::GpuShells(GpuSkyModel::new(gpu, model)?, pass()?)
+                } else {
+                    Drawer::CpuShells(model, Frame::new(1, 1))
+                }
+            }
+        })
+    }
+}
+
+impl Mode for SkyMode {
+    fn title(&self) -> &'static str {
+        "atmo sky"
+    }
+
+    fn check_script(&self, script: &Script) -> atmo::Result<()> {
+        let names: Vec<&str> = SkyParams::default()
+            .fields()
+            .iter()
+            .map(|(n, _)| *n)
+            .collect();
+        match script.parameters().find(|n| !names.contains(n)) {
+            Some(name) => Err(unknown_parameter(name)),
+            None => Ok(()),
+        }
+    }
+
+    fn draw_on_gpu(&mut self, on_gpu: bool) {
+        if on_gpu != self.on_gpu {
+            self.on_gpu = on_gpu;
+            self.drawer = None;
+        }
+    }
+
+    fn apply(&mut self, input: &Input) -> Result<()> {
         let mut p = self.params.clone();
         match input {
             Input::Key(key) => match key {
@@ -308,14 +347,14 @@ impl SkyMode {
                 Key::SunUp => p.sun_elevation_deg += 1.0,
                 Key::SunDown => p.sun_elevation_deg -= 1.0,
                 Key::Animate => self.animate = !self.animate,
-                // The window's own keys.
-                Key::Screenshot | Key::Panel => {}
+                // The window's own keys, and the stage's.
+                Key::Screenshot | Key::Panel | Key::Save => {}
             },
             Input::Drag(dx, dy) if !p.fisheye => {
                 p.yaw_deg = (p.yaw_deg + 0.2 * *dx as f64).rem_euclid(360.0);
                 p.pitch_deg = (p.pitch_deg - 0.2 * *dy as f64).clamp(-89.0, 89.0);
             }
-            Input::Drag(..) => {}
+            Input::Drag(..) | Input::Aim(..) => {}
             Input::Set(name, value) => p.set(name, value)?,
         }
         if p != self.params {
@@ -327,17 +366,18 @@ impl SkyMode {
 
     /// Advances the animation by a frame: the sun sets to the lowest elevation drawn,
     /// then rises again at 60 deg (or the highest).
-    pub fn update(&mut self) {
+    fn update(&mut self) -> Result<()> {
         if self.animate {
             let (low, high) = self.sun_range();
             let next = self.params.sun_elevation_deg - SUNSET_STEP_DEG;
             self.params.sun_elevation_deg = if next < low { high.min(60.0) } else { next };
         }
+        Ok(())
     }
 
     /// Draws the picture into `picture` (cleared), on the mode's backend. The model of
     /// the shell method is rebuilt first where the altitude changed.
-    pub fn draw(
+    fn draw(
         &mut self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
@@ -378,32 +418,7 @@ impl SkyMode {
         Ok(())
     }
 
-    fn make_drawer(&self, gpu: &Gpu) -> Result<Drawer> {
-        let pass = || SkyPass::new(gpu, SkyTarget::HEADLESS);
-        Ok(match (&self.source, self.on_gpu) {
-            (SkySource::Table(t), false) => Drawer::CpuTable(t.clone(), Frame::new(1, 1)),
-            (SkySource::Table(t), true) => {
-                Drawer::GpuTable(GpuSkyTable::new(gpu, t.clone())?, pass()?)
-            }
-            (
-                SkySource::Shells {
-                    atmosphere,
-                    settings,
-                },
-                on_gpu,
-            ) => {
-                let model = SkyModel::new(atmosphere, settings, self.params.altitude_m)?;
-                if on_gpu {
-                    Drawer::GpuShells(GpuSkyModel::new(gpu, model)?, pass()?)
-                } else {
-                    Drawer::CpuShells(model, Frame::new(1, 1))
-                }
-            }
-        })
-    }
-
-    /// The still command that draws this picture to `output` at `size`.
-    pub fn still_command(&self, output: &std::path::Path, (width, height): (u32, u32)) -> String {
+    fn still_command(&self, output: &std::path::Path, (width, height): (u32, u32)) -> String {
         let backend = if self.on_gpu { "gpu" } else { "cpu" };
         format!(
             "atmo sky {} {} --width {width} --height {height} --backend {backend} -o {}",
@@ -413,8 +428,7 @@ impl SkyMode {
         )
     }
 
-    /// The panel's widgets; edits come back as inputs, applied like any other.
-    pub fn panel(&self, ui: &mut egui::Ui) -> Vec<Input> {
+    fn panel(&mut self, ui: &mut egui::Ui) -> Vec<Input> {
         let mut p = self.params.clone();
         let (sun_low, sun_high) = self.sun_range();
         let (low, high) = self.altitude_range();
@@ -459,6 +473,17 @@ impl SkyMode {
             inputs.push(Input::Key(Key::Animate));
         }
         inputs
+    }
+
+    fn display(&self) -> Display {
+        Display {
+            exposure: self.params.exposure,
+            tone: self.params.tone,
+        }
+    }
+
+    fn help(&self) -> &'static str {
+        "drag: look; arrows: sun; R / F: climb; space: time of day"
     }
 }
 

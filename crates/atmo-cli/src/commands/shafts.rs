@@ -8,6 +8,7 @@ use anyhow::Result;
 use atmo::files::check_folder;
 use atmo::image::{Frame, ImageKind};
 use atmo::reference::shafts::RayMarcher;
+use atmo::shafts::edits::Edit;
 use atmo::shafts::{SamplePlanes, Scene};
 use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPipelines};
 use clap::{Args, ValueEnum};
@@ -19,6 +20,11 @@ use crate::backend::{gpu_error, Backend, BackendArgs};
 pub struct ShaftsArgs {
     /// Scene file (TOML; see docs/shafts.md and scenes/).
     scene: PathBuf,
+    /// Change a key of the scene file before it is read, as KEY=VALUE (repeatable, in
+    /// order): `--set spotlight[0].intensity=5000 --set 'camera.position=[0, 2, 9]'`;
+    /// `KEY=` removes the key. What `atmo view stage` prints for its edits.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    edits: Vec<String>,
     /// Output picture: .png (8-bit sRGB after the scene's exposure and tone map) or .exr
     /// (linear radiance, in cd/m^2 when intensities are in cd); with --animate a folder.
     #[arg(short, long, value_name = "FILE")]
@@ -87,14 +93,19 @@ impl From<GpuMethod> for ShaftsMethod {
     }
 }
 
-/// The scene of `path` with the command line's overrides, validated.
+/// The scene of `path` with the command line's edits and overrides, validated.
 pub fn load_scene(
     path: &std::path::Path,
+    edits: &[String],
     planes: Option<u32>,
     sub_planes: Option<u32>,
     shadow_map: Option<u32>,
 ) -> Result<Scene> {
-    let mut scene = Scene::from_file(path)?;
+    let edits = edits
+        .iter()
+        .map(|e| Edit::parse(e))
+        .collect::<atmo::Result<Vec<_>>>()?;
+    let mut scene = atmo::shafts::edits::load(path, &edits)?;
     scene.planes.planes = planes.unwrap_or(scene.planes.planes);
     scene.planes.sub_planes = sub_planes.unwrap_or(scene.planes.sub_planes);
     scene.planes.shadow_map = shadow_map.unwrap_or(scene.planes.shadow_map);
@@ -107,7 +118,13 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         ImageKind::of(&args.output)?;
     }
     check_folder(&args.output)?;
-    let mut scene = load_scene(&args.scene, args.planes, args.sub_planes, args.shadow_map)?;
+    let mut scene = load_scene(
+        &args.scene,
+        &args.edits,
+        args.planes,
+        args.sub_planes,
+        args.shadow_map,
+    )?;
     if let Some(t) = args.time {
         atmo::error::check_range("--time", t as f64, 0.0, 1e6)?;
         scene.at_time(t);

@@ -4,10 +4,12 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Result;
+use atmo::shafts::edits::Edit;
 use atmo::sky::SkylightTable;
 use atmo::Error;
 use atmo_view::sky::{SkyMode, SkySource};
-use atmo_view::{Options, Script};
+use atmo_view::stage::StageMode;
+use atmo_view::{Mode, Options, Script};
 use clap::{Args, Subcommand};
 
 use crate::args::{AtmosphereArgs, ShellArgs, SkyPictureArgs};
@@ -26,6 +28,35 @@ enum ViewMode {
     /// space runs the time of day, P saves a screenshot and its `atmo sky` command;
     /// every flag of `atmo sky` sets the first picture.
     Sky(ViewSkyArgs),
+    /// A shafts scene, live: drag to orbit, right-drag aims the panel's light, the
+    /// panel edits the camera, haze, display and each light (every edit is one of
+    /// `atmo shafts --set`), space plays the show, S saves the scene file, P saves a
+    /// screenshot and its `atmo shafts` command; the file is read again when it
+    /// changes on disk.
+    Stage(ViewStageArgs),
+}
+
+#[derive(Args)]
+pub struct ViewStageArgs {
+    /// Scene file (TOML; see docs/shafts.md and scenes/).
+    scene: PathBuf,
+    /// Change a key of the scene file first, as KEY=VALUE (repeatable), as `atmo
+    /// shafts --set` does; "save scene" writes these edits too.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    edits: Vec<String>,
+    /// The show's time to start at, s.
+    #[arg(long, default_value_t = 0.0)]
+    time: f32,
+    /// The window's width, pixels (default the scene camera's).
+    #[arg(long)]
+    width: Option<u32>,
+    /// The window's height, pixels (default the scene camera's).
+    #[arg(long)]
+    height: Option<u32>,
+    #[command(flatten)]
+    window: WindowArgs,
+    #[command(flatten)]
+    device: BackendArgs,
 }
 
 #[derive(Args)]
@@ -64,22 +95,74 @@ struct WindowArgs {
     #[arg(long)]
     timings: bool,
     /// Replay inputs, one a line: `FRAME key NAME`, `FRAME drag DX DY` or
-    /// `FRAME set PARAMETER VALUE` (PARAMETER: a flag of atmo sky, without --).
+    /// `FRAME aim LIGHT X Y` or `FRAME set PARAMETER VALUE` (sky: PARAMETER is a flag of
+    /// atmo sky, without --; stage: a key of the scene file as --set takes it, or time).
     #[arg(long, value_name = "FILE")]
     script: Option<PathBuf>,
 }
 
 pub fn run(args: ViewArgs) -> Result<()> {
-    let ViewMode::Sky(args) = args.mode;
     // Everything is checked before the window opens.
-    let params = args.picture.params()?;
-    if args.window.frames == Some(0) {
+    let (mode, size, window, device): (Box<dyn Mode>, _, _, _) = match args.mode {
+        ViewMode::Sky(args) => {
+            let size = (args.picture.width, args.picture.height);
+            (Box::new(sky_mode(&args)?), size, args.window, args.device)
+        }
+        ViewMode::Stage(args) => {
+            let edits = args
+                .edits
+                .iter()
+                .map(|e| Edit::parse(e))
+                .collect::<atmo::Result<Vec<_>>>()?;
+            let mode = StageMode::new(&args.scene, edits, args.time)?;
+            let camera = &mode.scene().camera;
+            let size = (
+                args.width.unwrap_or(camera.width),
+                args.height.unwrap_or(camera.height),
+            );
+            for (field, v) in [("--width", size.0), ("--height", size.1)] {
+                atmo::error::check_range(field, v as f64, 1.0, 16384.0)?;
+            }
+            (Box::new(mode), size, args.window, args.device)
+        }
+    };
+    if window.frames == Some(0) {
         return Err(Error::out_of_range("frames", 0.0, "[1, inf)").into());
     }
-    let script = match &args.window.script {
+    let script = match &window.script {
         Some(path) => Script::read(path)?,
         None => Script::default(),
     };
+    let options = Options {
+        size,
+        frames: window.frames,
+        screenshot: window.screenshot,
+        script,
+        backend: match device.backend {
+            Backend::Auto => atmo_view::Backend::Auto,
+            Backend::Gpu => atmo_view::Backend::Gpu,
+            Backend::Cpu => atmo_view::Backend::Cpu,
+        },
+        adapter: device.adapter,
+    };
+    let timings = atmo_view::run(options, mode)?;
+    if window.timings {
+        let stats = |v: &[f64]| {
+            let at = |q| (!v.is_empty()).then(|| percentile(v.to_vec(), q));
+            serde_json::json!({"median_ms": at(0.5), "p95_ms": at(0.95), "count": v.len()})
+        };
+        let line = serde_json::json!({
+            "frame": stats(&timings.frame_ms),
+            "method": stats(&timings.method_ms),
+        });
+        println!("{line}");
+    }
+    Ok(())
+}
+
+/// The sky mode of `atmo view sky`'s flags.
+fn sky_mode(args: &ViewSkyArgs) -> Result<SkyMode> {
+    let params = args.picture.params()?;
     let (source, flags) = match &args.table {
         Some(path) => (
             SkySource::Table(Arc::new(SkylightTable::read(path)?)),
@@ -99,30 +182,5 @@ pub fn run(args: ViewArgs) -> Result<()> {
             )
         }
     };
-    let mode = SkyMode::new(params, source, flags)?;
-    let options = Options {
-        size: (args.picture.width, args.picture.height),
-        frames: args.window.frames,
-        screenshot: args.window.screenshot,
-        script,
-        backend: match args.device.backend {
-            Backend::Auto => atmo_view::Backend::Auto,
-            Backend::Gpu => atmo_view::Backend::Gpu,
-            Backend::Cpu => atmo_view::Backend::Cpu,
-        },
-        adapter: args.device.adapter,
-    };
-    let timings = atmo_view::run(options, mode)?;
-    if args.window.timings {
-        let stats = |v: &[f64]| {
-            let at = |q| (!v.is_empty()).then(|| percentile(v.to_vec(), q));
-            serde_json::json!({"median_ms": at(0.5), "p95_ms": at(0.95), "count": v.len()})
-        };
-        let line = serde_json::json!({
-            "frame": stats(&timings.frame_ms),
-            "method": stats(&timings.method_ms),
-        });
-        println!("{line}");
-    }
-    Ok(())
+    SkyMode::new(params, source, flags)
 }

@@ -17,6 +17,7 @@
 //! - [`scene`]: the scene file (its camera is a [`crate::view::Camera`]); [`haze`], [`spotlight`] (beam, falloff, gobo
 //!   as the projected light map), [`objects`] (planes, rectangles, spheres, boxes, OBJ
 //!   meshes).
+//! - [`edits`]: changes to a scene file by key (`--set`, the viewer's edits).
 //! - [`photometry`]: measured profiles from IES LM-63 and EULUMDAT files.
 //! - [`gdtf`]: fixtures from GDTF files (read with the `gdtf` feature).
 //! - [`show`]: moving heads (pan, tilt, zoom, iris, colour, gobo wheel) and cues.
@@ -27,6 +28,7 @@
 //! - [`surface`]: the first term of shafts (1), shared by the fast method and the
 //!   reference ([`crate::reference::shafts`]).
 
+pub mod edits;
 pub mod gdtf;
 pub mod haze;
 pub mod objects;

@@ -1,0 +1,706 @@
+//! The stage in the window: a shafts scene file (`atmo shafts`) whose camera orbits and
+//! whose lights are aimed and edited live, drawn by the sample planes on the CPU or on
+//! the GPU.
+//!
+//! Every change is an edit of the scene file by key ([`atmo::shafts::edits`]), the one
+//! `atmo shafts --set` takes, so a screenshot's still command is the file and the
+//! window's edits, and "save scene" writes them into the file with its comments kept.
+//! Only what changed is redone: the picture is drawn again only when the scene
+//! changed, and on the CPU a light's shadow map is rebuilt only when that light moved
+//! or its field changed ([`ShadowMaps`]), so orbiting the camera reuses every map. The
+//! file is watched: when it changes on disk it is read again with the window's edits
+//! on top, and a bad file is shown as an error while the last good scene stays.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Instant, SystemTime};
+
+use anyhow::{Context, Result};
+use atmo::geometry::Ray;
+use atmo::image::{Display, ToneMap};
+use atmo::shafts::edits::{merged, Document, Edit};
+use atmo::shafts::planes::ShadowMaps;
+use atmo::shafts::Scene;
+use atmo::Error;
+use atmo_gpu::display::write_frame;
+use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPipelines};
+use atmo_gpu::Gpu;
+use glam::Vec3;
+
+use crate::input::{Input, Key, Script};
+use crate::{Mode, Picture};
+
+/// Show time a frame advances while the show plays, s (the stills' 24 frames/s).
+const SHOW_STEP_S: f32 = 1.0 / 24.0;
+
+/// How often the scene file is looked at for changes.
+const WATCH_INTERVAL_S: f64 = 0.25;
+
+/// The orbit's limit above and below the point looked at, degrees.
+const ORBIT_PITCH_LIMIT_DEG: f32 = 85.0;
+
+/// The stage mode: the scene file, the window's edits, the scene they give, and what
+/// draws it.
+pub struct StageMode {
+    path: PathBuf,
+    /// The file's text as last read or saved.
+    text: String,
+    /// When the file was last modified and its length, as last seen.
+    stamp: Option<(SystemTime, u64)>,
+    watched: Instant,
+    /// The window's edits since the file was read or saved, one per key.
+    edits: Vec<Edit>,
+    /// The file with the edits: what the panel reads and "save scene" writes.
+    edited: Document,
+    /// The picture's size, pixels, once the window has one: the camera's.
+    size: Option<(u32, u32)>,
+    /// The scene the file, the edits and the size give, posed at `time_s`.
+    scene: Scene,
+    time_s: f32,
+    playing: bool,
+    /// The orbit's step for keys, degrees (and a dolly of `step / 50` of the distance).
+    pub step_deg: f32,
+    /// The light the panel shows and a right-button drag aims.
+    selected: usize,
+    maps: ShadowMaps,
+    pipelines: Option<Arc<ShaftsPipelines>>,
+    on_gpu: bool,
+    /// The scene changed since the picture was last drawn.
+    dirty: bool,
+    /// The last thing done to the file ("saved", "read again"), for the panel.
+    status: Option<String>,
+}
+
+impl StageMode {
+    /// The scene file at `path` with `edits` (checked), posed at `time_s` into its show.
+    pub fn new(path: &Path, edits: Vec<Edit>, time_s: f32) -> Result<StageMode> {
+        atmo::error::check_range("time", time_s as f64, 0.0, 1e6)?;
+        let text = read(path)?;
+        let origin = path.display().to_string();
+        let edited = edited(&text, &origin, &edits)?;
+        let scene = load(path, &edited, &[], time_s)?;
+        Ok(StageMode {
+            path: path.to_path_buf(),
+            text,
+            stamp: stamp(path),
+            watched: Instant::now(),
+            edits: merged(&edits),
+            edited,
+            size: None,
+            scene,
+            time_s,
+            playing: false,
+            step_deg: 5.0,
+            selected: 0,
+            maps: ShadowMaps::default(),
+            pipelines: None,
+            on_gpu: false,
+            dirty: true,
+            status: None,
+        })
+    }
+
+    /// The scene as it is drawn now.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The window's edits, one per key, in the order keys were first changed.
+    pub fn edits(&self) -> &[Edit] {
+        &self.edits
+    }
+
+    /// The camera's size set to the picture's, where they differ.
+    fn size_edits(&self) -> Vec<Edit> {
+        let Some((width, height)) = self.size else {
+            return Vec::new();
+        };
+        [("camera.width", width), ("camera.height", height)]
+            .into_iter()
+            .filter(|(key, v)| self.edited.number(key) != Some(*v as f64))
+            .map(|(key, v)| Edit::set(key, v.to_string()))
+            .collect()
+    }
+
+    /// Makes the scene from `text` with `edits`: on success the mode's, and the
+    /// picture to be drawn again; on failure the error, and nothing changed. Shadow
+    /// maps are dropped where the objects or the maps' settings may have changed.
+    fn rebuild(&mut self, text: String, edits: Vec<Edit>) -> Result<()> {
+        let origin = self.path.display().to_string();
+        let edits = merged(&edits);
+        let edited = edited(&text, &origin, &edits)?;
+        let scene = load(&self.path, &edited, &self.size_edits(), self.time_s)?;
+        let solid = |e: &&Edit| e.key.starts_with("object") || e.key.starts_with("render");
+        let before: Vec<&Edit> = self.edits.iter().filter(solid).collect();
+        let after: Vec<&Edit> = edits.iter().filter(solid).collect();
+        if text != self.text || before != after {
+            self.maps = ShadowMaps::default();
+        }
+        (self.text, self.edits, self.edited, self.scene) = (text, edits, edited, scene);
+        self.dirty = true;
+        Ok(())
+    }
+
+    /// The camera's picture made `size`, pixels.
+    fn resize(&mut self, size: (u32, u32)) -> Result<()> {
+        if self.size != Some(size) {
+            let old = self.size.replace(size);
+            if let Err(e) = self.rebuild(self.text.clone(), self.edits.clone()) {
+                self.size = old;
+                return Err(e);
+            }
+        }
+        Ok(())
+    }
+
+    /// One more edit.
+    fn edit(&mut self, more: impl IntoIterator<Item = Edit>) -> Result<()> {
+        let mut edits = self.edits.clone();
+        edits.extend(more);
+        self.rebuild(self.text.clone(), edits)
+    }
+
+    /// A point of the edited file, as a vector.
+    fn point(&self, key: &str) -> Result<Vec3> {
+        let v = self
+            .edited
+            .vector(key)
+            .with_context(|| format!("{key} is not three numbers"))?;
+        Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
+    }
+
+    /// The camera moved about the point it looks at: `yaw_deg` around the vertical,
+    /// `pitch_deg` up, its distance times `scale`.
+    fn orbit(&mut self, yaw_deg: f32, pitch_deg: f32, scale: f32) -> Result<()> {
+        let (position, look_at) = (
+            self.point("camera.position")?,
+            self.point("camera.look_at")?,
+        );
+        let offset = position - look_at;
+        let distance = offset.length();
+        let pitch = (offset.y / distance).asin().to_degrees() + pitch_deg;
+        let pitch = pitch
+            .clamp(-ORBIT_PITCH_LIMIT_DEG, ORBIT_PITCH_LIMIT_DEG)
+            .to_radians();
+        let yaw = offset.x.atan2(offset.z) + yaw_deg.to_radians();
+        let direction = Vec3::new(
+            pitch.cos() * yaw.sin(),
+            pitch.sin(),
+            pitch.cos() * yaw.cos(),
+        );
+        let position = look_at + direction * (distance * scale);
+        self.edit([Edit::set("camera.position", vector(position))])
+    }
+
+    /// Spotlight `light` aimed at what pixel (x, y) of the picture shows.
+    fn aim(&mut self, light: usize, x: f32, y: f32) -> Result<()> {
+        let spotlights = self.edited.count("spotlight");
+        if light >= spotlights {
+            return Err(Error::Invalid(format!(
+                "light {light}: the mouse aims the scene's {spotlights} [[spotlight]]s; a \
+                 moving head is aimed by its pan and tilt"
+            ))
+            .into());
+        }
+        let camera = &self.scene.camera;
+        let ray = Ray {
+            origin: camera.position,
+            dir: camera.ray(x, y).normalize(),
+        };
+        let hit = self
+            .scene
+            .objects
+            .hit(&ray, camera.far)
+            .context("nothing under the pointer to aim at")?;
+        let at = format!("spotlight[{light}]");
+        let mut edits = vec![Edit::set(
+            &format!("{at}.aim"),
+            vector(ray.origin + hit.t * ray.dir),
+        )];
+        if self.edited.get(&format!("{at}.direction")).is_some() {
+            edits.insert(0, Edit::remove(&format!("{at}.direction")));
+        }
+        self.edit(edits)
+    }
+
+    /// The show's time set, s.
+    fn set_time(&mut self, time_s: f32) -> Result<()> {
+        atmo::error::check_range("time", time_s as f64, 0.0, 1e6)?;
+        self.time_s = time_s;
+        self.scene.at_time(time_s);
+        self.dirty = true;
+        Ok(())
+    }
+
+    /// Writes the edited scene into its file (atomically) and starts again from it.
+    fn save(&mut self) -> Result<()> {
+        let text = self.edited.to_string();
+        atmo::files::write_atomically(&self.path, |w| {
+            use std::io::Write;
+            w.write_all(text.as_bytes())
+                .map_err(atmo::Error::io_at(&self.path))
+        })?;
+        self.stamp = stamp(&self.path);
+        self.rebuild(text, Vec::new())?;
+        self.status = Some(format!("saved {}", self.path.display()));
+        Ok(())
+    }
+
+    /// Reads the file again if it changed on disk since it was last seen.
+    fn watch(&mut self) -> Result<()> {
+        if self.watched.elapsed().as_secs_f64() < WATCH_INTERVAL_S {
+            return Ok(());
+        }
+        self.watched = Instant::now();
+        let now = stamp(&self.path);
+        if now == self.stamp {
+            return Ok(());
+        }
+        self.stamp = now;
+        let text = read(&self.path)?;
+        if text == self.text {
+            return Ok(());
+        }
+        self.rebuild(text, self.edits.clone()).with_context(|| {
+            format!(
+                "{} changed on disk and is refused; the last good scene stays",
+                self.path.display()
+            )
+        })?;
+        self.status = Some(format!("read {} again", self.path.display()));
+        Ok(())
+    }
+
+    /// The lights by name, in scene order: the spotlights, then the moving heads.
+    fn light_names(&self) -> Vec<String> {
+        let spotlights = self.edited.count("spotlight");
+        (0..spotlights)
+            .map(|i| format!("spotlight {i}"))
+            .chain(self.scene.show.fixtures.iter().map(|f| f.name.clone()))
+            .collect()
+    }
+
+    /// The panel's widgets for spotlight `i`.
+    fn spotlight_panel(&self, ui: &mut egui::Ui, i: usize, edits: &mut Vec<Edit>) {
+        let at = |key: &str| format!("spotlight[{i}].{key}");
+        vector_row(ui, &self.edited, &at("position"), "position, m", edits);
+        if self.edited.get(&at("aim")).is_some() {
+            vector_row(ui, &self.edited, &at("aim"), "aim, m (right drag)", edits);
+        }
+        let sliders = [
+            ("intensity", "intensity, cd", 1.0..=1e6, true),
+            ("dimmer", "dimmer", 0.0..=1.0, false),
+            ("beam_deg", "beam, deg", 0.1..=170.0, false),
+            ("field_deg", "field, deg", 0.1..=170.0, false),
+            ("kelvin", "colour temperature, K", 1000.0..=20000.0, false),
+        ];
+        for (key, label, range, log) in sliders {
+            slider(ui, &self.edited, &at(key), label, range, log, edits);
+        }
+        if let Some(c) = self.edited.vector(&at("color")) {
+            let mut rgb = c.map(|v| v as f32);
+            ui.horizontal(|ui| {
+                ui.label("colour (linear RGB)");
+                egui::color_picker::color_edit_button_rgb(ui, &mut rgb);
+            });
+            if rgb != c.map(|v| v as f32) {
+                edits.push(Edit::set(&at("color"), vector(Vec3::from(rgb))));
+            }
+        }
+    }
+
+    /// The panel's widgets for moving head `k`: its attributes at the show's start.
+    fn fixture_panel(&self, ui: &mut egui::Ui, k: usize, edits: &mut Vec<Edit>) {
+        ui.label("at the show's start (the cues change them)");
+        let at = |key: &str| format!("fixture[{k}].start.{key}");
+        let sliders = [
+            ("pan_deg", "pan, deg", -540.0..=540.0),
+            ("tilt_deg", "tilt, deg", -270.0..=270.0),
+            ("zoom_deg", "zoom, deg", 1.0..=90.0),
+            ("dimmer", "dimmer", 0.0..=1.0),
+        ];
+        for (key, label, range) in sliders {
+            slider(ui, &self.edited, &at(key), label, range, false, edits);
+        }
+    }
+}
+
+/// The file's text.
+fn read(path: &Path) -> atmo::Result<String> {
+    atmo::files::read_text(path, "scene file", atmo::files::TEXT_LIMIT_BYTES)
+}
+
+/// `text` with `edits`, parsed.
+fn edited(text: &str, origin: &str, edits: &[Edit]) -> atmo::Result<Document> {
+    let mut doc = Document::parse(text, origin)?;
+    for edit in edits {
+        doc.apply(edit)?;
+    }
+    Ok(doc)
+}
+
+/// The scene of the edited file with `more` edits (the picture's size), posed.
+fn load(path: &Path, edited: &Document, more: &[Edit], time_s: f32) -> atmo::Result<Scene> {
+    let origin = path.display().to_string();
+    let text = atmo::shafts::edits::apply(&edited.to_string(), &origin, more)?;
+    let folder = path.parent().unwrap_or(Path::new("."));
+    let mut scene = Scene::from_toml_str(&text, &origin, folder)?;
+    scene.at_time(time_s);
+    Ok(scene)
+}
+
+/// When the file was last modified, and its length.
+fn stamp(path: &Path) -> Option<(SystemTime, u64)> {
+    let m = std::fs::metadata(path).ok()?;
+    Some((m.modified().ok()?, m.len()))
+}
+
+/// A vector as a TOML array, each float printed exactly (the value read back is it).
+fn vector(v: Vec3) -> String {
+    format!("[{},{},{}]", v.x, v.y, v.z)
+}
+
+/// A slider for the number at `key`, if the file has one; a change becomes an edit.
+fn slider(
+    ui: &mut egui::Ui,
+    doc: &Document,
+    key: &str,
+    label: &str,
+    range: std::ops::RangeInclusive<f64>,
+    logarithmic: bool,
+    edits: &mut Vec<Edit>,
+) {
+    let Some(old) = doc.number(key) else { return };
+    let mut value = old;
+    ui.add(
+        egui::Slider::new(&mut value, range)
+            .logarithmic(logarithmic)
+            .text(label),
+    );
+    if value != old {
+        edits.push(Edit::set(key, (value as f32).to_string()));
+    }
+}
+
+/// Three drag values for the point at `key`; a change becomes an edit.
+fn vector_row(ui: &mut egui::Ui, doc: &Document, key: &str, label: &str, edits: &mut Vec<Edit>) {
+    let Some(old) = doc.vector(key) else { return };
+    let mut v = old.map(|c| c as f32);
+    ui.horizontal(|ui| {
+        for c in &mut v {
+            ui.add(egui::DragValue::new(c).speed(0.05));
+        }
+        ui.label(label);
+    });
+    if v != old.map(|c| c as f32) {
+        edits.push(Edit::set(key, vector(Vec3::from(v))));
+    }
+}
+
+/// The tone maps by the names the scene file's `display.tone_map` takes.
+const TONES: [(&str, ToneMap); 3] = [
+    ("exponential", ToneMap::Exponential),
+    ("aces", ToneMap::Aces),
+    ("clamp", ToneMap::Clamp),
+];
+
+impl Mode for StageMode {
+    fn title(&self) -> &'static str {
+        "atmo stage"
+    }
+
+    fn check_script(&self, _: &Script) -> atmo::Result<()> {
+        // An edit's key is checked when it is made, against the scene as it is then.
+        Ok(())
+    }
+
+    fn draw_on_gpu(&mut self, on_gpu: bool) {
+        if on_gpu != self.on_gpu {
+            self.on_gpu = on_gpu;
+            self.dirty = true;
+        }
+    }
+
+    fn apply(&mut self, input: &Input) -> Result<()> {
+        let step = self.step_deg;
+        match input {
+            Input::Key(key) => match key {
+                Key::Climb => self.orbit(0.0, 0.0, 1.0 - step / 50.0)?,
+                Key::Descend => self.orbit(0.0, 0.0, 1.0 / (1.0 - step / 50.0))?,
+                Key::Faster => self.step_deg = (step * 2.0).min(45.0),
+                Key::Slower => self.step_deg = step / 2.0,
+                Key::SunLeft => self.orbit(-step, 0.0, 1.0)?,
+                Key::SunRight => self.orbit(step, 0.0, 1.0)?,
+                Key::SunUp => self.orbit(0.0, step, 1.0)?,
+                Key::SunDown => self.orbit(0.0, -step, 1.0)?,
+                Key::Animate => self.playing = !self.playing,
+                Key::Save => self.save()?,
+                Key::Screenshot | Key::Panel => {}
+            },
+            Input::Drag(dx, dy) => self.orbit(-0.3 * dx, 0.3 * dy, 1.0)?,
+            Input::Aim(light, x, y) => self.aim(*light, *x, *y)?,
+            Input::Set(name, value) if name == "time" => {
+                let t = value
+                    .parse::<f32>()
+                    .map_err(|_| Error::Invalid(format!("time: '{value}' is not a number")))?;
+                self.set_time(t)?;
+            }
+            Input::Set(key, value) => self.edit([Edit::parse(&format!("{key}={value}"))?])?,
+        }
+        Ok(())
+    }
+
+    fn update(&mut self) -> Result<()> {
+        if self.playing {
+            let duration = self.scene.show.duration();
+            let next = self.time_s + SHOW_STEP_S;
+            self.set_time(if next > duration { 0.0 } else { next })?;
+        }
+        self.watch()
+    }
+
+    fn draw(&mut self, gpu: &Gpu, _: &mut wgpu::CommandEncoder, picture: &Picture) -> Result<()> {
+        self.resize(picture.size)?;
+        if !self.dirty {
+            return Ok(());
+        }
+        let frame = if self.on_gpu {
+            let pipelines = match &self.pipelines {
+                Some(p) => p.clone(),
+                None => self.pipelines.insert(ShaftsPipelines::new(gpu)?).clone(),
+            };
+            let shafts = GpuShafts::with_pipelines(gpu, &self.scene, pipelines)?;
+            shafts.render(gpu, ShaftsMethod::Planes)?.frame
+        } else {
+            self.maps.render(&self.scene)
+        };
+        write_frame(gpu, &picture.texture, &frame);
+        self.dirty = false;
+        Ok(())
+    }
+
+    fn display(&self) -> Display {
+        self.scene.display
+    }
+
+    fn still_command(&self, output: &Path, _: (u32, u32)) -> String {
+        let backend = if self.on_gpu { "gpu" } else { "cpu" };
+        let mut words = vec![format!("atmo shafts {}", self.path.display())];
+        let size = self.size_edits();
+        words.extend(self.edits.iter().chain(&size).map(Edit::flag));
+        if self.time_s > 0.0 {
+            words.push(format!("--time {}", self.time_s));
+        }
+        words.push(format!("--backend {backend} -o {}", output.display()));
+        words.join(" ")
+    }
+
+    fn panel(&mut self, ui: &mut egui::Ui) -> Vec<Input> {
+        let mut edits = Vec::new();
+        let mut inputs = Vec::new();
+        ui.label(format!(
+            "{}{}",
+            self.path.display(),
+            if self.edits.is_empty() {
+                ""
+            } else {
+                " (edited)"
+            }
+        ));
+        if let Some(status) = &self.status {
+            ui.label(status);
+        }
+        let duration = self.scene.show.duration();
+        if duration > 0.0 {
+            let mut t = self.time_s;
+            ui.add(egui::Slider::new(&mut t, 0.0..=duration).text("show time, s"));
+            if t != self.time_s {
+                inputs.push(Input::Set("time".into(), t.to_string()));
+            }
+            let mut playing = self.playing;
+            ui.checkbox(&mut playing, "play the show (space)");
+            if playing != self.playing {
+                inputs.push(Input::Key(Key::Animate));
+            }
+        }
+        ui.separator();
+        slider(
+            ui,
+            &self.edited,
+            "camera.fov_deg",
+            "field of view, deg",
+            5.0..=150.0,
+            false,
+            &mut edits,
+        );
+        slider(
+            ui,
+            &self.edited,
+            "haze.extinction",
+            "haze extinction, 1/m",
+            1e-4..=1.0,
+            true,
+            &mut edits,
+        );
+        slider(
+            ui,
+            &self.edited,
+            "display.exposure",
+            "exposure",
+            1e-3..=1e3,
+            true,
+            &mut edits,
+        );
+        let tone = self.scene.display.tone;
+        let name = TONES
+            .iter()
+            .find(|(_, t)| *t == tone)
+            .map_or("", |(n, _)| n);
+        egui::ComboBox::from_label("tone map")
+            .selected_text(name)
+            .show_ui(ui, |ui| {
+                for (n, t) in TONES {
+                    if ui.selectable_label(t == tone, n).clicked() && t != tone {
+                        edits.push(Edit::set("display.tone_map", format!("\"{n}\"")));
+                    }
+                }
+            });
+        ui.separator();
+        let names = self.light_names();
+        self.selected = self.selected.min(names.len().saturating_sub(1));
+        egui::ComboBox::from_label("light")
+            .selected_text(names.get(self.selected).map_or("none", |n| n.as_str()))
+            .show_ui(ui, |ui| {
+                for (i, name) in names.iter().enumerate() {
+                    ui.selectable_value(&mut self.selected, i, name);
+                }
+            });
+        let spotlights = self.edited.count("spotlight");
+        if self.selected < spotlights {
+            self.spotlight_panel(ui, self.selected, &mut edits);
+        } else if self.selected < names.len() {
+            self.fixture_panel(ui, self.selected - spotlights, &mut edits);
+        }
+        ui.separator();
+        if ui.button("save scene (S)").clicked() {
+            inputs.push(Input::Key(Key::Save));
+        }
+        inputs.extend(edits.into_iter().map(|e| match e.value {
+            Some(v) => Input::Set(e.key, v),
+            None => Input::Set(e.key, String::new()),
+        }));
+        inputs
+    }
+
+    fn help(&self) -> &'static str {
+        "drag: orbit; right drag: aim the light; arrows: orbit; R / F: nearer / farther; \
+         space: play; S: save scene"
+    }
+
+    fn aimed_light(&self) -> Option<usize> {
+        (self.selected < self.edited.count("spotlight")).then_some(self.selected)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A copy of scenes/stage.toml in a fresh folder (with its gobo and mesh), for a
+    /// test that writes the file.
+    fn stage_copy(name: &str) -> PathBuf {
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let dir = std::env::temp_dir().join(format!("atmo-view-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(dir.join("gobos")).unwrap();
+        std::fs::create_dir_all(dir.join("meshes")).unwrap();
+        for file in ["stage.toml", "gobos/dots.png", "meshes/knot.obj"] {
+            if scenes.join(file).exists() {
+                std::fs::copy(scenes.join(file), dir.join(file)).unwrap();
+            }
+        }
+        dir.join("stage.toml")
+    }
+
+    /// The stage at a small size, the camera toward the floor.
+    fn small(path: &Path) -> StageMode {
+        let mut mode = StageMode::new(path, vec![Edit::set("render.shadow_map", "64")], 0.0)
+            .expect("the stage loads");
+        mode.resize((48, 32)).unwrap();
+        mode
+    }
+
+    #[test]
+    fn orbiting_keeps_every_shadow_map_and_editing_a_light_rebuilds_only_its_own() {
+        let path = stage_copy("maps");
+        let mut mode = small(&path);
+        let lights = mode.scene.lights.len();
+        mode.maps.render(&mode.scene);
+        assert_eq!(mode.maps.rebuilt, lights);
+        let look_at = mode.point("camera.look_at").unwrap();
+        let distance = |m: &StageMode| (m.point("camera.position").unwrap() - look_at).length();
+        let before = distance(&mode);
+        mode.apply(&Input::Drag(150.0, -20.0)).unwrap();
+        mode.apply(&Input::Key(Key::Climb)).unwrap();
+        assert!((distance(&mode) - 0.9 * before).abs() < 1e-4 * before);
+        mode.maps.render(&mode.scene);
+        assert_eq!(mode.maps.rebuilt, 0, "the camera moved: no map rebuilt");
+        mode.apply(&Input::Set("spotlight[2].aim".into(), "[1, 0, 1]".into()))
+            .unwrap();
+        mode.maps.render(&mode.scene);
+        assert_eq!(mode.maps.rebuilt, 1, "one light moved");
+        mode.apply(&Input::Set("object[0].albedo".into(), "0.5".into()))
+            .unwrap();
+        mode.maps.render(&mode.scene);
+        assert_eq!(mode.maps.rebuilt, lights, "the objects changed");
+        std::fs::remove_dir_all(path.parent().unwrap()).unwrap();
+    }
+
+    #[test]
+    fn the_mouse_aims_a_light_at_the_point_under_it() {
+        let path = stage_copy("aim");
+        let mut mode = small(&path);
+        // The pixel's ray meets the floor (y = 0) where the light is now aimed.
+        mode.apply(&Input::Aim(1, 20.0, 30.0)).unwrap();
+        let aim = mode.point("spotlight[1].aim").unwrap();
+        let camera = &mode.scene.camera;
+        let ray = camera.ray(20.0, 30.0).normalize();
+        let toward = (aim - camera.position).normalize();
+        assert!(aim.y.abs() < 1e-4 && toward.dot(ray) > 1.0 - 1e-6, "{aim}");
+        let light = &mode.scene.lights[1];
+        let axis = (aim - light.position).normalize();
+        assert!((light.light_from_world * axis - Vec3::Z).length() < 1e-5);
+        // Over the sky there is nothing to aim at; a moving head is not aimed so.
+        let e = mode.apply(&Input::Aim(1, 24.0, 0.0)).unwrap_err();
+        assert!(e.to_string().contains("nothing under the pointer"), "{e}");
+        let e = mode.apply(&Input::Aim(9, 20.0, 30.0)).unwrap_err();
+        assert!(e.to_string().contains("5 [[spotlight]]s"), "{e}");
+        std::fs::remove_dir_all(path.parent().unwrap()).unwrap();
+    }
+
+    #[test]
+    fn a_changed_file_is_read_again_under_the_edits_and_a_bad_one_refused() {
+        let path = stage_copy("watch");
+        let mut mode = small(&path);
+        mode.apply(&Input::Set("spotlight[0].dimmer".into(), "0.5".into()))
+            .unwrap();
+        let before = mode.scene.lights[0].intensity;
+        let text = std::fs::read_to_string(&path).unwrap();
+        let brighter = text.replace("intensity = 3000.0", "intensity = 6000.0");
+        std::fs::write(&path, &brighter).unwrap();
+        mode.watched -= std::time::Duration::from_secs(1);
+        mode.update().unwrap();
+        // Twice the intensity, still at the window's half dimmer.
+        let after = mode.scene.lights[0].intensity;
+        assert!(
+            (after - 2.0 * before).length() < 1e-3 * after.length(),
+            "{after}"
+        );
+        assert_eq!(mode.edits()[1], Edit::set("spotlight[0].dimmer", "0.5"));
+        std::fs::write(&path, brighter.replace("[haze]", "[haze")).unwrap();
+        mode.watched -= std::time::Duration::from_secs(1);
+        let e = mode.update().unwrap_err();
+        assert!(format!("{e:#}").contains("refused"), "{e:#}");
+        assert_eq!(mode.scene.lights[0].intensity, after, "the last good scene");
+        std::fs::remove_dir_all(path.parent().unwrap()).unwrap();
+    }
+}
