@@ -1,6 +1,7 @@
 // A linear HDR picture shown on a display target: times the exposure, tone-mapped and,
 // for a target that does not encode sRGB itself, sRGB-encoded, as atmo::image::Display
-// does for PNG files. One full-screen triangle; pixels outside the picture are left.
+// does for PNG files. One full-screen triangle (screen.wgsl); pixels outside the
+// picture are left.
 
 // Mirrors atmo_gpu::display::DisplayParams.
 struct DisplayParams {
@@ -19,12 +20,6 @@ struct DisplayParams {
 @group(0) @binding(0) var<uniform> params: DisplayParams;
 // Linear radiance, RGBA f32 (unfilterable: read texel by texel).
 @group(0) @binding(1) var picture: texture_2d<f32>;
-
-@vertex
-fn vertex(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
 
 @fragment
 fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {

@@ -50,7 +50,7 @@ impl DisplayPass {
     /// The pass for targets of `format` (an `*Srgb` format encodes on store; any other
     /// gets sRGB-encoded values).
     pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Result<Self, GpuError> {
-        let module = wgsl::module(gpu, "display.wgsl")?;
+        let module = wgsl::module(gpu, "screen.wgsl display.wgsl")?;
         let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::FRAGMENT,

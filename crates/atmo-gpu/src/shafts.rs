@@ -5,6 +5,11 @@
 //! or the same sums in one compute pass ([`ShaftsMethod::Compute`]). Everything stays
 //! on the GPU from the scene's upload to the finished picture. Translates
 //! `atmo::shafts::SamplePlanes::render`, which the tests hold it to.
+//!
+//! Two ways out: [`GpuShafts::render`] submits the passes and reads the picture back
+//! (the stills); [`GpuShafts::prepare`] records them into the caller's encoder and a
+//! [`ShaftsPass`] draws the picture into the caller's own colour target, with no
+//! read-back (the viewer, an engine).
 
 use atmo::geometry::Shape;
 use atmo::shafts::spotlight::{Falloff, Profile, Sampling};
@@ -66,6 +71,19 @@ gpu_struct! {
         map_rows: u32,
         gobo_cos: f32,
         gobo_sin: f32,
+    }
+}
+
+gpu_struct! {
+    /// The frame pass's parameters (see shafts_frame.wgsl).
+    pub struct ShaftsFrameParams in "shafts_frame.wgsl" {
+        corner: [f32; 2],
+        exposure: f32,
+        width: u32,
+        height: u32,
+        pad0: u32,
+        pad1: u32,
+        pad2: u32,
     }
 }
 
@@ -373,8 +391,54 @@ impl GpuShafts {
         })
     }
 
-    /// The picture, as `SamplePlanes::new(scene).render()` on the CPU.
+    /// The picture, as `SamplePlanes::new(scene).render()` on the CPU: the passes
+    /// submitted, timed where the device can, and the picture read back.
     pub fn render(&self, gpu: &Gpu, method: ShaftsMethod) -> Result<Rendered, GpuError> {
+        let gpu_ms = gpu.run("the light shafts", |encoder| {
+            self.encode(gpu, encoder, method)
+        })?;
+        let p = &self.params;
+        let bytes = gpu.read("the light shafts", &self.out, 0, self.out.size())?;
+        Ok(Rendered {
+            frame: crate::frame_of(p.width, p.height, &bytes),
+            gpu_ms,
+        })
+    }
+
+    /// Records the passes into the caller's `encoder` and sets `pass` to draw their
+    /// picture: the scene drawn into the caller's target with no read-back. The
+    /// picture is the scene camera's size; record `pass`'s draw into a render pass
+    /// whose colour attachment has `pass`'s format, after this encoder's passes.
+    pub fn prepare(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: &mut ShaftsPass,
+        method: ShaftsMethod,
+    ) {
+        self.encode(gpu, encoder, method);
+        let params = ShaftsFrameParams {
+            corner: pass.corner.map(|c| c as f32),
+            exposure: pass.exposure,
+            width: self.params.width,
+            height: self.params.height,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
+        };
+        gpu.queue
+            .write_buffer(&pass.params, 0, bytemuck::bytes_of(&params));
+        pass.group = Some(gpu.bind_group(
+            &pass.pipeline.get_bind_group_layout(0),
+            &[
+                pass.params.as_entire_binding(),
+                self.out.as_entire_binding(),
+            ],
+        ));
+    }
+
+    /// Records every pass of the frame into `encoder`, the picture ending in `out`.
+    fn encode(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder, method: ShaftsMethod) {
         let p = &self.params;
         gpu.queue
             .write_buffer(&self.extents, 0, bytemuck::cast_slice(&self.extents_init));
@@ -386,60 +450,103 @@ impl GpuShafts {
                 self.out.as_entire_binding(),
             ],
         );
-        let gpu_ms = gpu.run("the light shafts", |encoder| {
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_bind_group(0, &self.group, &[]);
+            if p.lights > 0 {
+                pass.set_pipeline(&self.pipelines.shadow);
+                let groups = p.shadow_size.div_ceil(8);
+                pass.dispatch_workgroups(groups, groups, p.lights);
+            }
+            pass.set_pipeline(&self.pipelines.prepare);
+            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_pipeline(&self.pipelines.attenuation);
+            pass.set_bind_group(0, &self.attenuation_group, &[]);
+            let groups = p.attenuation_size.div_ceil(16);
+            pass.dispatch_workgroups(groups, groups, 1);
+            pass.set_bind_group(0, &self.group, &[]);
+            pass.set_pipeline(&self.pipelines.surface);
+            pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
+            if method == ShaftsMethod::Compute {
+                pass.set_pipeline(&self.pipelines.compute);
+                pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
+            }
+        }
+        if method == ShaftsMethod::Planes {
             {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_bind_group(0, &self.group, &[]);
-                if p.lights > 0 {
-                    pass.set_pipeline(&self.pipelines.shadow);
-                    let groups = p.shadow_size.div_ceil(8);
-                    pass.dispatch_workgroups(groups, groups, p.lights);
-                }
-                pass.set_pipeline(&self.pipelines.prepare);
-                pass.dispatch_workgroups(1, 1, 1);
-                pass.set_pipeline(&self.pipelines.attenuation);
-                pass.set_bind_group(0, &self.attenuation_group, &[]);
-                let groups = p.attenuation_size.div_ceil(16);
-                pass.dispatch_workgroups(groups, groups, 1);
-                pass.set_bind_group(0, &self.group, &[]);
-                pass.set_pipeline(&self.pipelines.surface);
-                pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
-                if method == ShaftsMethod::Compute {
-                    pass.set_pipeline(&self.pipelines.compute);
-                    pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
-                }
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("sample planes"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    ..Default::default()
+                });
+                pass.set_pipeline(&self.pipelines.planes);
+                pass.set_bind_group(0, &self.render_group, &[]);
+                let quads = p.lights * p.planes * p.supersampling * p.supersampling;
+                pass.draw(0..6, 0..quads);
             }
-            if method == ShaftsMethod::Planes {
-                {
-                    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                        label: Some("sample planes"),
-                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                            view: &view,
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations {
-                                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                                store: wgpu::StoreOp::Store,
-                            },
-                        })],
-                        ..Default::default()
-                    });
-                    pass.set_pipeline(&self.pipelines.planes);
-                    pass.set_bind_group(0, &self.render_group, &[]);
-                    let quads = p.lights * p.planes * p.supersampling * p.supersampling;
-                    pass.draw(0..6, 0..quads);
-                }
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.pipelines.composite);
-                pass.set_bind_group(0, &composite_group, &[]);
-                pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
-            }
-        })?;
-        let bytes = gpu.read("the light shafts", &self.out, 0, self.out.size())?;
-        Ok(Rendered {
-            frame: crate::frame_of(p.width, p.height, &bytes),
-            gpu_ms,
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipelines.composite);
+            pass.set_bind_group(0, &composite_group, &[]);
+            pass.dispatch_workgroups(p.width.div_ceil(8), p.height.div_ceil(8), 1);
+        }
+    }
+}
+
+/// The shafts' picture drawn into a caller's colour target of one format: a
+/// full-screen triangle reading the picture [`GpuShafts::prepare`] recorded, pixel for
+/// pixel from [`ShaftsPass::corner`] (linear radiance times [`ShaftsPass::exposure`];
+/// an `*Srgb` format encodes it on store). Made once and kept: its pipeline is
+/// compiled here.
+pub struct ShaftsPass {
+    pipeline: wgpu::RenderPipeline,
+    params: wgpu::Buffer,
+    /// What the next draw reads, set by [`GpuShafts::prepare`].
+    group: Option<wgpu::BindGroup>,
+    /// Multiplies the radiance written.
+    pub exposure: f32,
+    /// The target's pixel where the picture's (0, 0) goes.
+    pub corner: [u32; 2],
+}
+
+impl ShaftsPass {
+    /// The pass for colour targets of `format`: refused by name where the device
+    /// cannot render to it.
+    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Result<Self, GpuError> {
+        let module = wgsl::module(gpu, "screen.wgsl shafts_frame.wgsl")?;
+        let pipeline = gpu.screen_pipeline(
+            "the shafts' picture pass",
+            &module,
+            None,
+            &[Some(format.into())],
+            None,
+        )?;
+        Ok(ShaftsPass {
+            pipeline,
+            params: gpu.uniform(
+                "the shafts' picture",
+                &<ShaftsFrameParams as bytemuck::Zeroable>::zeroed(),
+            ),
+            group: None,
+            exposure: 1.0,
+            corner: [0, 0],
         })
+    }
+
+    /// Records the picture into `pass` (nothing before a [`GpuShafts::prepare`]).
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        if let Some(group) = &self.group {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, group, &[]);
+            pass.draw(0..3, 0..1);
+        }
     }
 }
 

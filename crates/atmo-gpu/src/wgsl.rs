@@ -57,6 +57,7 @@ shared_codes! {
 /// The shader files, by name, as compiled into the crate.
 const FILES: &[(&str, &str)] = &[
     ("functions.wgsl", include_str!("../shaders/functions.wgsl")),
+    ("screen.wgsl", include_str!("../shaders/screen.wgsl")),
     ("display.wgsl", include_str!("../shaders/display.wgsl")),
     ("sky_map.wgsl", include_str!("../shaders/sky_map.wgsl")),
     ("sky_frame.wgsl", include_str!("../shaders/sky_frame.wgsl")),
@@ -103,6 +104,10 @@ const FILES: &[(&str, &str)] = &[
     (
         "shafts_surface.wgsl",
         include_str!("../shaders/shafts_surface.wgsl"),
+    ),
+    (
+        "shafts_frame.wgsl",
+        include_str!("../shaders/shafts_frame.wgsl"),
     ),
     (
         "shafts_compute.wgsl",

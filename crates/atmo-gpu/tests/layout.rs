@@ -61,5 +61,6 @@ fn cloud_structs_match_their_wgsl() {
 #[test]
 fn shafts_structs_match_their_wgsl() {
     check::<atmo_gpu::shafts::ShaftsParams>();
+    check::<atmo_gpu::shafts::ShaftsFrameParams>();
     check::<atmo_gpu::shafts::GpuLight>();
 }

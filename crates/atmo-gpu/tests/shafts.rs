@@ -7,7 +7,8 @@ mod common;
 use std::path::Path;
 
 use atmo::shafts::{SamplePlanes, Scene};
-use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};
+use atmo_gpu::display::{cleared_pass, picture_texture};
+use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPass};
 use common::{assert_close, gpu, mean_level};
 
 /// The example scene `name`, drawn at 1/5 of its size.
@@ -94,4 +95,57 @@ fn a_show_played_on_one_set_of_passes_matches_the_cpu_frame_by_frame() {
         );
         pipelines = Some(shafts.pipelines());
     }
+}
+
+#[test]
+fn the_shafts_draw_into_a_callers_target_as_they_read_back() {
+    // Recorded into the caller's encoder and drawn into its own target (larger than
+    // the picture, the picture at (8, 4), exposure 0.5) with no read-back of ours.
+    let Some(gpu) = gpu() else { return };
+    let scene = scene("spotlight-sphere.toml", 1);
+    let shafts = GpuShafts::new(&gpu, &scene).unwrap();
+    let read_back = shafts.render(&gpu, ShaftsMethod::Planes).unwrap().frame;
+    let (w, h) = (scene.camera.width + 16, scene.camera.height + 8);
+    let target = picture_texture(&gpu, w, h).unwrap();
+    let mut pass = ShaftsPass::new(&gpu, target.format()).unwrap();
+    pass.exposure = 0.5;
+    pass.corner = [8, 4];
+    let view = target.create_view(&Default::default());
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    shafts.prepare(&gpu, &mut encoder, &mut pass, ShaftsMethod::Planes);
+    {
+        let cleared = wgpu::Color {
+            r: 0.25,
+            g: 0.0,
+            b: 0.0,
+            a: 1.0,
+        };
+        let mut render = cleared_pass(&mut encoder, &view, "the caller's pass", cleared);
+        pass.draw(&mut render);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = gpu
+        .read_texture("the caller's target", &target, w, h)
+        .unwrap();
+    let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+    let at = |x: u32, y: u32| texels[(y * w + x) as usize];
+    for (i, p) in read_back.pixels.iter().enumerate() {
+        let (x, y) = (i as u32 % scene.camera.width, i as u32 / scene.camera.width);
+        let t = at(x + 8, y + 4);
+        assert_eq!(
+            [t[0], t[1], t[2], t[3]],
+            [0.5 * p.x, 0.5 * p.y, 0.5 * p.z, 1.0],
+            "({x}, {y})"
+        );
+    }
+    assert!(
+        mean_level(&read_back, scene.display.exposure) > 10.0,
+        "dark"
+    );
+    assert_eq!(
+        at(2, 1),
+        [0.25, 0.0, 0.0, 1.0],
+        "outside the picture: the caller's"
+    );
+    assert_eq!(at(w - 1, h - 1), [0.25, 0.0, 0.0, 1.0]);
 }

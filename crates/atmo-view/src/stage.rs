@@ -23,7 +23,7 @@ use atmo::shafts::planes::ShadowMaps;
 use atmo::shafts::Scene;
 use atmo::Error;
 use atmo_gpu::display::write_frame;
-use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPipelines};
+use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPass, ShaftsPipelines};
 use atmo_gpu::Gpu;
 use glam::Vec3;
 
@@ -63,7 +63,8 @@ pub struct StageMode {
     /// The light the panel shows and a right-button drag aims.
     selected: usize,
     maps: ShadowMaps,
-    pipelines: Option<Arc<ShaftsPipelines>>,
+    /// The GPU's passes, compiled once the first frame is drawn there.
+    passes: Option<(Arc<ShaftsPipelines>, ShaftsPass)>,
     on_gpu: bool,
     /// The scene changed since the picture was last drawn.
     dirty: bool,
@@ -93,7 +94,7 @@ impl StageMode {
             step_deg: 5.0,
             selected: 0,
             maps: ShadowMaps::default(),
-            pipelines: None,
+            passes: None,
             on_gpu: false,
             dirty: true,
             status: None,
@@ -459,22 +460,33 @@ impl Mode for StageMode {
         self.watch()
     }
 
-    fn draw(&mut self, gpu: &Gpu, _: &mut wgpu::CommandEncoder, picture: &Picture) -> Result<()> {
+    /// Draws the picture where the scene changed (else the picture keeps the last):
+    /// on the GPU recorded into the frame's encoder and drawn into the picture with no
+    /// read-back, on the CPU with the shadow maps of unchanged lights kept.
+    fn draw(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        picture: &Picture,
+    ) -> Result<()> {
         self.resize(picture.size)?;
         if !self.dirty {
             return Ok(());
         }
-        let frame = if self.on_gpu {
-            let pipelines = match &self.pipelines {
-                Some(p) => p.clone(),
-                None => self.pipelines.insert(ShaftsPipelines::new(gpu)?).clone(),
+        if self.on_gpu {
+            let (pipelines, pass) = match &mut self.passes {
+                Some(passes) => passes,
+                None => self.passes.insert((
+                    ShaftsPipelines::new(gpu)?,
+                    ShaftsPass::new(gpu, picture.texture.format())?,
+                )),
             };
-            let shafts = GpuShafts::with_pipelines(gpu, &self.scene, pipelines)?;
-            shafts.render(gpu, ShaftsMethod::Planes)?.frame
+            let shafts = GpuShafts::with_pipelines(gpu, &self.scene, pipelines.clone())?;
+            shafts.prepare(gpu, encoder, pass, ShaftsMethod::Planes);
+            picture.draw(encoder, |render| pass.draw(render));
         } else {
-            self.maps.render(&self.scene)
-        };
-        write_frame(gpu, &picture.texture, &frame);
+            write_frame(gpu, &picture.texture, &self.maps.render(&self.scene));
+        }
         self.dirty = false;
         Ok(())
     }

@@ -27,7 +27,7 @@ pub struct BenchArgs {
     /// One JSON object per case on its own line, instead of a table.
     #[arg(long)]
     json: bool,
-    /// shafts: the folder holding spotlight-sphere.toml and stage.toml.
+    /// shafts and view: the folder holding spotlight-sphere.toml and stage.toml.
     #[arg(long, default_value = "scenes")]
     scenes: std::path::PathBuf,
     /// shafts: a folder to write the plane sweep into as shafts-sweep.csv and .svg
@@ -57,8 +57,9 @@ enum Area {
     /// and a frame.
     Clouds,
     /// The window of `atmo view`: frame times over scripted runs at 1280 x 720 (a
-    /// climb with the sun setting from a table; the sun setting by the shell method)
-    /// beside the still's draw of the same frame; needs a display (xvfb-run).
+    /// climb with the sun setting from a table; the sun setting by the shell method;
+    /// the stage orbited; one of its lights re-aimed) beside the still's draw of the
+    /// same frame; needs a display (xvfb-run).
     View,
 }
 
@@ -69,7 +70,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             Backend::Gpu => &["gpu"],
             Backend::Auto => &["cpu", "gpu"],
         };
-        return view::run(args.quick, args.json, backends);
+        return view::run(args.quick, args.json, backends, &args.scenes);
     }
     if args.backend != Backend::Cpu {
         let device = BackendArgs {

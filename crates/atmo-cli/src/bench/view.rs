@@ -1,11 +1,15 @@
 //! `atmo bench view`: the window's frame times over scripted runs at 1280 x 720, beside
-//! the still's draw of the same frame in the same run. Each case runs `atmo view` as
-//! its own process (a window per process), which prints its times as JSON.
+//! the still's draw of the same frame in the same run: the sky (a flight from the
+//! table, the sun setting by the shell method) and the stage (the camera orbiting,
+//! one light re-aimed every frame). Each case runs `atmo view` as its own process (a
+//! window per process), which prints its times as JSON.
 
 use std::path::Path;
 use std::process::Command;
 
 use anyhow::{bail, Context, Result};
+use atmo::shafts::edits::{self, Edit};
+use atmo::shafts::SamplePlanes;
 use atmo::sky::table::SkylightTable;
 use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
@@ -28,8 +32,25 @@ fn flight(frames: u64) -> String {
     script
 }
 
-/// Runs `atmo view sky` with `args` for `frames` frames under the current display and
-/// returns its times.
+/// An orbit: the camera 2.4 deg around the stage a frame (a drag of 8 pixels).
+fn orbit(frames: u64) -> String {
+    (1..frames).map(|f| format!("{f} drag 8 0\n")).collect()
+}
+
+/// A light edit: spotlight 1's aim walked across the stage, 10 cm a frame.
+fn light_walk(frames: u64) -> String {
+    (1..frames)
+        .map(|f| {
+            format!(
+                "{f} set spotlight[1].aim [{},0,-1.5]\n",
+                -2.2 + 0.1 * f as f32
+            )
+        })
+        .collect()
+}
+
+/// Runs `atmo view` with `args` (the mode first) for `frames` frames under the current
+/// display and returns its times.
 fn window(dir: &Path, args: &[&str], frames: u64, script: &str) -> Result<Value> {
     let script_path = dir.join("script.txt");
     std::fs::write(&script_path, script)?;
@@ -37,11 +58,12 @@ fn window(dir: &Path, args: &[&str], frames: u64, script: &str) -> Result<Value>
     let exe = std::env::current_exe()?;
     let (w, h) = (SIZE.0.to_string(), SIZE.1.to_string());
     let output = Command::new(exe)
-        .args(["view", "sky", "--width", &w, "--height", &h, "--timings"])
+        .arg("view")
+        .args(args)
+        .args(["--width", &w, "--height", &h, "--timings"])
         .args(["--frames", &frames.to_string()])
         .args(["--screenshot", shot.to_str().context("a UTF-8 path")?])
         .args(["--script", script_path.to_str().context("a UTF-8 path")?])
-        .args(args)
         .output()?;
     let stdout = String::from_utf8_lossy(&output.stdout);
     if !output.status.success() {
@@ -68,7 +90,22 @@ fn still_ms(runs: usize, mut draw: impl FnMut(&View)) -> Result<f64> {
     Ok(median((0..runs).map(|_| time_ms(|| draw(&view))).collect()))
 }
 
-pub fn run(quick: bool, json: bool, backends: &[&str]) -> Result<()> {
+/// The still's draw of the stage's frame (`atmo shafts` on the CPU: shadow maps and
+/// picture) at the bench's size, median of `runs`.
+fn stage_still_ms(scene: &Path, runs: usize) -> Result<f64> {
+    let size = [
+        Edit::set("camera.width", SIZE.0.to_string()),
+        Edit::set("camera.height", SIZE.1.to_string()),
+    ];
+    let scene = edits::load(scene, &size)?;
+    let draw = || std::hint::black_box(SamplePlanes::new(&scene).render());
+    draw();
+    Ok(median(
+        (0..runs).map(|_| time_ms(|| drop(draw()))).collect(),
+    ))
+}
+
+pub fn run(quick: bool, json: bool, backends: &[&str], scenes: &Path) -> Result<()> {
     if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
         return Err(atmo::Error::Invalid(
             "atmo bench view opens windows: it needs a display (run it under xvfb-run)".into(),
@@ -93,22 +130,53 @@ pub fn run(quick: bool, json: bool, backends: &[&str]) -> Result<()> {
         std::hint::black_box(SkyPicture::new(&model, sun).render(view));
     })?;
     let table_arg = table_path.to_str().context("a UTF-8 path")?;
+    let stage = scenes.join("stage.toml");
+    let stage_arg = stage.to_str().context("a UTF-8 path")?;
+    let stage_frames = if quick { 8 } else { 20 };
+    let stage_still = stage_still_ms(&stage, if quick { 2 } else { 5 })?;
+    let picture_only = "the still's CPU draw of the same frame (picture only)";
+    let whole_still = "the still's CPU draw of the same frame (shadow maps and picture)";
     for &backend in backends {
+        // (name, mode and its flags, frames, script, what it does, the still, its time)
         let cases = [
             (
                 "view.sky",
-                vec!["--table", table_arg],
+                vec!["sky", "--table", table_arg],
+                frames,
                 flight(frames),
+                "climb 250 m a frame, sun setting",
+                picture_only,
                 table_still,
             ),
             (
                 "view.sky-shells",
-                vec![],
+                vec!["sky"],
+                frames,
                 "0 key space\n".to_string(),
+                "sun setting",
+                picture_only,
                 shells_still,
             ),
+            (
+                "view.stage.camera",
+                vec!["stage", stage_arg],
+                stage_frames,
+                orbit(stage_frames),
+                "orbit 2.4 deg a frame",
+                whole_still,
+                stage_still,
+            ),
+            (
+                "view.stage.light-edit",
+                vec!["stage", stage_arg],
+                stage_frames,
+                light_walk(stage_frames),
+                "one light re-aimed a frame",
+                whole_still,
+                stage_still,
+            ),
         ];
-        for (name, mut args, script, still) in cases {
+        for (name, mut args, frames, script, what, baseline, still) in cases {
             args.extend(["--backend", backend]);
             let times = window(&dir, &args, frames, &script)?;
             let frame = &times["frame"];
@@ -118,16 +186,14 @@ pub fn run(quick: bool, json: bool, backends: &[&str]) -> Result<()> {
                 json!({
                     "bench": name,
                     "params": {"backend": backend, "width": SIZE.0, "height": SIZE.1,
-                               "frames": frames, "script": if name == "view.sky" {
-                                   "climb 250 m a frame, sun setting"
-                               } else { "sun setting" }},
+                               "frames": frames, "script": what},
                     "median_ms": median_ms, "p95_ms": frame["p95_ms"],
                     "method_median_ms": times["method"]["median_ms"],
-                    "baseline": "the still's CPU draw of the same frame (picture only)",
+                    "baseline": baseline,
                     "baseline_median_ms": still, "ratio": still / median_ms,
                 }),
                 format!(
-                    "{name:<16} {backend}: frame {median_ms:>7.1} ms (p95 {:.1}), method {:.1} ms; still draw {still:.1} ms",
+                    "{name:<22} {backend}: frame {median_ms:>7.1} ms (p95 {:.1}), method {:.1} ms; still draw {still:.1} ms",
                     frame["p95_ms"].as_f64().unwrap_or(f64::NAN),
                     times["method"]["median_ms"].as_f64().unwrap_or(f64::NAN),
                 ),
