@@ -65,6 +65,41 @@
 //! 2.07 M at 1920 x 1080. The headless renders (`render`, read back as an
 //! `atmo::image::Frame`) are one user of this path, `atmo view` another.
 //!
+//! The shafts draw into the caller's target the same way: [`shafts::ShaftsPipelines`]
+//! compiles the passes once, [`shafts::GpuShafts::with_pipelines`] uploads a scene (again
+//! when it changes), [`shafts::GpuShafts::prepare`] records the frame's passes into the
+//! caller's encoder and [`shafts::ShaftsPass::draw`] writes the picture (linear radiance
+//! times its exposure, the scene camera's size from its corner) into the caller's
+//! render pass:
+//!
+//! ```no_run
+//! # fn frame(gpu: &atmo_gpu::Gpu, scene: &atmo::shafts::Scene, target: &wgpu::TextureView)
+//! #          -> Result<(), atmo_gpu::GpuError> {
+//! use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPass, ShaftsPipelines};
+//!
+//! // Once.
+//! let pipelines = ShaftsPipelines::new(gpu)?;
+//! let mut pass = ShaftsPass::new(gpu, wgpu::TextureFormat::Rgba16Float)?;
+//! // When the scene changes (a light moved, the camera orbited).
+//! let shafts = GpuShafts::with_pipelines(gpu, scene, pipelines.clone())?;
+//! // Each frame it is drawn.
+//! let mut encoder = gpu.device.create_command_encoder(&Default::default());
+//! shafts.prepare(gpu, &mut encoder, &mut pass, ShaftsMethod::Planes);
+//! {
+//!     let mut render = atmo_gpu::display::cleared_pass(&mut encoder, target, "shafts", wgpu::Color::BLACK);
+//!     pass.draw(&mut render);
+//! }
+//! gpu.queue.submit([encoder.finish()]);
+//! # Ok(()) }
+//! ```
+//!
+//! Its passes, per frame (docs/gpu.md counts them on the example scenes): the shadow
+//! maps, one ray a texel (5 x 512^2 for the five-light stage); the planes' extents (one
+//! invocation) and the attenuation table (1024^2); the surfaces, one ray a sub-pixel;
+//! the sample planes, one quad a light, plane and sub-pixel ray over its lit rectangle,
+//! each fragment summing `sub_planes` samples (14.8 M fragments, 89 M samples for the
+//! stage at 720 x 480); the composite and the picture pass, one invocation a pixel.
+//!
 //! Shaders are WGSL under `shaders/`, one per pass, composed by [`wgsl::source`] after
 //! a prelude of constants generated from the Rust and the WGSL twins of the library's
 //! shared functions (each tested against its Rust original). Parameter structs are

@@ -288,16 +288,14 @@ impl StageMode {
         if self.edited.get(&at("aim")).is_some() {
             vector_row(ui, &self.edited, &at("aim"), "aim, m (right drag)", edits);
         }
-        let sliders = [
-            ("intensity", "intensity, cd", 1.0..=1e6, true),
-            ("dimmer", "dimmer", 0.0..=1.0, false),
-            ("beam_deg", "beam, deg", 0.1..=170.0, false),
-            ("field_deg", "field, deg", 0.1..=170.0, false),
-            ("kelvin", "colour temperature, K", 1000.0..=20000.0, false),
+        let list = vec![
+            Slider::new(at("intensity"), "intensity, cd", 1.0..=1e6).logarithmic(),
+            Slider::new(at("dimmer"), "dimmer", 0.0..=1.0).or(1.0),
+            Slider::new(at("beam_deg"), "beam, deg", 0.1..=170.0),
+            Slider::new(at("field_deg"), "field, deg", 0.1..=170.0),
+            Slider::new(at("kelvin"), "colour temperature, K", 1000.0..=40000.0).logarithmic(),
         ];
-        for (key, label, range, log) in sliders {
-            slider(ui, &self.edited, &at(key), label, range, log, edits);
-        }
+        sliders(ui, &self.edited, list, edits);
         if let Some(c) = self.edited.vector(&at("color")) {
             let mut rgb = c.map(|v| v as f32);
             ui.horizontal(|ui| {
@@ -314,15 +312,15 @@ impl StageMode {
     fn fixture_panel(&self, ui: &mut egui::Ui, k: usize, edits: &mut Vec<Edit>) {
         ui.label("at the show's start (the cues change them)");
         let at = |key: &str| format!("fixture[{k}].start.{key}");
-        let sliders = [
-            ("pan_deg", "pan, deg", -540.0..=540.0),
-            ("tilt_deg", "tilt, deg", -270.0..=270.0),
-            ("zoom_deg", "zoom, deg", 1.0..=90.0),
-            ("dimmer", "dimmer", 0.0..=1.0),
+        // Where the start does not set them: along the axis, full (zoom: the widest,
+        // which only the fixture's range knows).
+        let list = vec![
+            Slider::new(at("pan_deg"), "pan, deg", -540.0..=540.0).or(0.0),
+            Slider::new(at("tilt_deg"), "tilt, deg", -270.0..=270.0).or(0.0),
+            Slider::new(at("zoom_deg"), "zoom, deg", 1.0..=90.0),
+            Slider::new(at("dimmer"), "dimmer", 0.0..=1.0).or(1.0),
         ];
-        for (key, label, range) in sliders {
-            slider(ui, &self.edited, &at(key), label, range, false, edits);
-        }
+        sliders(ui, &self.edited, list, edits);
     }
 }
 
@@ -361,25 +359,58 @@ fn vector(v: Vec3) -> String {
     format!("[{},{},{}]", v.x, v.y, v.z)
 }
 
-/// A slider for the number at `key`, if the file has one; a change becomes an edit.
-fn slider(
-    ui: &mut egui::Ui,
-    doc: &Document,
-    key: &str,
-    label: &str,
+/// What a slider edits: the key, its label and range, whether the scale is
+/// logarithmic, and the value the scene takes where the file has none (the slider is
+/// left out where it has neither).
+struct Slider {
+    key: String,
+    label: &'static str,
     range: std::ops::RangeInclusive<f64>,
     logarithmic: bool,
-    edits: &mut Vec<Edit>,
-) {
-    let Some(old) = doc.number(key) else { return };
-    let mut value = old;
-    ui.add(
-        egui::Slider::new(&mut value, range)
-            .logarithmic(logarithmic)
-            .text(label),
-    );
-    if value != old {
-        edits.push(Edit::set(key, (value as f32).to_string()));
+    default: Option<f64>,
+}
+
+impl Slider {
+    fn new(key: String, label: &'static str, range: std::ops::RangeInclusive<f64>) -> Slider {
+        Slider {
+            key,
+            label,
+            range,
+            logarithmic: false,
+            default: None,
+        }
+    }
+
+    fn logarithmic(self) -> Slider {
+        Slider {
+            logarithmic: true,
+            ..self
+        }
+    }
+
+    fn or(self, default: f64) -> Slider {
+        Slider {
+            default: Some(default),
+            ..self
+        }
+    }
+}
+
+/// A slider for each of `list`; a change becomes an edit.
+fn sliders(ui: &mut egui::Ui, doc: &Document, list: Vec<Slider>, edits: &mut Vec<Edit>) {
+    for s in list {
+        let Some(old) = doc.number(&s.key).or(s.default) else {
+            continue;
+        };
+        let mut value = old;
+        ui.add(
+            egui::Slider::new(&mut value, s.range)
+                .logarithmic(s.logarithmic)
+                .text(s.label),
+        );
+        if value != old {
+            edits.push(Edit::set(&s.key, (value as f32).to_string()));
+        }
     }
 }
 
@@ -536,33 +567,14 @@ impl Mode for StageMode {
             }
         }
         ui.separator();
-        slider(
-            ui,
-            &self.edited,
-            "camera.fov_deg",
-            "field of view, deg",
-            5.0..=150.0,
-            false,
-            &mut edits,
-        );
-        slider(
-            ui,
-            &self.edited,
-            "haze.extinction",
-            "haze extinction, 1/m",
-            1e-4..=1.0,
-            true,
-            &mut edits,
-        );
-        slider(
-            ui,
-            &self.edited,
-            "display.exposure",
-            "exposure",
-            1e-3..=1e3,
-            true,
-            &mut edits,
-        );
+        let list = vec![
+            Slider::new("camera.fov_deg".into(), "field of view, deg", 5.0..=150.0),
+            Slider::new("haze.extinction".into(), "haze extinction, 1/m", 1e-4..=1.0).logarithmic(),
+            Slider::new("display.exposure".into(), "exposure", 1e-3..=1e3)
+                .logarithmic()
+                .or(1.0),
+        ];
+        sliders(ui, &self.edited, list, &mut edits);
         let tone = self.scene.display.tone;
         let name = TONES
             .iter()
