@@ -73,7 +73,7 @@ pub struct SkyPictureArgs {
 }
 
 /// Where and when: the sun from a place and a time instead of its angles.
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct PlaceArgs {
     /// Latitude, degrees north, in [-90, 90]; with --longitude and --time the sun is
     /// placed by NREL's SPA (overrides --sun-elevation and --sun-azimuth).

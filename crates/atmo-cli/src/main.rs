@@ -182,9 +182,13 @@ fn parse_args() -> Cli {
         }
         error.exit()
     };
-    // A later value of a flag replaces an earlier one: a cloud scene's flags go first.
-    let command =
-        hyphen_values(Cli::command()).mut_subcommand("clouds", |c| c.args_override_self(true));
+    // A later value of a flag replaces an earlier one: a cloud scene's flags go first
+    // (`atmo clouds --scene` and `atmo view clouds --scene`).
+    let command = hyphen_values(Cli::command())
+        .mut_subcommand("clouds", |c| c.args_override_self(true))
+        .mut_subcommand("view", |v| {
+            v.mut_subcommand("clouds", |c| c.args_override_self(true))
+        });
     let argv = with_scene(&command, std::env::args_os().collect());
     let matches = command
         .try_get_matches_from(argv)

@@ -112,6 +112,24 @@ fn matches_its_still(
     command
 }
 
+/// Each of `cases` (the arguments after `atmo view`, and what stderr must say) exits 2
+/// before a window opens; `--frames 1 --screenshot DIR/x.png` is added where a case
+/// does not give --frames.
+fn refused_before_the_window(dir: &Path, cases: Vec<(Vec<&str>, &str)>) {
+    let shot = dir.join("x.png");
+    for (args, says) in cases {
+        let mut all = vec!["view"];
+        all.extend(&args);
+        if !args.contains(&"--frames") {
+            all.extend(["--frames", "1", "--screenshot", shot.to_str().unwrap()]);
+        }
+        let o = atmo(&all);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+    }
+}
+
 /// The sky viewer with `args` and `script`, then its still; returns the still command.
 fn shot_and_still(dir: &Path, name: &str, args: &[&str], script: &str) -> Option<String> {
     let mut all = vec!["sky"];
@@ -188,29 +206,32 @@ fn bad_input_before_the_window_exits_2_with_a_message() {
     std::fs::write(&unknown, "0 set colour red\n").unwrap();
     let (bad_line, unknown) = (bad_line.to_str().unwrap(), unknown.to_str().unwrap());
     let missing = dir.join("missing.atmo-sky");
-    let shot = dir.join("x.png");
-    let frames = ["--frames", "1", "--screenshot", shot.to_str().unwrap()];
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["--script", bad_line], "bad-line.txt:2"),
-        (vec!["--script", unknown], "no parameter 'colour'"),
+        (vec!["sky", "--script", bad_line], "bad-line.txt:2"),
+        (vec!["sky", "--script", unknown], "no parameter 'colour'"),
         (
-            vec!["--table", missing.to_str().unwrap()],
+            vec!["sky", "--table", missing.to_str().unwrap()],
             "missing.atmo-sky",
         ),
-        (vec!["--sun-elevation", "91"], "--sun-elevation"),
-        (vec!["--frames", "0", "--screenshot", "x.png"], "frames"),
+        (vec!["sky", "--sun-elevation", "91"], "--sun-elevation"),
+        (
+            vec!["sky", "--frames", "0", "--screenshot", "x.png"],
+            "frames",
+        ),
+        // The clouds.
+        (
+            vec![CLOUD, CUMULUS, SMALL, "--sun-elevation", "0"],
+            "--sun-elevation",
+        ),
+        (
+            vec![CLOUD, CUMULUS, SMALL, "--script", unknown],
+            "no parameter 'colour' in the clouds",
+        ),
+        (vec![CLOUD, CUMULUS, SMALL, "--fov", "200"], "--fov"),
     ];
-    for (args, says) in cases {
-        let mut all = vec!["view", "sky"];
-        all.extend(&args);
-        if !args.contains(&"--frames") {
-            all.extend(frames);
-        }
-        let o = atmo(&all);
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
-        assert!(stderr.contains(says), "{args:?}: {stderr}");
-    }
+    refused_before_the_window(&dir, cases);
+    let shot = dir.join("x.png");
+    let frames = ["--frames", "1", "--screenshot", shot.to_str().unwrap()];
     // No display at all.
     let o = Command::new(env!("CARGO_BIN_EXE_atmo"))
         .args(["view", "sky"])
@@ -234,6 +255,11 @@ fn bad_input_before_the_window_exits_2_with_a_message() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A small cloud of the generator, for input refused before anything is drawn.
+const CLOUD: &str = "clouds";
+const CUMULUS: &str = "--generate=cumulus";
+const SMALL: &str = "--particles=100";
+
 /// The repository's scenes folder.
 fn scenes() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
@@ -251,13 +277,41 @@ fn stage_run(dir: &Path, name: &str, scene: &Path, args: &[&str], script: &str) 
     viewer_run(dir, name, &all, script)
 }
 
-#[test]
-fn scripted_stage_windows_give_the_pictures_of_their_still_commands() {
-    let dir = scratch("view-stage");
+/// `atmo view MODE...` (`args`) with `script` on the CPU backend and, where there is a
+/// GPU, on the GPU's: each last frame against the still command (`atmo COMMAND ...`)
+/// it printed, which must hold each of `parts`. The viewers' outputs.
+fn each_backend_matches_its_still(
+    dir: &Path,
+    args: &[&str],
+    script: &str,
+    command: &str,
+    display: Display,
+    parts: &[&str],
+) -> Vec<Output> {
     let mut backends = vec!["cpu"];
     if has_gpu() {
         backends.push("gpu");
     }
+    let mut outputs = Vec::new();
+    for backend in backends {
+        let name = format!("{}-{backend}", args[0]);
+        let mut all = args.to_vec();
+        all.extend(["--backend", backend]);
+        let Some(o) = viewer_run(dir, &name, &all, script) else {
+            break;
+        };
+        let still = matches_its_still(dir, &name, &o, command, display);
+        for part in parts {
+            assert!(still.contains(part), "{name}: {part} missing from {still}");
+        }
+        outputs.push(o);
+    }
+    outputs
+}
+
+#[test]
+fn scripted_stage_windows_give_the_pictures_of_their_still_commands() {
+    let dir = scratch("view-stage");
     // The camera orbited, a gel changed, a light aimed by the mouse, the exposure.
     let script = "1 drag 40 -10\n2 set spotlight[2].color [1, 0.2, 0.1]\n2 aim 1 40 52\n\
                   3 set display.exposure 1.5\n";
@@ -265,23 +319,21 @@ fn scripted_stage_windows_give_the_pictures_of_their_still_commands() {
         exposure: 1.5,
         tone: ToneMap::Exponential,
     };
-    for backend in backends {
-        let name = format!("stage-{backend}");
-        let scene = scenes().join("stage.toml");
-        let Some(o) = stage_run(&dir, &name, &scene, &["--backend", backend], script) else {
-            return;
-        };
-        let still = matches_its_still(&dir, &name, &o, "shafts", display);
-        for part in [
-            "--set camera.position=[",
-            "--set 'spotlight[2].color=[1, 0.2, 0.1]'",
-            "--set spotlight[1].aim=[",
-            "--set display.exposure=1.5",
-            "--set camera.width=96",
-        ] {
-            assert!(still.contains(part), "{name}: {part} missing from {still}");
-        }
-    }
+    let scene = scenes().join("stage.toml");
+    let args = [
+        "stage",
+        scene.to_str().unwrap(),
+        "--set",
+        "render.shadow_map=128",
+    ];
+    let parts = [
+        "--set camera.position=[",
+        "--set 'spotlight[2].color=[1, 0.2, 0.1]'",
+        "--set spotlight[1].aim=[",
+        "--set display.exposure=1.5",
+        "--set camera.width=96",
+    ];
+    each_backend_matches_its_still(&dir, &args, script, "shafts", display, &parts);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -315,28 +367,53 @@ fn bad_stage_input_before_the_window_exits_2_naming_it() {
     let dir = scratch("view-stage-bad");
     let stage = scenes().join("stage.toml");
     let stage = stage.to_str().unwrap();
-    let shot = dir.join("x.png");
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["no-such-scene.toml"], "no-such-scene.toml"),
+        (vec!["stage", "no-such-scene.toml"], "no-such-scene.toml"),
         (
-            vec![stage, "--set", "spotlight[9].dimmer=1"],
+            vec!["stage", stage, "--set", "spotlight[9].dimmer=1"],
             "not one at index 9",
         ),
         (
-            vec![stage, "--set", "haze.extinction=-1"],
+            vec!["stage", stage, "--set", "haze.extinction=-1"],
             "haze.extinction",
         ),
-        (vec![stage, "--time", "-1"], "time"),
-        (vec![stage, "--width", "0"], "--width"),
+        (vec!["stage", stage, "--time", "-1"], "time"),
+        (vec!["stage", stage, "--width", "0"], "--width"),
     ];
-    for (args, says) in cases {
-        let mut all = vec!["view", "stage"];
-        all.extend(&args);
-        all.extend(["--frames", "1", "--screenshot", shot.to_str().unwrap()]);
-        let o = atmo(&all);
+    refused_before_the_window(&dir, cases);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn scripted_cloud_windows_give_the_pictures_of_their_still_commands() {
+    let dir = scratch("view-clouds");
+    // The sun moved by a key and the panel, the camera orbited and brought nearer, then
+    // a sun below the horizon refused.
+    let script = "1 key right\n1 set sun-elevation 35\n2 drag 40 -10\n2 key r\n\
+                  3 set sun-elevation -5\n";
+    let args = [
+        "clouds",
+        "--generate",
+        "cumulus",
+        "--particles",
+        "3000",
+        "--resolution",
+        "48",
+        "--sky",
+    ];
+    let display = Display {
+        exposure: 0.15,
+        tone: ToneMap::Exponential,
+    };
+    let parts = [
+        "--sun-elevation 35 ",
+        "--sun-azimuth 45 ",
+        "--sky ",
+        "--particles 3000 ",
+    ];
+    for o in each_backend_matches_its_still(&dir, &args, script, "clouds", display, &parts) {
         let stderr = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
-        assert!(stderr.contains(says), "{args:?}: {stderr}");
+        assert!(stderr.contains("--sun-elevation"), "{stderr}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

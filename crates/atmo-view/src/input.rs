@@ -151,6 +151,15 @@ impl Script {
             .map(|(_, input)| input)
     }
 
+    /// Refuses a panel edit of a parameter not among `names`, the parameters of `mode`
+    /// ("the sky"), before the window opens.
+    pub fn check_parameters(&self, mode: &str, names: &[&str]) -> atmo::Result<()> {
+        match self.parameters().find(|n| !names.contains(n)) {
+            Some(name) => Err(unknown_parameter(name, mode, names)),
+            None => Ok(()),
+        }
+    }
+
     /// Every panel edit's parameter name, to check against a mode's before the window
     /// opens.
     pub fn parameters(&self) -> impl Iterator<Item = &str> {
@@ -159,6 +168,14 @@ impl Script {
             _ => None,
         })
     }
+}
+
+/// The error for a parameter `mode` does not have, listing those it has (`names`).
+pub fn unknown_parameter(name: &str, mode: &str, names: &[&str]) -> Error {
+    Error::Invalid(format!(
+        "no parameter '{name}' in {mode}; parameters: {}",
+        names.join(", ")
+    ))
 }
 
 #[cfg(test)]

@@ -1,9 +1,10 @@
 //! atmo's viewer: a window (winit + wgpu) that draws a [`Mode`] every frame as its
 //! parameters change, with a panel (egui) holding them, so that what a user finds in
 //! the window is written back as the still command that reproduces it. The modes: the
-//! sky ([`sky`], the parameters of `atmo sky`: sun, altitude, camera) and the stage
+//! sky ([`sky`], the parameters of `atmo sky`: sun, altitude, camera), the stage
 //! ([`stage`], a shafts scene file whose lights and camera are edited live, the edits
-//! those of `atmo shafts --set`).
+//! those of `atmo shafts --set`) and the clouds ([`clouds`], the sun moved and the
+//! camera orbited around a cloud of `atmo clouds`).
 //!
 //! The picture is drawn into an RGBA f32 texture ([`Picture`]) by the same code as the
 //! stills: on the GPU through `atmo_gpu` (the sky's [`SkyPass`] recorded into this
@@ -19,7 +20,9 @@
 //! [`SkyPass`]: atmo_gpu::sky::SkyPass
 
 mod app;
+pub mod clouds;
 pub mod input;
+mod panel;
 pub mod sky;
 pub mod stage;
 
@@ -66,6 +69,33 @@ pub trait Mode {
     fn aimed_light(&self) -> Option<usize> {
         None
     }
+}
+
+/// The limit of an orbit above and below the point looked at, degrees.
+const ORBIT_PITCH_LIMIT_DEG: f32 = 85.0;
+
+/// A camera at `camera` moved about the point `look_at`: `yaw_deg` around the vertical
+/// (clockwise seen from above, x east and z south), `pitch_deg` up (held within 85 deg
+/// of the horizontal), its distance times `scale`. The stage's and the clouds' orbit.
+pub fn orbit(
+    camera: glam::Vec3,
+    look_at: glam::Vec3,
+    yaw_deg: f32,
+    pitch_deg: f32,
+    scale: f32,
+) -> glam::Vec3 {
+    let offset = camera - look_at;
+    let distance = offset.length();
+    let pitch = ((offset.y / distance).asin().to_degrees() + pitch_deg)
+        .clamp(-ORBIT_PITCH_LIMIT_DEG, ORBIT_PITCH_LIMIT_DEG)
+        .to_radians();
+    let yaw = offset.x.atan2(offset.z) + yaw_deg.to_radians();
+    let direction = glam::Vec3::new(
+        pitch.cos() * yaw.sin(),
+        pitch.sin(),
+        pitch.cos() * yaw.cos(),
+    );
+    look_at + direction * (distance * scale)
 }
 
 /// Where the method runs; the window itself always shows through the GPU's surface.

@@ -16,6 +16,7 @@ use atmo_gpu::Gpu;
 use glam::Vec3;
 
 use crate::input::{Input, Key, Script};
+use crate::panel::{edits, not, number, tone_name, tone_named};
 use crate::{Mode, Picture};
 
 /// What `atmo sky` draws from.
@@ -105,6 +106,15 @@ impl SkyParams {
         ]
     }
 
+    /// The parameters' names.
+    fn names() -> Vec<&'static str> {
+        SkyParams::default()
+            .fields()
+            .iter()
+            .map(|(n, _)| *n)
+            .collect()
+    }
+
     /// The flags of `atmo sky` that give these parameters.
     pub fn flags(&self) -> String {
         let mut out = Vec::new();
@@ -122,15 +132,12 @@ impl SkyParams {
     /// Sets the parameter `name` (a flag's name) from `value`; an unknown name or a
     /// value that does not parse is an error naming it.
     pub fn set(&mut self, name: &str, value: &str) -> atmo::Result<()> {
-        let bad = |allowed: &str| Error::Invalid(format!("{name}: '{value}' is not {allowed}"));
-        let number = || {
+        let number = || number(name, value);
+        let flag = || {
             value
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| bad("a finite number"))
+                .parse::<bool>()
+                .map_err(|_| not(name, value, "true or false"))
         };
-        let flag = || value.parse::<bool>().map_err(|_| bad("true or false"));
         match name {
             "sun-elevation" => self.sun_elevation_deg = number()?,
             "sun-azimuth" => self.sun_azimuth_deg = number()?,
@@ -141,44 +148,16 @@ impl SkyParams {
             "fisheye" => self.fisheye = flag()?,
             "sun-disc" => self.sun_disc = flag()?,
             "exposure" => self.exposure = number()? as f32,
-            "tone-map" => {
-                self.tone = TONES
-                    .iter()
-                    .find(|(n, _)| *n == value)
-                    .map(|(_, t)| *t)
-                    .ok_or_else(|| bad("clamp, exponential or aces"))?
-            }
+            "tone-map" => self.tone = tone_named(name, value)?,
             _ => return Err(unknown_parameter(name)),
         }
         Ok(())
     }
 }
 
-/// The tone maps by the names `--tone-map` takes.
-const TONES: [(&str, ToneMap); 3] = [
-    ("clamp", ToneMap::Clamp),
-    ("exponential", ToneMap::Exponential),
-    ("aces", ToneMap::Aces),
-];
-
-fn tone_name(tone: ToneMap) -> &'static str {
-    TONES
-        .iter()
-        .find(|(_, t)| *t == tone)
-        .map_or("", |(n, _)| n)
-}
-
 /// The error for a parameter the sky does not have, listing those it has.
 pub fn unknown_parameter(name: &str) -> Error {
-    let names: Vec<&str> = SkyParams::default()
-        .fields()
-        .iter()
-        .map(|(n, _)| *n)
-        .collect();
-    Error::Invalid(format!(
-        "no parameter '{name}' in the sky; parameters: {}",
-        names.join(", ")
-    ))
+    crate::input::unknown_parameter(name, "the sky", &SkyParams::names())
 }
 
 impl Default for SkyParams {
@@ -316,15 +295,7 @@ impl Mode for SkyMode {
     }
 
     fn check_script(&self, script: &Script) -> atmo::Result<()> {
-        let names: Vec<&str> = SkyParams::default()
-            .fields()
-            .iter()
-            .map(|(n, _)| *n)
-            .collect();
-        match script.parameters().find(|n| !names.contains(n)) {
-            Some(name) => Err(unknown_parameter(name)),
-            None => Ok(()),
-        }
+        script.check_parameters("the sky", &SkyParams::names())
     }
 
     fn draw_on_gpu(&mut self, on_gpu: bool) {
@@ -434,41 +405,24 @@ impl Mode for SkyMode {
         let (low, high) = self.altitude_range();
         let mut animate = self.animate;
         ui.add(
-            egui::Slider::new(&mut p.sun_elevation_deg, sun_low..=sun_high)
+            crate::panel::slider(&mut p.sun_elevation_deg, sun_low..=sun_high)
                 .text("sun elevation, deg"),
         );
-        ui.add(egui::Slider::new(&mut p.sun_azimuth_deg, 0.0..=359.9).text("sun azimuth, deg"));
+        ui.add(crate::panel::slider(&mut p.sun_azimuth_deg, 0.0..=359.9).text("sun azimuth, deg"));
         ui.checkbox(&mut animate, "time of day (space)");
-        ui.add(egui::Slider::new(&mut p.altitude_m, low..=high).text("altitude, m"));
+        ui.add(crate::panel::slider(&mut p.altitude_m, low..=high).text("altitude, m"));
         ui.label(format!("R / F: climb / descend {} m (+ / -)", self.step_m));
         ui.separator();
         ui.checkbox(&mut p.fisheye, "fisheye (the whole dome)");
         ui.add_enabled_ui(!p.fisheye, |ui| {
-            ui.add(egui::Slider::new(&mut p.yaw_deg, 0.0..=359.9).text("yaw, deg (drag)"));
-            ui.add(egui::Slider::new(&mut p.pitch_deg, -89.0..=89.0).text("pitch, deg"));
-            ui.add(egui::Slider::new(&mut p.fov_deg, 10.0..=150.0).text("vertical fov, deg"));
+            ui.add(crate::panel::slider(&mut p.yaw_deg, 0.0..=359.9).text("yaw, deg (drag)"));
+            ui.add(crate::panel::slider(&mut p.pitch_deg, -89.0..=89.0).text("pitch, deg"));
+            ui.add(crate::panel::slider(&mut p.fov_deg, 10.0..=150.0).text("vertical fov, deg"));
         });
         ui.checkbox(&mut p.sun_disc, "sun disc");
         ui.separator();
-        ui.add(
-            egui::Slider::new(&mut p.exposure, 0.001..=100.0)
-                .logarithmic(true)
-                .text("exposure"),
-        );
-        egui::ComboBox::from_label("tone map")
-            .selected_text(tone_name(p.tone))
-            .show_ui(ui, |ui| {
-                for (name, tone) in TONES {
-                    ui.selectable_value(&mut p.tone, tone, name);
-                }
-            });
-        let mut inputs: Vec<Input> = p
-            .fields()
-            .into_iter()
-            .zip(self.params.fields())
-            .filter(|(new, old)| new != old)
-            .map(|((name, value), _)| Input::Set(name.to_string(), value))
-            .collect();
+        crate::panel::display(ui, &mut p.exposure, &mut p.tone);
+        let mut inputs = edits(p.fields(), self.params.fields());
         if animate != self.animate {
             inputs.push(Input::Key(Key::Animate));
         }

@@ -17,7 +17,7 @@ use std::time::{Instant, SystemTime};
 
 use anyhow::{Context, Result};
 use atmo::geometry::Ray;
-use atmo::image::{Display, ToneMap};
+use atmo::image::Display;
 use atmo::shafts::edits::{merged, Document, Edit};
 use atmo::shafts::planes::ShadowMaps;
 use atmo::shafts::Scene;
@@ -28,6 +28,7 @@ use atmo_gpu::Gpu;
 use glam::Vec3;
 
 use crate::input::{Input, Key, Script};
+use crate::panel::{tone_combo, tone_name};
 use crate::{Mode, Picture};
 
 /// Show time a frame advances while the show plays, s (the stills' 24 frames/s).
@@ -35,9 +36,6 @@ const SHOW_STEP_S: f32 = 1.0 / 24.0;
 
 /// How often the scene file is looked at for changes.
 const WATCH_INTERVAL_S: f64 = 0.25;
-
-/// The orbit's limit above and below the point looked at, degrees.
-const ORBIT_PITCH_LIMIT_DEG: f32 = 85.0;
 
 /// The stage mode: the scene file, the window's edits, the scene they give, and what
 /// draws it.
@@ -177,19 +175,7 @@ impl StageMode {
             self.point("camera.position")?,
             self.point("camera.look_at")?,
         );
-        let offset = position - look_at;
-        let distance = offset.length();
-        let pitch = (offset.y / distance).asin().to_degrees() + pitch_deg;
-        let pitch = pitch
-            .clamp(-ORBIT_PITCH_LIMIT_DEG, ORBIT_PITCH_LIMIT_DEG)
-            .to_radians();
-        let yaw = offset.x.atan2(offset.z) + yaw_deg.to_radians();
-        let direction = Vec3::new(
-            pitch.cos() * yaw.sin(),
-            pitch.sin(),
-            pitch.cos() * yaw.cos(),
-        );
-        let position = look_at + direction * (distance * scale);
+        let position = crate::orbit(position, look_at, yaw_deg, pitch_deg, scale);
         self.edit([Edit::set("camera.position", vector(position))])
     }
 
@@ -404,7 +390,7 @@ fn sliders(ui: &mut egui::Ui, doc: &Document, list: Vec<Slider>, edits: &mut Vec
         };
         let mut value = old;
         ui.add(
-            egui::Slider::new(&mut value, s.range)
+            crate::panel::slider(&mut value, s.range)
                 .logarithmic(s.logarithmic)
                 .text(s.label),
         );
@@ -428,13 +414,6 @@ fn vector_row(ui: &mut egui::Ui, doc: &Document, key: &str, label: &str, edits: 
         edits.push(Edit::set(key, vector(Vec3::from(v))));
     }
 }
-
-/// The tone maps by the names the scene file's `display.tone_map` takes.
-const TONES: [(&str, ToneMap); 3] = [
-    ("exponential", ToneMap::Exponential),
-    ("aces", ToneMap::Aces),
-    ("clamp", ToneMap::Clamp),
-];
 
 impl Mode for StageMode {
     fn title(&self) -> &'static str {
@@ -556,7 +535,7 @@ impl Mode for StageMode {
         let duration = self.scene.show.duration();
         if duration > 0.0 {
             let mut t = self.time_s;
-            ui.add(egui::Slider::new(&mut t, 0.0..=duration).text("show time, s"));
+            ui.add(crate::panel::slider(&mut t, 0.0..=duration).text("show time, s"));
             if t != self.time_s {
                 inputs.push(Input::Set("time".into(), t.to_string()));
             }
@@ -575,20 +554,12 @@ impl Mode for StageMode {
                 .or(1.0),
         ];
         sliders(ui, &self.edited, list, &mut edits);
-        let tone = self.scene.display.tone;
-        let name = TONES
-            .iter()
-            .find(|(_, t)| *t == tone)
-            .map_or("", |(n, _)| n);
-        egui::ComboBox::from_label("tone map")
-            .selected_text(name)
-            .show_ui(ui, |ui| {
-                for (n, t) in TONES {
-                    if ui.selectable_label(t == tone, n).clicked() && t != tone {
-                        edits.push(Edit::set("display.tone_map", format!("\"{n}\"")));
-                    }
-                }
-            });
+        let mut tone = self.scene.display.tone;
+        tone_combo(ui, &mut tone);
+        if tone != self.scene.display.tone {
+            let name = tone_name(tone);
+            edits.push(Edit::set("display.tone_map", format!("\"{name}\"")));
+        }
         ui.separator();
         let names = self.light_names();
         self.selected = self.selected.min(names.len().saturating_sub(1));

@@ -23,6 +23,7 @@ use glam::Vec3;
 
 use atmo_gpu::clouds::GpuClouds;
 use atmo_gpu::Gpu;
+use atmo_view::clouds::{CloudParams, CloudPictures};
 
 use crate::args::{PlaceArgs, ToneMapArg};
 use crate::backend::{gpu_error, BackendArgs};
@@ -43,6 +44,30 @@ pub const FLAGS: &[(&str, &str)] = &[
 
 #[derive(Args)]
 pub struct CloudsArgs {
+    #[command(flatten)]
+    pub still: CloudStill,
+    /// Also write the particles to this file (.csv or .atmo-particles).
+    #[arg(long, value_name = "FILE")]
+    save_particles: Option<PathBuf>,
+    /// Animate: the sun going round (`sun`) or the wind moving the particles (`wind`),
+    /// the light pass run again every frame; -o is then a folder.
+    #[arg(long, value_enum)]
+    animate: Option<Animate>,
+    /// Frames of --animate.
+    #[arg(long, default_value_t = 120, requires = "animate")]
+    frames: usize,
+    /// Output picture: .png or .exr (linear radiance, sun irradiance 1 per channel);
+    /// with --animate, a folder.
+    #[arg(short, long, value_name = "FILE")]
+    output: PathBuf,
+    #[command(flatten)]
+    device: BackendArgs,
+}
+
+/// A cloud picture: the cloud, the sun, how it is lit, the camera and the display;
+/// the still `atmo clouds` and the window `atmo view clouds` take the same flags.
+#[derive(Args, Clone)]
+pub struct CloudStill {
     /// Read the scene from a TOML file whose keys are this command's flags
     /// (`generate = "cumulus"`, `camera = [0, 1900, -3000]`, `sky = true`; see
     /// docs/clouds.md); flags on the command line override it.
@@ -66,9 +91,6 @@ pub struct CloudsArgs {
     /// `.atmo-particles`; see docs/clouds.md).
     #[arg(long, value_name = "FILE")]
     particles_file: Option<PathBuf>,
-    /// Also write the particles to this file (.csv or .atmo-particles).
-    #[arg(long, value_name = "FILE")]
-    save_particles: Option<PathBuf>,
     /// Sun elevation above the horizon, degrees, in (0, 90].
     #[arg(long, default_value_t = 20.0)]
     sun_elevation: f32,
@@ -149,19 +171,6 @@ pub struct CloudsArgs {
     /// Tone map for PNG output.
     #[arg(long, value_enum, default_value_t = ToneMapArg::Exponential)]
     tone_map: ToneMapArg,
-    /// Animate: the sun going round (`sun`) or the wind moving the particles (`wind`),
-    /// the light pass run again every frame; -o is then a folder.
-    #[arg(long, value_enum)]
-    animate: Option<Animate>,
-    /// Frames of --animate.
-    #[arg(long, default_value_t = 120, requires = "animate")]
-    frames: usize,
-    /// Output picture: .png or .exr (linear radiance, sun irradiance 1 per channel);
-    /// with --animate, a folder.
-    #[arg(short, long, value_name = "FILE")]
-    output: PathBuf,
-    #[command(flatten)]
-    device: BackendArgs,
 }
 
 /// The command-line arguments a cloud scene file stands for: each key a flag of
@@ -214,25 +223,39 @@ pub fn scene_arguments(path: &std::path::Path, long_flags: &[&str]) -> atmo::Res
     Ok(argv)
 }
 
-/// The light pass and the drawing, on the CPU or the GPU.
+/// The light pass and the drawing, on the CPU or the GPU (whose device the caller
+/// passes to each call).
 enum Renderer {
     /// The buffer and its resolution (none before the first light pass).
     Cpu(Option<IntensityBuffer>, usize),
-    Gpu(Box<(Gpu, GpuClouds)>),
+    Gpu(Box<GpuClouds>),
 }
 
 impl Renderer {
+    /// The renderer for `cloud`: on `gpu` where there is one, else on the CPU.
+    fn new(gpu: Option<&Gpu>, cloud: &Cloud) -> Result<Renderer> {
+        Ok(match gpu {
+            Some(gpu) => Renderer::Gpu(Box::new(
+                GpuClouds::new(gpu, &cloud.particles, cloud.resolution).map_err(gpu_error)?,
+            )),
+            None => Renderer::Cpu(None, cloud.resolution),
+        })
+    }
+
     /// The intensity buffer of `particles` (which may have moved) lit from `to_sun`.
     fn light(
         &mut self,
+        gpu: Option<&Gpu>,
         particles: &[Particle],
         to_sun: Vec3,
         forward: f32,
         splat: Splat,
     ) -> Result<()> {
-        match self {
-            Renderer::Cpu(Some(buffer), _) => buffer.update(particles, to_sun, forward, splat)?,
-            Renderer::Cpu(buffer, resolution) => {
+        match (self, gpu) {
+            (Renderer::Cpu(Some(buffer), _), _) => {
+                buffer.update(particles, to_sun, forward, splat)?
+            }
+            (Renderer::Cpu(buffer, resolution), _) => {
                 *buffer = Some(IntensityBuffer::new(
                     particles,
                     to_sun,
@@ -241,36 +264,37 @@ impl Renderer {
                     splat,
                 )?)
             }
-            Renderer::Gpu(boxed) => {
-                let (gpu, clouds) = &mut **boxed;
+            (Renderer::Gpu(clouds), Some(gpu)) => {
                 clouds.move_particles(gpu, particles).map_err(gpu_error)?;
                 clouds
                     .light(gpu, to_sun, forward, splat)
                     .map_err(gpu_error)?;
             }
+            (Renderer::Gpu(_), None) => unreachable!("a GPU renderer is made with a device"),
         }
         Ok(())
     }
 
     fn draw(
         &self,
+        gpu: Option<&Gpu>,
         particles: &[Particle],
         camera: &Camera,
         light: &Lighting,
         background: Option<&Frame>,
     ) -> Result<Frame> {
-        Ok(match self {
-            Renderer::Cpu(buffer, _) => {
+        Ok(match (self, gpu) {
+            (Renderer::Cpu(buffer, _), _) => {
                 let buffer = buffer.as_ref().expect("a light pass comes first");
                 render(particles, buffer, camera, light, background)?
             }
-            Renderer::Gpu(boxed) => {
-                let (gpu, clouds) = &**boxed;
+            (Renderer::Gpu(clouds), Some(gpu)) => {
                 clouds
                     .render(gpu, camera, light, background)
                     .map_err(gpu_error)?
                     .frame
             }
+            (Renderer::Gpu(_), None) => unreachable!("a GPU renderer is made with a device"),
         })
     }
 }
@@ -352,32 +376,212 @@ enum Animate {
     Wind,
 }
 
-/// The camera: at --camera, or looking at the cloud's centre from --view-azimuth,
-/// --distance widths away, at --view-height m; toward --look-at (default the centre).
-/// Refused inside a particle (a billboard cannot be drawn around the eye).
-fn camera_for(particles: &[Particle], args: &CloudsArgs) -> atmo::Result<Camera> {
-    check_range("--fov", args.fov as f64, 1.0, 170.0)?;
-    Frame::check_size(args.width, args.height)?;
-    let (lo, hi) = particles.iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(l, h), p| (l.min(p.position), h.max(p.position)),
-    );
-    let centre = 0.5 * (lo + hi);
-    let position = match args.camera {
-        Some(position) => position,
-        None => {
-            check_range("--distance", args.distance as f64, 0.1, 1000.0)?;
-            check_range("--view-azimuth", args.view_azimuth as f64, -360.0, 360.0)?;
-            check_range("--view-height", args.view_height as f64, -1e5, 1e5)?;
-            let width = (hi - lo).x.max((hi - lo).z).max(1.0);
-            let a = args.view_azimuth.to_radians();
-            Vec3::new(
-                centre.x + a.sin() * width * args.distance,
-                args.view_height,
-                centre.z - a.cos() * width * args.distance,
-            )
+/// A cloud picture's inputs, checked once: the particles, the sun, the camera, how the
+/// cloud is lit and how the picture is shown. `atmo clouds` draws it once (or as an
+/// animation); `atmo view clouds` draws it each frame with the window's sun and camera.
+pub struct Cloud {
+    pub particles: Vec<Particle>,
+    /// The sun's elevation and azimuth, degrees (from the place and time, or from
+    /// --sun-direction, where given).
+    pub sun_elevation: f32,
+    pub sun_azimuth: f32,
+    pub camera: Camera,
+    /// The point the camera looks at, m.
+    pub look_at: Vec3,
+    /// The field of view across `fov_axis`, degrees.
+    pub fov_deg: f32,
+    pub display: Display,
+    fov_axis: FovAxis,
+    resolution: usize,
+    forward: f32,
+    splat: Splat,
+    phase: PhaseFunction,
+    scattering: Octaves,
+    ambient: Ambient,
+    sky: bool,
+    /// `atmo clouds`'s flags for all of this but the sun, the camera and the display.
+    flags: String,
+}
+
+impl Cloud {
+    /// The picture `still` asks for, every flag checked (exit 2 naming it).
+    pub fn new(still: &CloudStill) -> Result<Cloud> {
+        let mut sun = (still.sun_elevation, still.sun_azimuth);
+        // The sun from a place and a time, where they are given (at the cloud's base).
+        if let Some(p) = still.place.sun_position(Cumulus::default().base as f64)? {
+            eprintln!(
+                "atmo: the sun at {:.3} deg elevation, {:.3} deg azimuth (SPA)",
+                p.elevation_deg, p.azimuth_deg
+            );
+            sun = (p.elevation_deg as f32, p.azimuth_deg as f32);
         }
-    };
+        if let Some(toward) = still.sun_direction {
+            let s = Sun::from_toward(toward).map_err(|_| {
+                atmo::Error::Invalid(format!(
+                    "--sun-direction = {toward} has no direction: give a non-zero X,Y,Z toward the sun"
+                ))
+            })?;
+            sun = (
+                s.elevation().to_degrees() as f32,
+                s.azimuth().to_degrees() as f32,
+            );
+        }
+        check_sun(sun.0, sun.1)?;
+        let exposure = still
+            .exposure
+            .unwrap_or(if still.sky { 0.15 } else { 10.0 });
+        atmo::error::check_positive("--exposure", exposure as f64, 1e12)?;
+        let particles = match &still.particles_file {
+            Some(path) => files::read(path, 0.99)?,
+            None => {
+                check_range("--particles", still.particles as f64, 1.0, 5e6)?;
+                Cumulus {
+                    particles: still.particles,
+                    seed: still.seed,
+                    ..Cumulus::default()
+                }
+                .generate()
+            }
+        };
+        let (position, look_at) = placement(&particles, still)?;
+        let ambient = Ambient::parse(still.ambient.as_deref(), still.sky)?;
+        let scattering = match still.scattering {
+            ScatteringArg::Single => Octaves::SINGLE,
+            ScatteringArg::Multiple => {
+                if still.forward != 0.0 {
+                    return Err(atmo::Error::Invalid(format!(
+                        "--forward = {} applies to --scattering single only (the octaves of \
+                         --scattering multiple need the sun's transmittance: --forward 0)",
+                        still.forward
+                    ))
+                    .into());
+                }
+                Octaves::MULTIPLE
+            }
+        };
+        let phase = match still.phase {
+            PhaseArg::Mie => PhaseFunction::CloudMie,
+            PhaseArg::Hg => {
+                check_range("--g", still.g as f64, -0.99, 0.99)?;
+                PhaseFunction::HenyeyGreenstein { g: still.g as f64 }
+            }
+        };
+        let size = (still.width, still.height);
+        let camera = camera_at(
+            &particles,
+            still.fov_axis,
+            position,
+            look_at,
+            still.fov,
+            size,
+        )?;
+        Ok(Cloud {
+            camera,
+            particles,
+            sun_elevation: sun.0,
+            sun_azimuth: sun.1,
+            look_at,
+            fov_deg: still.fov,
+            display: Display {
+                exposure,
+                tone: still.tone_map.into(),
+            },
+            fov_axis: still.fov_axis,
+            resolution: still.resolution,
+            forward: still.forward,
+            splat: match still.splat {
+                SplatArg::Pieces => Splat::Pieces,
+                SplatArg::Whole => Splat::Whole,
+            },
+            phase,
+            scattering,
+            ambient,
+            sky: still.sky,
+            flags: fixed_flags(still),
+        })
+    }
+
+    /// The sun at `azimuth_deg` and the cloud's elevation.
+    fn sun_at(&self, azimuth_deg: f32) -> atmo::Result<Sun> {
+        Sun::from_degrees(self.sun_elevation as f64, azimuth_deg as f64)
+    }
+
+    /// A camera at `position` looking at `target` with a field of view of `fov_deg`
+    /// across the still's --fov-axis, for a `size` picture (see [`camera_at`]).
+    pub fn camera_at(
+        &self,
+        position: Vec3,
+        target: Vec3,
+        fov_deg: f32,
+        size: (u32, u32),
+    ) -> atmo::Result<Camera> {
+        camera_at(
+            &self.particles,
+            self.fov_axis,
+            position,
+            target,
+            fov_deg,
+            size,
+        )
+    }
+
+    /// The sky around the cloud seen from `camera`, where the picture has one.
+    fn sky_for(&self, camera: &Camera) -> atmo::Result<Option<SkyAround>> {
+        self.sky
+            .then(|| SkyAround::new(&self.particles, camera))
+            .transpose()
+    }
+
+    /// Sunlight and sky light at the cloud for `sun`, and what `camera` sees behind it.
+    fn lighting(
+        &self,
+        sky: Option<&SkyAround>,
+        sun: Sun,
+        camera: &Camera,
+    ) -> atmo::Result<(Lighting, Option<Frame>)> {
+        let (sunlight, ambient, haze, background) = match (sky, self.ambient) {
+            (None, Ambient::Rgb(rgb)) => (Vec3::ONE, rgb, Haze::CLEAR, None),
+            (None, Ambient::Sky) => unreachable!("Ambient::parse needs --sky for it"),
+            (Some(sky), ambient) => {
+                let (sunlight, skylight, haze, background) = sky.at(sun, camera)?;
+                let ambient = match ambient {
+                    Ambient::Rgb(rgb) => rgb,
+                    Ambient::Sky => skylight,
+                };
+                (sunlight, ambient, haze, Some(background))
+            }
+        };
+        let light = Lighting {
+            to_sun: sun.toward(),
+            sun: sunlight,
+            ambient,
+            phase: self.phase,
+            haze,
+            scattering: self.scattering,
+        };
+        Ok((light, background))
+    }
+
+    /// `atmo clouds`'s flags for the cloud and how it is lit: all but the sun, the
+    /// camera and the display, which `atmo view clouds` adds from its window.
+    pub fn fixed_flags(&self) -> &str {
+        &self.flags
+    }
+}
+
+/// A camera at `position` looking at `target` with a field of view of `fov_deg` across
+/// `axis`, for a `size` picture. Refused inside a particle (a billboard cannot be drawn
+/// around the eye).
+fn camera_at(
+    particles: &[Particle],
+    axis: FovAxis,
+    position: Vec3,
+    target: Vec3,
+    fov_deg: f32,
+    size: (u32, u32),
+) -> atmo::Result<Camera> {
+    check_range("--fov", fov_deg as f64, 1.0, 170.0)?;
+    Frame::check_size(size.0, size.1)?;
     if let Some((k, p)) = particles
         .iter()
         .enumerate()
@@ -389,49 +593,89 @@ fn camera_for(particles: &[Particle], args: &CloudsArgs) -> atmo::Result<Camera>
             p.position, p.radius
         )));
     }
-    let fov = match args.fov_axis {
-        FovAxis::Vertical => Fov::Vertical(args.fov),
-        FovAxis::Horizontal => Fov::Horizontal(args.fov),
-    };
-    let target = args.look_at.unwrap_or(centre);
     if target == position {
         return Err(atmo::Error::Invalid(format!(
-            "--look-at = {target} is where the camera is (--camera): the camera has no view \
-             direction"
+            "--look-at = {target} is where the camera is (--camera): the camera has no \
+             view direction"
         )));
     }
-    Camera::look_at(position, target, Vec3::Y, fov, (args.width, args.height))
+    let fov = match axis {
+        FovAxis::Vertical => Fov::Vertical(fov_deg),
+        FovAxis::Horizontal => Fov::Horizontal(fov_deg),
+    };
+    Camera::look_at(position, target, Vec3::Y, fov, size)
 }
 
-pub fn run(mut args: CloudsArgs) -> Result<()> {
-    // The sun from a place and a time, where they are given (at the cloud's base).
-    if let Some(p) = args.place.sun_position(Cumulus::default().base as f64)? {
-        eprintln!(
-            "atmo: the sun at {:.3} deg elevation, {:.3} deg azimuth (SPA)",
-            p.elevation_deg, p.azimuth_deg
-        );
-        (args.sun_elevation, args.sun_azimuth) = (p.elevation_deg as f32, p.azimuth_deg as f32);
-    }
-    if let Some(toward) = args.sun_direction {
-        let sun = Sun::from_toward(toward).map_err(|_| {
-            atmo::Error::Invalid(format!(
-                "--sun-direction = {toward} has no direction: give a non-zero X,Y,Z toward the sun"
-            ))
-        })?;
-        (args.sun_elevation, args.sun_azimuth) = (
-            sun.elevation().to_degrees() as f32,
-            sun.azimuth().to_degrees() as f32,
-        );
-    }
+/// The sun's angles, checked.
+fn check_sun(elevation_deg: f32, azimuth_deg: f32) -> atmo::Result<()> {
     check_range(
         "--sun-elevation (a sun at or below the horizon does not light a cloud from above)",
-        args.sun_elevation as f64,
+        elevation_deg as f64,
         0.5,
         90.0,
     )?;
-    check_range("--sun-azimuth", args.sun_azimuth as f64, -360.0, 360.0)?;
-    let exposure = args.exposure.unwrap_or(if args.sky { 0.15 } else { 10.0 });
-    atmo::error::check_positive("--exposure", exposure as f64, 1e12)?;
+    check_range("--sun-azimuth", azimuth_deg as f64, -360.0, 360.0)
+}
+
+/// Where the camera stands and what it looks at: --camera, or looking at the cloud's
+/// centre from --view-azimuth, --distance widths away, at --view-height m; toward
+/// --look-at (default the centre).
+fn placement(particles: &[Particle], still: &CloudStill) -> atmo::Result<(Vec3, Vec3)> {
+    let (lo, hi) = particles.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(l, h), p| (l.min(p.position), h.max(p.position)),
+    );
+    let centre = 0.5 * (lo + hi);
+    let position = match still.camera {
+        Some(position) => position,
+        None => {
+            check_range("--distance", still.distance as f64, 0.1, 1000.0)?;
+            check_range("--view-azimuth", still.view_azimuth as f64, -360.0, 360.0)?;
+            check_range("--view-height", still.view_height as f64, -1e5, 1e5)?;
+            let width = (hi - lo).x.max((hi - lo).z).max(1.0);
+            let a = still.view_azimuth.to_radians();
+            Vec3::new(
+                centre.x + a.sin() * width * still.distance,
+                still.view_height,
+                centre.z - a.cos() * width * still.distance,
+            )
+        }
+    };
+    Ok((position, still.look_at.unwrap_or(centre)))
+}
+
+/// The flags of [`Cloud::fixed_flags`], each value as clap reads it back.
+fn fixed_flags(still: &CloudStill) -> String {
+    let name = |v: &dyn Fn() -> Option<clap::builder::PossibleValue>| {
+        v().map(|p| p.get_name().to_string()).unwrap_or_default()
+    };
+    let mut flags = match &still.particles_file {
+        Some(path) => vec![format!("--particles-file {}", path.display())],
+        None => vec![format!(
+            "--generate cumulus --particles {} --seed {}",
+            still.particles, still.seed
+        )],
+    };
+    flags.push(format!(
+        "--resolution {} --scattering {} --forward {} --splat {} --phase {} --g {} --fov-axis {}",
+        still.resolution,
+        name(&|| still.scattering.to_possible_value()),
+        still.forward,
+        name(&|| still.splat.to_possible_value()),
+        name(&|| still.phase.to_possible_value()),
+        still.g,
+        name(&|| still.fov_axis.to_possible_value()),
+    ));
+    if still.sky {
+        flags.push("--sky".into());
+    }
+    if let Some(ambient) = &still.ambient {
+        flags.push(format!("--ambient {ambient}"));
+    }
+    flags.join(" ")
+}
+
+pub fn run(args: CloudsArgs) -> Result<()> {
     match args.animate {
         None => {
             ImageKind::of(&args.output)?;
@@ -439,117 +683,34 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
         }
         Some(_) => check_range("--frames", args.frames as f64, 2.0, 10_000.0)?,
     }
-    let mut particles = match &args.particles_file {
-        Some(path) => files::read(path, 0.99)?,
-        None => {
-            check_range("--particles", args.particles as f64, 1.0, 5e6)?;
-            Cumulus {
-                particles: args.particles,
-                seed: args.seed,
-                ..Cumulus::default()
-            }
-            .generate()
-        }
-    };
+    let cloud = Cloud::new(&args.still)?;
     if let Some(path) = &args.save_particles {
         check_folder(path)?;
-        if let Some(input) = &args.particles_file {
+        if let Some(input) = &args.still.particles_file {
             atmo::files::check_distinct(path, &[("--particles-file", input)])?;
         }
     }
-    let camera = camera_for(&particles, &args)?;
-    let ambient = Ambient::parse(args.ambient.as_deref(), args.sky)?;
-    let scattering = match args.scattering {
-        ScatteringArg::Single => Octaves::SINGLE,
-        ScatteringArg::Multiple => {
-            if args.forward != 0.0 {
-                return Err(atmo::Error::Invalid(format!(
-                    "--forward = {} applies to --scattering single only (the octaves of \
-                     --scattering multiple need the sun's transmittance: --forward 0)",
-                    args.forward
-                ))
-                .into());
-            }
-            Octaves::MULTIPLE
-        }
-    };
-    let splat = match args.splat {
-        SplatArg::Pieces => Splat::Pieces,
-        SplatArg::Whole => Splat::Whole,
-    };
-    let phase = match args.phase {
-        PhaseArg::Mie => PhaseFunction::CloudMie,
-        PhaseArg::Hg => {
-            check_range("--g", args.g as f64, -0.99, 0.99)?;
-            PhaseFunction::HenyeyGreenstein { g: args.g as f64 }
-        }
-    };
-    let display = Display {
-        exposure,
-        tone: args.tone_map.into(),
-    };
-    let sky = if args.sky {
-        Some(SkyAround::new(&particles, &camera)?)
-    } else {
-        None
-    };
-    // The sun at --sun-elevation and `azimuth_deg`.
-    let sun_at =
-        |azimuth_deg: f32| Sun::from_degrees(args.sun_elevation as f64, azimuth_deg as f64);
-    // Sunlight and sky light at the cloud, and what is behind it.
-    let lighting = |sun: Sun| -> atmo::Result<(Lighting, Option<Frame>)> {
-        Ok(match &sky {
-            None => (
-                Lighting {
-                    to_sun: sun.toward(),
-                    sun: Vec3::ONE,
-                    ambient: match ambient {
-                        Ambient::Rgb(rgb) => rgb,
-                        Ambient::Sky => unreachable!("Ambient::parse needs --sky for it"),
-                    },
-                    phase,
-                    haze: Haze::CLEAR,
-                    scattering,
-                },
-                None,
-            ),
-            Some(sky) => {
-                let (sunlight, skylight, haze, background) = sky.at(sun, &camera)?;
-                let light = Lighting {
-                    to_sun: sun.toward(),
-                    sun: sunlight,
-                    ambient: match ambient {
-                        Ambient::Rgb(rgb) => rgb,
-                        Ambient::Sky => skylight,
-                    },
-                    phase,
-                    haze,
-                    scattering,
-                };
-                (light, Some(background))
-            }
-        })
-    };
-    let sun = sun_at(args.sun_azimuth)?;
-    let mut renderer = match args.device.open()? {
-        Some(gpu) => {
-            let clouds = GpuClouds::new(&gpu, &particles, args.resolution).map_err(gpu_error)?;
-            Renderer::Gpu(Box::new((gpu, clouds)))
-        }
-        None => Renderer::Cpu(None, args.resolution),
-    };
+    let camera = &cloud.camera;
+    let sky = cloud.sky_for(camera)?;
+    let sun = cloud.sun_at(cloud.sun_azimuth)?;
+    let gpu = args.device.open()?;
+    let gpu = gpu.as_ref();
+    let mut renderer = Renderer::new(gpu, &cloud)?;
+    let (forward, splat) = (cloud.forward, cloud.splat);
+    let mut particles = cloud.particles.clone();
     let start = Instant::now();
-    renderer.light(&particles, sun.toward(), args.forward, splat)?;
+    renderer.light(gpu, &particles, sun.toward(), forward, splat)?;
     let light_ms = start.elapsed().as_secs_f64() * 1e3;
     // Everything is validated now (the light pass checked the buffer's settings).
     if let Some(path) = &args.save_particles {
         files::write(path, &particles)?;
     }
+    let display = cloud.display;
     match args.animate {
         None => {
             let start = Instant::now();
-            let (light, background) = lighting(sun)?;
-            let frame = renderer.draw(&particles, &camera, &light, background.as_ref())?;
+            let (light, background) = cloud.lighting(sky.as_ref(), sun, camera)?;
+            let frame = renderer.draw(gpu, &particles, camera, &light, background.as_ref())?;
             let draw_ms = start.elapsed().as_secs_f64() * 1e3;
             frame.write(&args.output, display.exposure, display.tone)?;
             eprintln!(
@@ -558,7 +719,7 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
                 frame.width,
                 frame.height,
                 particles.len(),
-                args.resolution
+                cloud.resolution
             );
         }
         Some(animate) => {
@@ -567,13 +728,13 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
                 &args.output,
                 args.frames,
                 30,
-                (args.width, args.height),
+                (camera.width, camera.height),
                 display,
                 |k, frame| {
                     let sun = match animate {
                         // Once round, the azimuth kept in [0, 360).
-                        Animate::Sun => sun_at(
-                            (args.sun_azimuth + 360.0 * k as f32 / args.frames as f32)
+                        Animate::Sun => cloud.sun_at(
+                            (cloud.sun_azimuth + 360.0 * k as f32 / args.frames as f32)
                                 .rem_euclid(360.0),
                         )?,
                         Animate::Wind => {
@@ -591,9 +752,9 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
                             sun
                         }
                     };
-                    renderer.light(&particles, sun.toward(), args.forward, splat)?;
-                    let (light, background) = lighting(sun)?;
-                    *frame = renderer.draw(&particles, &camera, &light, background.as_ref())?;
+                    renderer.light(gpu, &particles, sun.toward(), forward, splat)?;
+                    let (light, background) = cloud.lighting(sky.as_ref(), sun, camera)?;
+                    *frame = renderer.draw(gpu, &particles, camera, &light, background.as_ref())?;
                     Ok(())
                 },
             )?;
@@ -606,6 +767,85 @@ pub fn run(mut args: CloudsArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The cloud as `atmo view clouds` draws it, frame after frame: the light pass run
+/// again only when the sun or the device changed, the sky around the cloud made again
+/// only when the camera's height changed (the sky in front of it is drawn from there).
+pub struct WindowClouds {
+    cloud: Cloud,
+    /// The renderer, and whether it is the GPU's.
+    renderer: Option<(bool, Renderer)>,
+    /// The sun the intensity buffer was lit by.
+    lit: Option<Sun>,
+    /// The sky around the cloud, and the camera height it was made for.
+    sky: Option<(f32, Option<SkyAround>)>,
+}
+
+impl WindowClouds {
+    pub fn new(cloud: Cloud) -> WindowClouds {
+        WindowClouds {
+            cloud,
+            renderer: None,
+            lit: None,
+            sky: None,
+        }
+    }
+
+    /// The window's first parameters: the still's.
+    pub fn params(&self) -> CloudParams {
+        let c = &self.cloud;
+        CloudParams {
+            sun_elevation_deg: c.sun_elevation,
+            sun_azimuth_deg: c.sun_azimuth,
+            camera: c.camera.position,
+            look_at: c.look_at,
+            fov_deg: c.fov_deg,
+            exposure: c.display.exposure,
+            tone: c.display.tone,
+        }
+    }
+}
+
+impl CloudPictures for WindowClouds {
+    fn draw(&mut self, gpu: Option<&Gpu>, p: &CloudParams, size: (u32, u32)) -> Result<Frame> {
+        check_sun(p.sun_elevation_deg, p.sun_azimuth_deg)?;
+        atmo::error::check_positive("--exposure", p.exposure as f64, 1e12)?;
+        let cloud = &self.cloud;
+        let camera = cloud.camera_at(p.camera, p.look_at, p.fov_deg, size)?;
+        let sun = Sun::from_degrees(p.sun_elevation_deg as f64, p.sun_azimuth_deg as f64)?;
+        let (on_gpu, renderer) = match &mut self.renderer {
+            Some((on_gpu, renderer)) if *on_gpu == gpu.is_some() => (*on_gpu, renderer),
+            slot => {
+                self.lit = None;
+                let made = (gpu.is_some(), Renderer::new(gpu, cloud)?);
+                let (on_gpu, renderer) = slot.insert(made);
+                (*on_gpu, renderer)
+            }
+        };
+        debug_assert_eq!(on_gpu, gpu.is_some());
+        if self.lit != Some(sun) {
+            renderer.light(
+                gpu,
+                &cloud.particles,
+                sun.toward(),
+                cloud.forward,
+                cloud.splat,
+            )?;
+            self.lit = Some(sun);
+        }
+        let height = camera.position.y;
+        let sky = match &mut self.sky {
+            Some((h, sky)) if *h == height => sky,
+            slot => &mut slot.insert((height, cloud.sky_for(&camera)?)).1,
+        };
+        let (light, background) = cloud.lighting(sky.as_ref(), sun, &camera)?;
+        renderer.draw(gpu, &cloud.particles, &camera, &light, background.as_ref())
+    }
+
+    fn flags(&self) -> String {
+        self.cloud.fixed_flags().to_string()
+    }
 }
 
 /// The sky around a cloud (Earth atmosphere, default settings): its light at the

@@ -7,6 +7,7 @@ use anyhow::Result;
 use atmo::shafts::edits::Edit;
 use atmo::sky::SkylightTable;
 use atmo::Error;
+use atmo_view::clouds::CloudsMode;
 use atmo_view::sky::{SkyMode, SkySource};
 use atmo_view::stage::StageMode;
 use atmo_view::{Mode, Options, Script};
@@ -15,6 +16,7 @@ use clap::{Args, Subcommand};
 use crate::args::{AtmosphereArgs, ShellArgs, SkyPictureArgs};
 use crate::backend::{Backend, BackendArgs};
 use crate::bench::percentile;
+use crate::commands::clouds::{Cloud, CloudStill, WindowClouds};
 
 #[derive(Args)]
 pub struct ViewArgs {
@@ -34,6 +36,21 @@ enum ViewMode {
     /// screenshot and its `atmo shafts` command; the file is read again when it
     /// changes on disk.
     Stage(ViewStageArgs),
+    /// A cloud, live: arrows move the sun, drag orbits the camera, R / F nearer and
+    /// farther, space sends the sun round, P saves a screenshot and its `atmo clouds`
+    /// command; every flag of `atmo clouds` (but the animation's) sets the first
+    /// picture.
+    Clouds(ViewCloudsArgs),
+}
+
+#[derive(Args)]
+pub struct ViewCloudsArgs {
+    #[command(flatten)]
+    still: CloudStill,
+    #[command(flatten)]
+    window: WindowArgs,
+    #[command(flatten)]
+    device: BackendArgs,
 }
 
 #[derive(Args)]
@@ -123,6 +140,14 @@ pub fn run(args: ViewArgs) -> Result<()> {
             for (field, v) in [("--width", size.0), ("--height", size.1)] {
                 atmo::error::check_range(field, v as f64, 1.0, 16384.0)?;
             }
+            (Box::new(mode), size, args.window, args.device)
+        }
+        ViewMode::Clouds(args) => {
+            let cloud = Cloud::new(&args.still)?;
+            let size = (cloud.camera.width, cloud.camera.height);
+            let pictures = WindowClouds::new(cloud);
+            let params = pictures.params();
+            let mode = CloudsMode::new(params, Box::new(pictures));
             (Box::new(mode), size, args.window, args.device)
         }
     };
