@@ -387,9 +387,9 @@ fn bad_stage_input_before_the_window_exits_2_naming_it() {
 #[test]
 fn scripted_cloud_windows_give_the_pictures_of_their_still_commands() {
     let dir = scratch("view-clouds");
-    // The sun moved by a key and the panel, the camera orbited and brought nearer, then
-    // a sun below the horizon refused.
-    let script = "1 key right\n1 set sun-elevation 35\n2 drag 40 -10\n2 key r\n\
+    // The sun moved by a key and the panel, the wind blowing, the camera orbited and
+    // brought nearer, then a sun below the horizon refused (which stops the wind).
+    let script = "1 key right\n1 set sun-elevation 35\n1 key w\n2 drag 40 -10\n2 key r\n\
                   3 set sun-elevation -5\n";
     let args = [
         "clouds",
@@ -408,6 +408,7 @@ fn scripted_cloud_windows_give_the_pictures_of_their_still_commands() {
     let parts = [
         "--sun-elevation 35 ",
         "--sun-azimuth 45 ",
+        "--wind-s 8 ",
         "--sky ",
         "--particles 3000 ",
     ];

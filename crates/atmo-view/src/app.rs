@@ -211,6 +211,7 @@ fn key_of(code: KeyCode) -> Option<Key> {
         KeyCode::ArrowDown => Key::SunDown,
         KeyCode::Space => Key::Animate,
         KeyCode::KeyS => Key::Save,
+        KeyCode::KeyW => Key::Wind,
         KeyCode::KeyP => Key::Screenshot,
         KeyCode::Tab => Key::Panel,
         _ => return None,

@@ -18,6 +18,9 @@ use crate::{Mode, Picture};
 /// The sun's azimuth per frame while the sun goes round, degrees.
 const SUN_STEP_DEG: f64 = 1.0;
 
+/// The wind's time per frame while the wind blows, s (`atmo clouds --animate wind`'s).
+const WIND_STEP_S: f32 = 4.0;
+
 /// What the window changes, each the value of one of `atmo clouds`'s flags.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CloudParams {
@@ -31,6 +34,8 @@ pub struct CloudParams {
     pub look_at: Vec3,
     /// `--fov`, degrees.
     pub fov_deg: f32,
+    /// `--wind-s`: how long the breeze has carried the particles, s.
+    pub wind_s: f32,
     /// `--exposure`.
     pub exposure: f32,
     /// `--tone-map`.
@@ -48,6 +53,7 @@ impl CloudParams {
             ("camera", v(self.camera)),
             ("look-at", v(self.look_at)),
             ("fov", self.fov_deg.to_string()),
+            ("wind-s", self.wind_s.to_string()),
             ("exposure", self.exposure.to_string()),
             ("tone-map", tone_name(self.tone).to_string()),
         ]
@@ -88,6 +94,7 @@ impl CloudParams {
             "camera" => self.camera = vector()?,
             "look-at" => self.look_at = vector()?,
             "fov" => self.fov_deg = number()?,
+            "wind-s" => self.wind_s = number()?,
             "exposure" => self.exposure = number()?,
             "tone-map" => self.tone = tone_named(name, value)?,
             _ => return Err(unknown_parameter(name, "the clouds", &self.names())),
@@ -113,6 +120,8 @@ pub struct CloudsMode {
     pictures: Box<dyn CloudPictures>,
     /// The sun going round, a degree a frame.
     pub animate: bool,
+    /// The wind blowing, [`WIND_STEP_S`] a frame.
+    pub wind: bool,
     /// The orbit's step for keys, degrees.
     pub step_deg: f32,
     on_gpu: bool,
@@ -129,6 +138,7 @@ impl CloudsMode {
             params,
             pictures,
             animate: false,
+            wind: false,
             step_deg: 5.0,
             on_gpu: false,
             drawn: None,
@@ -170,6 +180,7 @@ impl Mode for CloudsMode {
                 Key::Faster => self.step_deg = (step * 2.0).min(45.0),
                 Key::Slower => self.step_deg = step / 2.0,
                 Key::Animate => self.animate = !self.animate,
+                Key::Wind => self.wind = !self.wind,
                 Key::Screenshot | Key::Panel | Key::Save => {}
             },
             Input::Drag(dx, dy) => orbit_camera(p, -0.3 * dx, 0.3 * dy, 1.0),
@@ -180,9 +191,12 @@ impl Mode for CloudsMode {
     }
 
     fn update(&mut self) -> Result<()> {
+        let p = &mut self.params;
         if self.animate {
-            let p = &mut self.params;
             p.sun_azimuth_deg = ((p.sun_azimuth_deg as f64 + SUN_STEP_DEG) % 360.0) as f32;
+        }
+        if self.wind {
+            p.wind_s += WIND_STEP_S;
         }
         Ok(())
     }
@@ -205,7 +219,7 @@ impl Mode for CloudsMode {
                 if let Some((last, _, _)) = &self.drawn {
                     self.params = last.clone();
                 }
-                self.animate = false;
+                (self.animate, self.wind) = (false, false);
                 Err(e)
             }
         }
@@ -236,6 +250,9 @@ impl Mode for CloudsMode {
         );
         ui.add(crate::panel::slider(&mut p.sun_azimuth_deg, 0.0..=359.9).text("sun azimuth, deg"));
         ui.checkbox(&mut animate, "the sun goes round (space)");
+        let mut wind = self.wind;
+        ui.checkbox(&mut wind, "the wind blows (W)");
+        ui.add(crate::panel::slider(&mut p.wind_s, 0.0..=3600.0).text("wind, s"));
         ui.separator();
         ui.label(format!(
             "camera at {:.0}, {:.0}, {:.0} m (drag to orbit, R / F nearer / farther)",
@@ -247,11 +264,15 @@ impl Mode for CloudsMode {
         if animate != self.animate {
             inputs.push(Input::Key(Key::Animate));
         }
+        if wind != self.wind {
+            inputs.push(Input::Key(Key::Wind));
+        }
         inputs
     }
 
     fn help(&self) -> &'static str {
-        "drag: orbit; arrows: sun; R / F: nearer / farther; space: the sun goes round"
+        "drag: orbit; arrows: sun; R / F: nearer / farther; space: the sun goes round; W: \
+         wind"
     }
 }
 
@@ -266,6 +287,7 @@ mod tests {
             camera: Vec3::new(-2200.0, 1900.0, 2200.0),
             look_at: Vec3::new(0.0, 1900.0, 0.0),
             fov_deg: 50.0,
+            wind_s: 0.0,
             exposure: 0.05,
             tone: ToneMap::Aces,
         }

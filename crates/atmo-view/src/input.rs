@@ -46,6 +46,8 @@ pub enum Key {
     Animate,
     /// S: the stage's scene, edited, saved to its file.
     Save,
+    /// W: the wind in the clouds on or off.
+    Wind,
     /// P: a screenshot and its still command.
     Screenshot,
     /// Tab: the panel shown or hidden.
@@ -65,6 +67,7 @@ impl Key {
         ("down", Key::SunDown),
         ("space", Key::Animate),
         ("s", Key::Save),
+        ("w", Key::Wind),
         ("p", Key::Screenshot),
         ("tab", Key::Panel),
     ];

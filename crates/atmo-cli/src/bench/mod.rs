@@ -58,8 +58,8 @@ enum Area {
     Clouds,
     /// The window of `atmo view`: frame times over scripted runs at 1280 x 720 (a
     /// climb with the sun setting from a table; the sun setting by the shell method;
-    /// the stage orbited; one of its lights re-aimed) beside the still's draw of the
-    /// same frame; needs a display (xvfb-run).
+    /// the stage orbited; one of its lights re-aimed; the sun round a cloud) beside the
+    /// still's draw of the same frame; needs a display (xvfb-run).
     View,
 }
 

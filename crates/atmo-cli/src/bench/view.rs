@@ -1,7 +1,7 @@
 //! `atmo bench view`: the window's frame times over scripted runs at 1280 x 720, beside
 //! the still's draw of the same frame in the same run: the sky (a flight from the
-//! table, the sun setting by the shell method) and the stage (the camera orbiting,
-//! one light re-aimed every frame). Each case runs `atmo view` as its own process (a
+//! table, the sun setting by the shell method), the stage (the camera orbiting, one
+//! light re-aimed every frame) and the clouds (the sun going round). Each case runs `atmo view` as its own process (a
 //! window per process), which prints its times as JSON.
 
 use std::path::Path;
@@ -19,6 +19,9 @@ use serde_json::{json, Value};
 
 use super::sky_table::table_settings;
 use super::{emit, median, time_ms};
+use crate::commands::clouds::{Cloud, CloudStill, WindowClouds};
+use atmo_view::clouds::CloudPictures;
+use clap::Parser;
 
 const SIZE: (u32, u32) = (1280, 720);
 
@@ -105,6 +108,37 @@ fn stage_still_ms(scene: &Path, runs: usize) -> Result<f64> {
     ))
 }
 
+/// The cloud of `atmo view clouds --generate cumulus --sky` at the bench's size.
+#[derive(clap::Parser)]
+struct CloudFlags {
+    #[command(flatten)]
+    still: CloudStill,
+}
+
+/// The flags of the clouds' case: the paper's largest cloud before the sky.
+const CLOUD_FLAGS: [&str; 3] = ["--generate", "cumulus", "--sky"];
+
+/// The still's draw of a frame of the clouds with the sun moved (`atmo clouds` on the
+/// CPU: the light pass, the sky behind and the billboards), median of `runs`.
+fn clouds_still_ms(runs: usize) -> Result<f64> {
+    let (w, h) = (SIZE.0.to_string(), SIZE.1.to_string());
+    let args = ["clouds", "--width", &w, "--height", &h];
+    let flags = CloudFlags::try_parse_from(args.iter().chain(&CLOUD_FLAGS))?;
+    let mut pictures = WindowClouds::new(Cloud::new(&flags.still)?);
+    let mut params = pictures.params();
+    let mut times = Vec::new();
+    // The first frame also makes the sky around the cloud: not timed.
+    for k in 0..=runs {
+        params.sun_azimuth_deg += 1.0;
+        let start = std::time::Instant::now();
+        std::hint::black_box(pictures.draw(None, &params, SIZE)?);
+        if k > 0 {
+            times.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    Ok(median(times))
+}
+
 pub fn run(quick: bool, json: bool, backends: &[&str], scenes: &Path) -> Result<()> {
     if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
         return Err(atmo::Error::Invalid(
@@ -134,6 +168,9 @@ pub fn run(quick: bool, json: bool, backends: &[&str], scenes: &Path) -> Result<
     let stage_arg = stage.to_str().context("a UTF-8 path")?;
     let stage_frames = if quick { 8 } else { 20 };
     let stage_still = stage_still_ms(&stage, if quick { 2 } else { 5 })?;
+    let cloud_frames = if quick { 4 } else { 10 };
+    let clouds_still = clouds_still_ms(if quick { 2 } else { 4 })?;
+    let cloud_args = [&["clouds"][..], &CLOUD_FLAGS].concat();
     let picture_only = "the still's CPU draw of the same frame (picture only)";
     let whole_still = "the still's CPU draw of the same frame (shadow maps and picture)";
     for &backend in backends {
@@ -174,6 +211,15 @@ pub fn run(quick: bool, json: bool, backends: &[&str], scenes: &Path) -> Result<
                 "one light re-aimed a frame",
                 whole_still,
                 stage_still,
+            ),
+            (
+                "view.clouds.sun",
+                cloud_args.clone(),
+                cloud_frames,
+                "0 key space\n".to_string(),
+                "the sun 1 deg round a frame",
+                "the still's CPU draw of the same frame (light pass, sky, billboards)",
+                clouds_still,
             ),
         ];
         for (name, mut args, frames, script, what, baseline, still) in cases {

@@ -91,6 +91,10 @@ pub struct CloudStill {
     /// `.atmo-particles`; see docs/clouds.md).
     #[arg(long, value_name = "FILE")]
     particles_file: Option<PathBuf>,
+    /// Carry the particles this long by the breeze of `--animate wind`, s: 6 m/s at the
+    /// cloud's base, 1 m/s faster for each 100 m up, toward the east and a little south.
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    wind_s: f32,
     /// Sun elevation above the horizon, degrees, in (0, 90].
     #[arg(long, default_value_t = 20.0)]
     sun_elevation: f32,
@@ -222,6 +226,9 @@ pub fn scene_arguments(path: &std::path::Path, long_flags: &[&str]) -> atmo::Res
     }
     Ok(argv)
 }
+
+/// The wind's time a frame of `--animate wind` (and of the window's wind), s.
+pub const WIND_STEP_S: f32 = 4.0;
 
 /// The light pass and the drawing, on the CPU or the GPU (whose device the caller
 /// passes to each call).
@@ -380,6 +387,10 @@ enum Animate {
 /// cloud is lit and how the picture is shown. `atmo clouds` draws it once (or as an
 /// animation); `atmo view clouds` draws it each frame with the window's sun and camera.
 pub struct Cloud {
+    /// The particles as given, before the wind.
+    pub calm: Vec<Particle>,
+    /// The seconds of wind they are carried (`--wind-s`), and where that takes them.
+    pub wind_s: f32,
     pub particles: Vec<Particle>,
     /// The sun's elevation and azimuth, degrees (from the place and time, or from
     /// --sun-direction, where given).
@@ -443,6 +454,9 @@ impl Cloud {
                 .generate()
             }
         };
+        check_range("--wind-s", still.wind_s as f64, 0.0, 1e5)?;
+        let calm = particles;
+        let particles = blown(&calm, still.wind_s);
         let (position, look_at) = placement(&particles, still)?;
         let ambient = Ambient::parse(still.ambient.as_deref(), still.sky)?;
         let scattering = match still.scattering {
@@ -477,6 +491,8 @@ impl Cloud {
         )?;
         Ok(Cloud {
             camera,
+            calm,
+            wind_s: still.wind_s,
             particles,
             sun_elevation: sun.0,
             sun_azimuth: sun.1,
@@ -504,25 +520,6 @@ impl Cloud {
     /// The sun at `azimuth_deg` and the cloud's elevation.
     fn sun_at(&self, azimuth_deg: f32) -> atmo::Result<Sun> {
         Sun::from_degrees(self.sun_elevation as f64, azimuth_deg as f64)
-    }
-
-    /// A camera at `position` looking at `target` with a field of view of `fov_deg`
-    /// across the still's --fov-axis, for a `size` picture (see [`camera_at`]).
-    pub fn camera_at(
-        &self,
-        position: Vec3,
-        target: Vec3,
-        fov_deg: f32,
-        size: (u32, u32),
-    ) -> atmo::Result<Camera> {
-        camera_at(
-            &self.particles,
-            self.fov_axis,
-            position,
-            target,
-            fov_deg,
-            size,
-        )
     }
 
     /// The sky around the cloud seen from `camera`, where the picture has one.
@@ -604,6 +601,26 @@ fn camera_at(
         FovAxis::Horizontal => Fov::Horizontal(fov_deg),
     };
     Camera::look_at(position, target, Vec3::Y, fov, size)
+}
+
+/// `particles` carried `seconds` by a sheared breeze: 6 m/s at the cloud's base and
+/// 1 m/s faster for each 100 m up, toward +x and a little +z (east, a little south).
+/// The wind's picture at any time, the same whether reached at once or frame by frame.
+fn blown(particles: &[Particle], seconds: f32) -> Vec<Particle> {
+    let base = particles
+        .iter()
+        .map(|p| p.position.y)
+        .fold(f32::INFINITY, f32::min);
+    particles
+        .iter()
+        .map(|p| {
+            let speed = 6.0 + 0.01 * (p.position.y - base);
+            Particle {
+                position: p.position + Vec3::new(speed, 0.0, 0.3 * speed) * seconds,
+                ..*p
+            }
+        })
+        .collect()
 }
 
 /// The sun's angles, checked.
@@ -738,17 +755,9 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                                 .rem_euclid(360.0),
                         )?,
                         Animate::Wind => {
-                            // A sheared breeze: 6 m/s at the base, faster aloft, 4 s a frame.
-                            if k > 0 {
-                                let base = particles
-                                    .iter()
-                                    .map(|p| p.position.y)
-                                    .fold(f32::INFINITY, f32::min);
-                                for p in &mut particles {
-                                    let speed = 6.0 + 0.01 * (p.position.y - base);
-                                    p.position += Vec3::new(speed, 0.0, 0.3 * speed) * 4.0;
-                                }
-                            }
+                            // The breeze, WIND_STEP_S a frame.
+                            let wind_s = cloud.wind_s + WIND_STEP_S * k as f32;
+                            particles = blown(&cloud.calm, wind_s);
                             sun
                         }
                     };
@@ -774,6 +783,9 @@ pub fn run(args: CloudsArgs) -> Result<()> {
 /// only when the camera's height changed (the sky in front of it is drawn from there).
 pub struct WindowClouds {
     cloud: Cloud,
+    /// The particles where the window's wind has carried them, and its seconds.
+    particles: Vec<Particle>,
+    wind_s: f32,
     /// The renderer, and whether it is the GPU's.
     renderer: Option<(bool, Renderer)>,
     /// The sun the intensity buffer was lit by.
@@ -785,6 +797,8 @@ pub struct WindowClouds {
 impl WindowClouds {
     pub fn new(cloud: Cloud) -> WindowClouds {
         WindowClouds {
+            particles: cloud.particles.clone(),
+            wind_s: cloud.wind_s,
             cloud,
             renderer: None,
             lit: None,
@@ -801,6 +815,7 @@ impl WindowClouds {
             camera: c.camera.position,
             look_at: c.look_at,
             fov_deg: c.fov_deg,
+            wind_s: c.wind_s,
             exposure: c.display.exposure,
             tone: c.display.tone,
         }
@@ -812,7 +827,23 @@ impl CloudPictures for WindowClouds {
         check_sun(p.sun_elevation_deg, p.sun_azimuth_deg)?;
         atmo::error::check_positive("--exposure", p.exposure as f64, 1e12)?;
         let cloud = &self.cloud;
-        let camera = cloud.camera_at(p.camera, p.look_at, p.fov_deg, size)?;
+        if p.wind_s != self.wind_s {
+            check_range("--wind-s", p.wind_s as f64, 0.0, 1e5)?;
+            self.particles = blown(&cloud.calm, p.wind_s);
+            (self.wind_s, self.lit) = (p.wind_s, None);
+            if let Some((_, Some(sky))) = &mut self.sky {
+                sky.centre = SkyAround::centre_of(&self.particles);
+            }
+        }
+        let particles = &self.particles;
+        let camera = camera_at(
+            particles,
+            cloud.fov_axis,
+            p.camera,
+            p.look_at,
+            p.fov_deg,
+            size,
+        )?;
         let sun = Sun::from_degrees(p.sun_elevation_deg as f64, p.sun_azimuth_deg as f64)?;
         let (on_gpu, renderer) = match &mut self.renderer {
             Some((on_gpu, renderer)) if *on_gpu == gpu.is_some() => (*on_gpu, renderer),
@@ -825,22 +856,22 @@ impl CloudPictures for WindowClouds {
         };
         debug_assert_eq!(on_gpu, gpu.is_some());
         if self.lit != Some(sun) {
-            renderer.light(
-                gpu,
-                &cloud.particles,
-                sun.toward(),
-                cloud.forward,
-                cloud.splat,
-            )?;
+            renderer.light(gpu, particles, sun.toward(), cloud.forward, cloud.splat)?;
             self.lit = Some(sun);
         }
         let height = camera.position.y;
         let sky = match &mut self.sky {
             Some((h, sky)) if *h == height => sky,
-            slot => &mut slot.insert((height, cloud.sky_for(&camera)?)).1,
+            slot => {
+                let sky = cloud
+                    .sky
+                    .then(|| SkyAround::new(particles, &camera))
+                    .transpose()?;
+                &mut slot.insert((height, sky)).1
+            }
         };
         let (light, background) = cloud.lighting(sky.as_ref(), sun, &camera)?;
-        renderer.draw(gpu, &cloud.particles, &camera, &light, background.as_ref())
+        renderer.draw(gpu, particles, &camera, &light, background.as_ref())
     }
 
     fn flags(&self) -> String {
@@ -866,12 +897,16 @@ impl SkyAround {
             particles.iter().map(|p| p.position.y as f64).sum::<f64>() / particles.len() as f64;
         let top = atmosphere.top_radius_m - atmosphere.bottom_radius_m - 1.0;
         let altitude = |h: f64| h.clamp(0.0, top);
-        let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
         Ok(SkyAround {
             at_cloud: Daylight::new(&atmosphere, &settings, altitude(height))?,
             at_camera: SkyModel::new(&atmosphere, &settings, altitude(camera.position.y as f64))?,
-            centre,
+            centre: SkyAround::centre_of(particles),
         })
+    }
+
+    /// The cloud's centre: its particles' mean position, m.
+    fn centre_of(particles: &[Particle]) -> Vec3 {
+        particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32
     }
 
     /// The air between `camera` and the cloud's centre for `sun`: the aerial
