@@ -120,7 +120,7 @@ pub struct CloudsMode {
     pictures: Box<dyn CloudPictures>,
     /// The sun going round, a degree a frame.
     pub animate: bool,
-    /// The wind blowing, [`WIND_STEP_S`] a frame.
+    /// The wind blowing, 4 s of it a frame.
     pub wind: bool,
     /// The orbit's step for keys, degrees.
     pub step_deg: f32,
