@@ -23,9 +23,8 @@ struct DisplayParams {
 
 @fragment
 fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    let texel = vec2<i32>(floor(position.xy - params.corner));
-    let size = vec2<i32>(textureDimensions(picture));
-    if any(texel < vec2<i32>(0)) || any(texel >= size) {
+    let texel = picture_texel(position, params.corner);
+    if !in_picture(texel, vec2<i32>(textureDimensions(picture))) {
         discard;
     }
     let rgb = textureLoad(picture, texel, 0).rgb * params.exposure;

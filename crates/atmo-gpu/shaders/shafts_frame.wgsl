@@ -20,8 +20,8 @@ struct ShaftsFrameParams {
 
 @fragment
 fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    let p = vec2<i32>(floor(position.xy - params.corner));
-    if any(p < vec2<i32>(0)) || p.x >= i32(params.width) || p.y >= i32(params.height) {
+    let p = picture_texel(position, params.corner);
+    if !in_picture(p, vec2<i32>(i32(params.width), i32(params.height))) {
         discard;
     }
     let rgb = frame[u32(p.y) * params.width + u32(p.x)].rgb;

@@ -4,7 +4,9 @@
 //! to front as billboards that look the buffer up trilinearly. Translates
 //! `atmo::clouds::buffer` and `atmo::clouds::render`; the buffer lives on the GPU
 //! between the light pass and the draw, so a moving sun costs one light pass and a
-//! moving camera none.
+//! moving camera none. [`GpuClouds::render`] reads the picture back (the stills);
+//! [`GpuClouds::prepare`] records the draw into the caller's encoder and a
+//! [`CloudsPass`] puts the cloud over the caller's own target, with no read-back.
 
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
@@ -235,7 +237,8 @@ impl GpuClouds {
 
     /// The cloud seen by `camera` over `background` (or black), as
     /// `atmo::clouds::render::render`: particles sorted by depth on the CPU, drawn back
-    /// to front. An error before the first light pass.
+    /// to front, the picture read back and the higher octaves added to it. An error
+    /// before the first light pass.
     pub fn render(
         &self,
         gpu: &Gpu,
@@ -243,9 +246,6 @@ impl GpuClouds {
         light: &Lighting,
         background: Option<&Frame>,
     ) -> Result<Rendered, GpuError> {
-        let frame = self.frame.ok_or_else(|| {
-            atmo::Error::Invalid("the clouds need a light pass before they are drawn".into())
-        })?;
         let (w, h) = (camera.width, camera.height);
         if let Some(b) = background {
             if (b.width, b.height) != (w, h) {
@@ -256,6 +256,96 @@ impl GpuClouds {
                 .into());
             }
         }
+        let billboards = self.billboards(gpu, camera, light)?;
+        // The picture over the background, and the higher octaves' light apart (its
+        // alpha, 1 - the cloud's transmittance, scales it).
+        let target = target_texture(gpu, w, h, background);
+        let higher = target_texture(gpu, w, h, None);
+        let views = [&target, &higher].map(|t| t.create_view(&Default::default()));
+        let gpu_ms = gpu.run("the cloud draw", |encoder| {
+            self.record(encoder, &billboards, &views)
+        })?;
+        let mut frame = crate::frame_of(w, h, &gpu.read_texture("the cloud frame", &target, w, h)?);
+        let octaves = light.scattering;
+        if octaves.count > 1 {
+            let bytes = gpu.read_texture("the higher octaves", &higher, w, h)?;
+            let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+            for (pixel, t) in frame.pixels.iter_mut().zip(texels) {
+                *pixel += octaves.higher_share(1.0 - t[3]) * Vec3::new(t[0], t[1], t[2]);
+            }
+        }
+        Ok(Rendered { frame, gpu_ms })
+    }
+
+    /// Records the cloud seen by `camera` into the caller's `encoder` and sets `pass`
+    /// to draw it, with its higher octaves, over what the caller's target holds: no
+    /// read-back. The picture is the camera's size; record `pass`'s draw into a render
+    /// pass whose colour attachment has `pass`'s format, after this encoder's passes.
+    /// An error before the first light pass.
+    pub fn prepare(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: &mut CloudsPass,
+        camera: &Camera,
+        light: &Lighting,
+    ) -> Result<(), GpuError> {
+        let billboards = self.billboards(gpu, camera, light)?;
+        let size = (camera.width, camera.height);
+        let [picture, higher] = match pass.targets.take() {
+            Some((s, targets)) if s == size => targets,
+            _ => [(); 2].map(|_| target_texture(gpu, size.0, size.1, None)),
+        };
+        let views = [&picture, &higher].map(|t| t.create_view(&Default::default()));
+        for view in &views {
+            drop(crate::display::cleared_pass(
+                encoder,
+                view,
+                "the cloud's targets",
+                wgpu::Color::TRANSPARENT,
+            ));
+        }
+        self.record(encoder, &billboards, &views);
+        let octaves = light.scattering;
+        let params = CompositeParams {
+            corner: pass.corner.map(|c| c as f32),
+            exposure: pass.exposure,
+            depth_scale: octaves.depth_scale,
+            higher: (octaves.count > 1) as u32,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
+        };
+        gpu.queue
+            .write_buffer(&pass.params, 0, bytemuck::bytes_of(&params));
+        // Bindings the device refuses are an error here, not a frame that draws nothing.
+        let group = gpu.scoped("the clouds' composite", || {
+            gpu.bind_group(
+                &pass.layout,
+                &[
+                    pass.params.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&views[0]),
+                    wgpu::BindingResource::TextureView(&views[1]),
+                ],
+            )
+        })?;
+        pass.group = Some(group);
+        pass.targets = Some((size, [picture, higher]));
+        Ok(())
+    }
+
+    /// What drawing the cloud seen by `camera` needs: the particles sorted by depth on
+    /// the CPU (farthest first), the draw's parameters and bindings, checked.
+    fn billboards(
+        &self,
+        gpu: &Gpu,
+        camera: &Camera,
+        light: &Lighting,
+    ) -> Result<Billboards, GpuError> {
+        let frame = self.frame.ok_or_else(|| {
+            atmo::Error::Invalid("the clouds need a light pass before they are drawn".into())
+        })?;
+        let (w, h) = (camera.width, camera.height);
         gpu.check_texture_side("the image width", w, "the width")?;
         gpu.check_texture_side("the image height", h, "the height")?;
         // Farthest first; ties in reverse index order, the CPU's front-to-back reversed.
@@ -317,41 +407,122 @@ impl GpuClouds {
                 self.cells.as_entire_binding(),
             ],
         );
-        // The picture over the background, and the higher octaves' light apart (its
-        // alpha, 1 - the cloud's transmittance, scales it).
-        let target = target_texture(gpu, w, h, background);
-        let higher = target_texture(gpu, w, h, None);
-        let views = [&target, &higher].map(|t| t.create_view(&Default::default()));
-        let gpu_ms = gpu.run("the cloud draw", |encoder| {
-            let attachments = views.each_ref().map(|view| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            });
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("billboards"),
-                color_attachments: &attachments,
-                ..Default::default()
-            });
-            pass.set_pipeline(&self.draw);
-            pass.set_bind_group(0, &group, &[]);
-            pass.draw(0..6, 0..order.len() as u32);
-        })?;
-        let mut frame = crate::frame_of(w, h, &gpu.read_texture("the cloud frame", &target, w, h)?);
-        if octaves.count > 1 {
-            let bytes = gpu.read_texture("the higher octaves", &higher, w, h)?;
-            let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-            for (pixel, t) in frame.pixels.iter_mut().zip(texels) {
-                *pixel += octaves.higher_share(1.0 - t[3]) * Vec3::new(t[0], t[1], t[2]);
-            }
-        }
-        Ok(Rendered { frame, gpu_ms })
+        Ok(Billboards {
+            group,
+            count: order.len() as u32,
+        })
+    }
+
+    /// Records the billboards into the picture's and the higher octaves' targets.
+    fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        billboards: &Billboards,
+        views: &[wgpu::TextureView; 2],
+    ) {
+        let attachments = views.each_ref().map(|view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("billboards"),
+            color_attachments: &attachments,
+            ..Default::default()
+        });
+        pass.set_pipeline(&self.draw);
+        pass.set_bind_group(0, &billboards.group, &[]);
+        pass.draw(0..6, 0..billboards.count);
+    }
+}
+
+/// A draw of the billboards: its bindings and how many particles are in front.
+struct Billboards {
+    group: wgpu::BindGroup,
+    count: u32,
+}
+
+gpu_struct! {
+    /// The composite's parameters (see clouds_composite.wgsl).
+    pub struct CompositeParams in "screen.wgsl clouds_composite.wgsl" {
+        corner: [f32; 2],
+        exposure: f32,
+        depth_scale: f32,
+        higher: u32,
+        pad0: u32,
+        pad1: u32,
+        pad2: u32,
+    }
+}
+
+/// The cloud drawn into a caller's colour target of one format: a full-screen
+/// triangle that puts the picture [`GpuClouds::prepare`] recorded (with its higher
+/// octaves) over what the target holds, pixel for pixel from [`CloudsPass::corner`],
+/// times [`CloudsPass::exposure`]. It keeps the two targets the billboards are drawn
+/// into between frames of one size.
+pub struct CloudsPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    group: Option<wgpu::BindGroup>,
+    /// The picture's and the higher octaves' targets, and their size.
+    targets: Option<((u32, u32), [wgpu::Texture; 2])>,
+    /// Multiplies the radiance written.
+    pub exposure: f32,
+    /// The target's pixel where the picture's (0, 0) goes.
+    pub corner: [u32; 2],
+}
+
+impl CloudsPass {
+    /// The pass for colour targets of `format` (blendable): refused by name where the
+    /// device cannot render to it.
+    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Result<Self, GpuError> {
+        let module = wgsl::module(gpu, "screen.wgsl clouds_composite.wgsl")?;
+        // Premultiplied "over": the cloud, then (1 - its coverage) of what is behind.
+        let over = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let target = wgpu::ColorTargetState {
+            format,
+            blend: Some(wgpu::BlendState {
+                color: over,
+                alpha: over,
+            }),
+            write_mask: wgpu::ColorWrites::ALL,
+        };
+        let (layout, pipeline_layout) = crate::display::picture_layout(gpu, "the clouds", 2);
+        let pipeline = gpu.screen_pipeline(
+            "the clouds' composite",
+            &module,
+            Some(&pipeline_layout),
+            &[Some(target)],
+            None,
+        )?;
+        Ok(CloudsPass {
+            pipeline,
+            layout,
+            params: gpu.uniform(
+                "the clouds' composite",
+                &<CompositeParams as bytemuck::Zeroable>::zeroed(),
+            ),
+            group: None,
+            targets: None,
+            exposure: 1.0,
+            corner: [0, 0],
+        })
+    }
+
+    /// Records the cloud into `pass` (nothing before a [`GpuClouds::prepare`]).
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        crate::display::draw_screen(pass, &self.pipeline, self.group.as_ref());
     }
 }
 
@@ -369,7 +540,8 @@ fn records(particles: &[Particle]) -> Vec<GpuParticle> {
         .collect()
 }
 
-/// An RGBA f32 render target of `w` x `h`, holding `background` (or black).
+/// An RGBA f32 render target of `w` x `h`, holding `background` (or black), that a
+/// [`CloudsPass`] can read.
 pub(crate) fn target_texture(
     gpu: &Gpu,
     w: u32,
@@ -389,6 +561,7 @@ pub(crate) fn target_texture(
         dimension: wgpu::TextureDimension::D2,
         format: wgpu::TextureFormat::Rgba32Float,
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC
             | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],

@@ -10,7 +10,7 @@ use crate::{gpu_struct, Gpu, GpuError};
 
 gpu_struct! {
     /// The display pass's parameters (see display.wgsl).
-    pub struct DisplayParams in "display.wgsl" {
+    pub struct DisplayParams in "screen.wgsl display.wgsl" {
         corner: [f32; 2],
         exposure: f32,
         tone: u32,
@@ -51,42 +51,7 @@ impl DisplayPass {
     /// gets sRGB-encoded values).
     pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Result<Self, GpuError> {
         let module = wgsl::module(gpu, "screen.wgsl display.wgsl")?;
-        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty,
-            count: None,
-        };
-        let layout = gpu
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("display"),
-                entries: &[
-                    entry(
-                        0,
-                        wgpu::BindingType::Buffer {
-                            ty: wgpu::BufferBindingType::Uniform,
-                            has_dynamic_offset: false,
-                            min_binding_size: None,
-                        },
-                    ),
-                    entry(
-                        1,
-                        wgpu::BindingType::Texture {
-                            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                            view_dimension: wgpu::TextureViewDimension::D2,
-                            multisampled: false,
-                        },
-                    ),
-                ],
-            });
-        let pipeline_layout = gpu
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("display"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
+        let (layout, pipeline_layout) = picture_layout(gpu, "display", 1);
         let pipeline = gpu.screen_pipeline(
             "the display pass",
             &module,
@@ -134,11 +99,64 @@ impl DisplayPass {
     /// Records the picture into `pass`, whose colour attachment has this pass's format;
     /// nothing before [`DisplayPass::prepare`].
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
-        if let Some(group) = &self.group {
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, group, &[]);
-            pass.draw(0..3, 0..1);
-        }
+        crate::display::draw_screen(pass, &self.pipeline, self.group.as_ref());
+    }
+}
+
+/// The bindings of a pass that reads pictures texel by texel: a uniform at binding 0,
+/// then `pictures` RGBA f32 textures (unfilterable: an automatic layout would want
+/// them filterable) at 1, 2, ...; and the pipeline layout of that one group.
+pub(crate) fn picture_layout(
+    gpu: &Gpu,
+    label: &str,
+    pictures: u32,
+) -> (wgpu::BindGroupLayout, wgpu::PipelineLayout) {
+    let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty,
+        count: None,
+    };
+    let uniform = wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Uniform,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    let texture = wgpu::BindingType::Texture {
+        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: false,
+    };
+    let entries: Vec<_> = std::iter::once(entry(0, uniform))
+        .chain((1..=pictures).map(|b| entry(b, texture)))
+        .collect();
+    let layout = gpu
+        .device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &entries,
+        });
+    let pipeline_layout = gpu
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+    (layout, pipeline_layout)
+}
+
+/// Records the full-screen triangle of `pipeline` reading `group` into `pass`: how
+/// every picture pass draws; nothing before its group is set (before its `prepare`).
+pub(crate) fn draw_screen(
+    pass: &mut wgpu::RenderPass<'_>,
+    pipeline: &wgpu::RenderPipeline,
+    group: Option<&wgpu::BindGroup>,
+) {
+    if let Some(group) = group {
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.draw(0..3, 0..1);
     }
 }
 

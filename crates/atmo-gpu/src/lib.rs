@@ -93,7 +93,11 @@
 //! # Ok(()) }
 //! ```
 //!
-//! Its passes, per frame (docs/gpu.md counts them on the example scenes): the shadow
+//! The clouds, after [`clouds::GpuClouds::light`], likewise: [`clouds::GpuClouds::prepare`]
+//! records the billboards and [`clouds::CloudsPass::draw`] puts the cloud over what the
+//! caller's target holds (premultiplied over, the higher octaves added on the GPU).
+//!
+//! The shafts' passes, per frame (docs/gpu.md counts them on the example scenes): the shadow
 //! maps, one ray a texel (5 x 512^2 for the five-light stage); the planes' extents (one
 //! invocation) and the attenuation table (1024^2); the surfaces, one ray a sub-pixel;
 //! the sample planes, one quad a light, plane and sub-pixel ray over its lit rectangle,
@@ -115,6 +119,8 @@ pub mod sky;
 pub mod wgsl;
 
 pub use device::Gpu;
+/// The wgpu atmo-gpu is built on, for a caller to name its types by the same version.
+pub use wgpu;
 
 /// A frame and, where the adapter has timestamp queries, the GPU time it took, ms.
 pub struct Rendered {

@@ -76,7 +76,7 @@ gpu_struct! {
 
 gpu_struct! {
     /// The frame pass's parameters (see shafts_frame.wgsl).
-    pub struct ShaftsFrameParams in "shafts_frame.wgsl" {
+    pub struct ShaftsFrameParams in "screen.wgsl shafts_frame.wgsl" {
         corner: [f32; 2],
         exposure: f32,
         width: u32,
@@ -542,11 +542,7 @@ impl ShaftsPass {
 
     /// Records the picture into `pass` (nothing before a [`GpuShafts::prepare`]).
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
-        if let Some(group) = &self.group {
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, group, &[]);
-            pass.draw(0..3, 0..1);
-        }
+        crate::display::draw_screen(pass, &self.pipeline, self.group.as_ref());
     }
 }
 

@@ -384,11 +384,7 @@ impl SkyPass {
     /// Records the sky into `pass`, whose colour (and depth) attachments are the
     /// [`SkyTarget`]'s; nothing before a sky's `prepare`.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
-        if let Some(group) = &self.group {
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, group, &[]);
-            pass.draw(0..3, 0..1);
-        }
+        crate::display::draw_screen(pass, &self.pipeline, self.group.as_ref());
     }
 }
 

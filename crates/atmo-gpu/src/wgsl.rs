@@ -9,6 +9,7 @@
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::FOOTPRINT;
 use atmo::clouds::particles::FADE_SCALE;
+use atmo::clouds::render::OPAQUE;
 use atmo::shafts::shadow_map::RECEIVER_BIAS;
 use atmo::sky::shells::export;
 
@@ -106,6 +107,10 @@ const FILES: &[(&str, &str)] = &[
         include_str!("../shaders/shafts_surface.wgsl"),
     ),
     (
+        "clouds_composite.wgsl",
+        include_str!("../shaders/clouds_composite.wgsl"),
+    ),
+    (
         "shafts_frame.wgsl",
         include_str!("../shaders/shafts_frame.wgsl"),
     ),
@@ -129,8 +134,8 @@ const FILES: &[(&str, &str)] = &[
 
 /// The constants WGSL shares with the Rust, generated: `const PHASE_RAYLEIGH: u32 = 0u;`
 /// and the rest of [`PhaseFunction::CODES`], this module's codes, the sky model's
-/// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, the clouds' `FOOTPRINT` and
-/// `FADE_SCALE`, and the shadow maps' `RECEIVER_BIAS`.
+/// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, the clouds' `FOOTPRINT`,
+/// `FADE_SCALE` and `OPAQUE`, and the shadow maps' `RECEIVER_BIAS`.
 pub fn prelude() -> String {
     let phases = PhaseFunction::CODES
         .iter()
@@ -151,6 +156,8 @@ pub fn prelude() -> String {
     // and the scale of a faded billboard's column.
     out.push_str(&format!("const FOOTPRINT: f32 = {:?};\n", FOOTPRINT));
     out.push_str(&format!("const FADE_SCALE: f32 = {:?};\n", FADE_SCALE));
+    // The transmittance below which a cloud's pixel counts as opaque.
+    out.push_str(&format!("const OPAQUE: f32 = {:?};\n", OPAQUE));
     // How much nearer than a receiver's plane a shadow map's surface must be.
     out.push_str(&format!(
         "const RECEIVER_BIAS: f32 = {:?};\n",

@@ -11,7 +11,8 @@ use atmo::clouds::render::{render, Haze, Lighting};
 use atmo::clouds::Octaves;
 use atmo::image::Frame;
 use atmo::view::{Camera, Fov};
-use atmo_gpu::clouds::GpuClouds;
+use atmo_gpu::clouds::{CloudsPass, GpuClouds};
+use atmo_gpu::display::{cleared_pass, picture_texture};
 use common::{assert_close, gpu, mean_level};
 use glam::Vec3;
 
@@ -56,18 +57,38 @@ fn the_light_pass_matches_the_cpu_buffer_for_both_splats() {
     }
 }
 
-#[test]
-fn the_drawn_cloud_matches_the_cpu_picture() {
-    let Some(gpu) = gpu() else { return };
-    let particles = cloud();
-    let camera = Camera::look_at(
+/// The drawn cloud's camera: beside the cloud, a little above its middle.
+fn camera() -> Camera {
+    Camera::look_at(
         Vec3::new(0.0, 1700.0, -600.0),
         Vec3::new(0.0, 1650.0, 0.0),
         Vec3::Y,
         Fov::Vertical(2.0 * 0.45f32.atan().to_degrees()),
         (120, 80),
     )
-    .unwrap();
+    .unwrap()
+}
+
+/// Sunlight, sky light and air in front of the cloud (the GPU hazes it as the CPU).
+fn lighting(phase: PhaseFunction, scattering: Octaves) -> Lighting {
+    Lighting {
+        to_sun: to_sun(),
+        sun: Vec3::ONE,
+        ambient: Vec3::new(0.03, 0.04, 0.06),
+        phase,
+        haze: Haze {
+            transmittance: Vec3::new(0.8, 0.85, 0.9),
+            inscatter: Vec3::new(0.01, 0.02, 0.04),
+        },
+        scattering,
+    }
+}
+
+#[test]
+fn the_drawn_cloud_matches_the_cpu_picture() {
+    let Some(gpu) = gpu() else { return };
+    let particles = cloud();
+    let camera = camera();
     let mut background = Frame::new(120, 80);
     for (i, p) in background.pixels.iter_mut().enumerate() {
         *p = Vec3::new(0.2, 0.3, 0.5) * (1.0 + (i % 120) as f32 / 120.0);
@@ -83,18 +104,7 @@ fn the_drawn_cloud_matches_the_cpu_picture() {
             Octaves::SINGLE,
         ),
     ] {
-        let light = Lighting {
-            to_sun: to_sun(),
-            sun: Vec3::ONE,
-            ambient: Vec3::new(0.03, 0.04, 0.06),
-            phase,
-            // Air in front of the cloud: the GPU hazes it as the CPU does.
-            haze: Haze {
-                transmittance: Vec3::new(0.8, 0.85, 0.9),
-                inscatter: Vec3::new(0.01, 0.02, 0.04),
-            },
-            scattering,
-        };
+        let light = lighting(phase, scattering);
         let cpu = render(&particles, &buffer, &camera, &light, back).unwrap();
         let out = clouds.render(&gpu, &camera, &light, back).unwrap().frame;
         assert!(
@@ -103,6 +113,74 @@ fn the_drawn_cloud_matches_the_cpu_picture() {
         );
         assert_close(&out, &cpu, 4.0, &format!("{phase:?}"));
     }
+}
+
+#[test]
+fn the_cloud_draws_over_a_callers_target_as_it_reads_back() {
+    // Recorded into the caller's encoder and put over the caller's own target (a
+    // sky-blue it cleared, larger than the picture, the picture at (8, 4)), every
+    // octave: as the read-back picture over the same blue.
+    let Some(gpu) = gpu() else { return };
+    let particles = cloud();
+    let camera = camera();
+    let light = lighting(PhaseFunction::CloudMie, Octaves::MULTIPLE);
+    let mut clouds = GpuClouds::new(&gpu, &particles, 48).unwrap();
+    clouds.light(&gpu, to_sun(), 0.0, Splat::Pieces).unwrap();
+    let behind = Vec3::new(0.2, 0.3, 0.5);
+    let (w, h) = (camera.width, camera.height);
+    let mut background = Frame::new(w, h);
+    background.pixels.fill(behind);
+    let read_back = clouds
+        .render(&gpu, &camera, &light, Some(&background))
+        .unwrap()
+        .frame;
+    let (tw, th) = (w + 16, h + 8);
+    let target = picture_texture(&gpu, tw, th).unwrap();
+    let view = target.create_view(&Default::default());
+    let mut pass = CloudsPass::new(&gpu, target.format()).unwrap();
+    pass.corner = [8, 4];
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    clouds
+        .prepare(&gpu, &mut encoder, &mut pass, &camera, &light)
+        .unwrap();
+    {
+        let sky = wgpu::Color {
+            r: behind.x as f64,
+            g: behind.y as f64,
+            b: behind.z as f64,
+            a: 1.0,
+        };
+        let mut render = cleared_pass(&mut encoder, &view, "the caller's pass", sky);
+        pass.draw(&mut render);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = gpu
+        .read_texture("the caller's target", &target, tw, th)
+        .unwrap();
+    let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+    let at = |x: u32, y: u32| Vec3::from_slice(&texels[(y * tw + x) as usize][..3]);
+    let brightest = read_back
+        .pixels
+        .iter()
+        .map(|p| p.max_element())
+        .fold(0.0, f32::max);
+    assert!(mean_level(&read_back, 4.0) > 15.0, "the picture is dark");
+    eprintln!(
+        "DEBUG outside {:?} inside {:?} {:?}",
+        texels[(tw + 2) as usize],
+        texels[(4 * tw + 8) as usize],
+        texels[(40 * tw + 68) as usize]
+    );
+    for (i, p) in read_back.pixels.iter().enumerate() {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        let d = (at(x + 8, y + 4) - *p).abs().max_element();
+        assert!(
+            d <= 1e-4 * brightest,
+            "({x}, {y}): {} vs {p}",
+            at(x + 8, y + 4)
+        );
+    }
+    assert_eq!(at(2, 1), behind, "outside the picture: the caller's");
 }
 
 #[test]

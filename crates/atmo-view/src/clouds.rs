@@ -104,12 +104,22 @@ impl CloudParams {
 }
 
 /// Draws the cloud's pictures: made by the command line from `atmo clouds`'s flags.
+/// The light pass is run again only where the sun or the wind changed; parameters the
+/// cloud cannot be drawn at (a sun below the horizon, a camera inside a particle) are
+/// refused, naming the flag.
 pub trait CloudPictures {
-    /// The picture at `params` and `size` (linear radiance), on `gpu` where given, else
-    /// on the CPU; the light pass run again only where the sun changed. Parameters the
-    /// cloud cannot be drawn at (a sun below the horizon, a camera inside a particle)
-    /// are refused, naming the flag.
-    fn draw(&mut self, gpu: Option<&Gpu>, params: &CloudParams, size: (u32, u32)) -> Result<Frame>;
+    /// The picture at `params` and `size` on the CPU (linear radiance).
+    fn draw(&mut self, params: &CloudParams, size: (u32, u32)) -> Result<Frame>;
+    /// The picture at `params` drawn into `picture` on the GPU: what is behind the
+    /// cloud uploaded, the billboards recorded into `encoder` and put over it, with no
+    /// read-back.
+    fn draw_on(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        picture: &Picture,
+        params: &CloudParams,
+    ) -> Result<()>;
     /// `atmo clouds`'s flags for the cloud and its light: all but [`CloudParams`].
     fn flags(&self) -> String;
 }
@@ -203,15 +213,24 @@ impl Mode for CloudsMode {
 
     /// Draws where the parameters, the size or the backend changed; parameters the
     /// cloud refuses go back to the last drawn.
-    fn draw(&mut self, gpu: &Gpu, _: &mut wgpu::CommandEncoder, picture: &Picture) -> Result<()> {
+    fn draw(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        picture: &Picture,
+    ) -> Result<()> {
         let now = (self.params.clone(), picture.size, self.on_gpu);
         if self.drawn.as_ref() == Some(&now) {
             return Ok(());
         }
-        let device = self.on_gpu.then_some(gpu);
-        match self.pictures.draw(device, &self.params, picture.size) {
-            Ok(frame) => {
-                write_frame(gpu, &picture.texture, &frame);
+        let drawn = if self.on_gpu {
+            self.pictures.draw_on(gpu, encoder, picture, &self.params)
+        } else {
+            let frame = self.pictures.draw(&self.params, picture.size);
+            frame.map(|frame| write_frame(gpu, &picture.texture, &frame))
+        };
+        match drawn {
+            Ok(()) => {
                 self.drawn = Some(now);
                 Ok(())
             }

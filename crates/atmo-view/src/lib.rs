@@ -156,6 +156,29 @@ impl Picture {
         draw(&mut pass);
     }
 
+    /// Records a render pass over the picture as it is (what was written into it stays
+    /// behind), in which `draw` records its draws.
+    pub fn draw_over(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("over the picture"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        draw(&mut pass);
+    }
+
     /// The picture read back.
     fn read(&self, gpu: &Gpu) -> Result<Frame, GpuError> {
         let (width, height) = self.size;

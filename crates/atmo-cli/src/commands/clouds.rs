@@ -21,9 +21,11 @@ use atmo::Atmosphere;
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 
-use atmo_gpu::clouds::GpuClouds;
+use atmo_gpu::clouds::{CloudsPass, GpuClouds};
+use atmo_gpu::display::write_frame;
 use atmo_gpu::Gpu;
 use atmo_view::clouds::{CloudParams, CloudPictures};
+use atmo_view::Picture;
 
 use crate::args::{PlaceArgs, ToneMapArg};
 use crate::backend::{gpu_error, BackendArgs};
@@ -792,6 +794,8 @@ pub struct WindowClouds {
     lit: Option<Sun>,
     /// The sky around the cloud, and the camera height it was made for.
     sky: Option<(f32, Option<SkyAround>)>,
+    /// On the GPU: the pass that puts the cloud over what is behind it.
+    pass: Option<CloudsPass>,
 }
 
 impl WindowClouds {
@@ -803,6 +807,7 @@ impl WindowClouds {
             renderer: None,
             lit: None,
             sky: None,
+            pass: None,
         }
     }
 
@@ -822,8 +827,17 @@ impl WindowClouds {
     }
 }
 
-impl CloudPictures for WindowClouds {
-    fn draw(&mut self, gpu: Option<&Gpu>, p: &CloudParams, size: (u32, u32)) -> Result<Frame> {
+impl WindowClouds {
+    /// What a frame at `p` and `size` needs, on `gpu` where given, else on the CPU:
+    /// the parameters checked, the particles where the wind took them, the light pass
+    /// where the sun or the wind changed, the sky around the cloud where the camera's
+    /// height changed; the camera, the light at the cloud and what is behind it.
+    fn prepare(
+        &mut self,
+        gpu: Option<&Gpu>,
+        p: &CloudParams,
+        size: (u32, u32),
+    ) -> Result<(Camera, Lighting, Option<Frame>)> {
         check_sun(p.sun_elevation_deg, p.sun_azimuth_deg)?;
         atmo::error::check_positive("--exposure", p.exposure as f64, 1e12)?;
         let cloud = &self.cloud;
@@ -836,25 +850,16 @@ impl CloudPictures for WindowClouds {
             }
         }
         let particles = &self.particles;
-        let camera = camera_at(
-            particles,
-            cloud.fov_axis,
-            p.camera,
-            p.look_at,
-            p.fov_deg,
-            size,
-        )?;
+        let (axis, position, target) = (cloud.fov_axis, p.camera, p.look_at);
+        let camera = camera_at(particles, axis, position, target, p.fov_deg, size)?;
         let sun = Sun::from_degrees(p.sun_elevation_deg as f64, p.sun_azimuth_deg as f64)?;
-        let (on_gpu, renderer) = match &mut self.renderer {
-            Some((on_gpu, renderer)) if *on_gpu == gpu.is_some() => (*on_gpu, renderer),
+        let renderer = match &mut self.renderer {
+            Some((on_gpu, renderer)) if *on_gpu == gpu.is_some() => renderer,
             slot => {
                 self.lit = None;
-                let made = (gpu.is_some(), Renderer::new(gpu, cloud)?);
-                let (on_gpu, renderer) = slot.insert(made);
-                (*on_gpu, renderer)
+                &mut slot.insert((gpu.is_some(), Renderer::new(gpu, cloud)?)).1
             }
         };
-        debug_assert_eq!(on_gpu, gpu.is_some());
         if self.lit != Some(sun) {
             renderer.light(gpu, particles, sun.toward(), cloud.forward, cloud.splat)?;
             self.lit = Some(sun);
@@ -871,7 +876,39 @@ impl CloudPictures for WindowClouds {
             }
         };
         let (light, background) = cloud.lighting(sky.as_ref(), sun, &camera)?;
-        renderer.draw(gpu, particles, &camera, &light, background.as_ref())
+        Ok((camera, light, background))
+    }
+}
+
+impl CloudPictures for WindowClouds {
+    fn draw(&mut self, p: &CloudParams, size: (u32, u32)) -> Result<Frame> {
+        let (camera, light, background) = self.prepare(None, p, size)?;
+        let (_, renderer) = self.renderer.as_ref().expect("made by prepare");
+        renderer.draw(None, &self.particles, &camera, &light, background.as_ref())
+    }
+
+    fn draw_on(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut atmo_gpu::wgpu::CommandEncoder,
+        picture: &Picture,
+        p: &CloudParams,
+    ) -> Result<()> {
+        let (camera, light, background) = self.prepare(Some(gpu), p, picture.size)?;
+        let Some((_, Renderer::Gpu(clouds))) = &self.renderer else {
+            unreachable!("prepare made the GPU's renderer")
+        };
+        let behind = background.unwrap_or_else(|| Frame::new(picture.size.0, picture.size.1));
+        write_frame(gpu, &picture.texture, &behind);
+        let pass = match &mut self.pass {
+            Some(pass) => pass,
+            slot => slot.insert(CloudsPass::new(gpu, picture.texture.format()).map_err(gpu_error)?),
+        };
+        clouds
+            .prepare(gpu, encoder, pass, &camera, &light)
+            .map_err(gpu_error)?;
+        picture.draw_over(encoder, |render| pass.draw(render));
+        Ok(())
     }
 
     fn flags(&self) -> String {
