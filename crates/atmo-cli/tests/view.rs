@@ -10,9 +10,9 @@ use std::process::{Command, Output};
 use atmo::image::{Display, Frame, ToneMap};
 use common::{atmo, has_gpu, scratch, tiny_table, COARSE_SHELLS};
 
-/// Runs `atmo` under a fresh Xvfb display; `None` (the test skipped) where xvfb-run is
-/// missing, outside CI.
-fn windowed(args: &[&str]) -> Option<Output> {
+/// Runs `atmo` under a fresh Xvfb display in the folder `dir` (where the P and E keys
+/// save); `None` (the test skipped) where xvfb-run is missing, outside CI.
+fn windowed(dir: &Path, args: &[&str]) -> Option<Output> {
     if Command::new("xvfb-run").arg("--help").output().is_err() {
         assert!(
             std::env::var("CI").as_deref() != Ok("true"),
@@ -25,6 +25,7 @@ fn windowed(args: &[&str]) -> Option<Output> {
         .args(["-a", "-s", "-screen 0 640x480x24"])
         .arg(env!("CARGO_BIN_EXE_atmo"))
         .args(args)
+        .current_dir(dir)
         .env_remove("WAYLAND_DISPLAY")
         .output()
         .expect("xvfb-run runs");
@@ -80,7 +81,7 @@ fn viewer_run(dir: &Path, name: &str, args: &[&str], script: &str) -> Option<Out
     all.extend(["--width", "96", "--height", "64", "--frames", "5"]);
     all.extend(["--screenshot", shot.to_str().unwrap()]);
     all.extend(["--script", script_path.to_str().unwrap()]);
-    let o = windowed(&all)?;
+    let o = windowed(dir, &all)?;
     assert!(
         o.status.success(),
         "{name}: {}",
@@ -246,7 +247,7 @@ fn bad_input_before_the_window_exits_2_with_a_message() {
     // A display but no such adapter.
     let mut all = vec!["view", "sky", "--adapter", "no-such-gpu"];
     all.extend(frames);
-    if let Some(o) = windowed(&all) {
+    if let Some(o) = windowed(&dir, &all) {
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{stderr}");
         assert!(stderr.contains("no-such-gpu"), "{stderr}");
@@ -343,7 +344,8 @@ fn a_refused_stage_edit_keeps_the_last_good_scene_and_save_writes_the_file() {
     let scene = dir.join("lamp.toml");
     let text = std::fs::read_to_string(scenes().join("spotlight-sphere.toml")).unwrap();
     std::fs::write(&scene, &text).unwrap();
-    let script = "1 set spotlight[0].intensity -5\n2 set spotlight[0].intensity 900\n3 key s\n";
+    let script = "1 set spotlight[0].intensity -5\n2 set spotlight[0].intensity 900\n3 key s\n\
+                  4 key e\n";
     let Some(o) = stage_run(&dir, "save", &scene, &["--backend", "cpu"], script) else {
         return;
     };
@@ -358,6 +360,11 @@ fn a_refused_stage_edit_keeps_the_last_good_scene_and_save_writes_the_file() {
     // The still command is the saved file at the window's size, nothing more.
     let display = atmo::shafts::Scene::from_file(&scene).unwrap().display;
     let still = matches_its_still(&dir, "save", &o, "shafts", display);
+    // E saved the picture of frame 4 as linear radiance: the last frame's (nothing
+    // changed after it).
+    let key_shot = Frame::read_exr(&dir.join("atmo-view-0004.exr")).unwrap();
+    let last = Frame::read_exr(&dir.join("save.exr")).unwrap();
+    assert_eq!(key_shot.pixels, last.pixels);
     assert!(!still.contains("intensity"), "{still}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

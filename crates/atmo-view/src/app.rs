@@ -213,6 +213,7 @@ fn key_of(code: KeyCode) -> Option<Key> {
         KeyCode::KeyS => Key::Save,
         KeyCode::KeyW => Key::Wind,
         KeyCode::KeyP => Key::Screenshot,
+        KeyCode::KeyE => Key::ScreenshotExr,
         KeyCode::Tab => Key::Panel,
         _ => return None,
     })
@@ -367,8 +368,13 @@ impl Running {
     fn apply(&mut self, input: &Input) {
         match input {
             Input::Key(Key::Panel) => self.show_panel = !self.show_panel,
-            Input::Key(Key::Screenshot) => {
-                let path = PathBuf::from(format!("atmo-view-{:04}.png", self.frame));
+            Input::Key(key @ (Key::Screenshot | Key::ScreenshotExr)) => {
+                let kind = if *key == Key::Screenshot {
+                    "png"
+                } else {
+                    "exr"
+                };
+                let path = PathBuf::from(format!("atmo-view-{:04}.{kind}", self.frame));
                 if let Err(e) = self.screenshot(&path) {
                     self.refuse(e);
                 }
@@ -482,16 +488,25 @@ impl Running {
                     self.method_ms,
                     self.gpu.describe()
                 ));
-                if ui.button("screenshot and still command (P)").clicked() {
-                    edits.push(Input::Key(Key::Screenshot));
-                }
+                ui.horizontal(|ui| {
+                    ui.label("screenshot and still command:");
+                    if ui.button("PNG (P)").clicked() {
+                        edits.push(Input::Key(Key::Screenshot));
+                    }
+                    if ui.button("EXR (E)").clicked() {
+                        edits.push(Input::Key(Key::ScreenshotExr));
+                    }
+                });
                 if let Some(still) = &self.still {
                     ui.label(egui::RichText::new(still).monospace().small());
                 }
                 if let Some(message) = &self.message {
                     ui.colored_label(egui::Color32::from_rgb(255, 120, 100), message);
                 }
-                ui.label(format!("{}; P: screenshot; Tab: panel", self.mode.help()));
+                ui.label(format!(
+                    "{}; P / E: screenshot (PNG / EXR); Tab: panel",
+                    self.mode.help()
+                ));
             });
         edits
     }

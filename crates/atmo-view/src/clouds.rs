@@ -191,7 +191,7 @@ impl Mode for CloudsMode {
                 Key::Slower => self.step_deg = step / 2.0,
                 Key::Animate => self.animate = !self.animate,
                 Key::Wind => self.wind = !self.wind,
-                Key::Screenshot | Key::Panel | Key::Save => {}
+                Key::Screenshot | Key::ScreenshotExr | Key::Panel | Key::Save => {}
             },
             Input::Drag(dx, dy) => orbit_camera(p, -0.3 * dx, 0.3 * dy, 1.0),
             Input::Aim(..) => {}

@@ -48,8 +48,10 @@ pub enum Key {
     Save,
     /// W: the wind in the clouds on or off.
     Wind,
-    /// P: a screenshot and its still command.
+    /// P: a screenshot (PNG) and its still command.
     Screenshot,
+    /// E: the same as linear radiance (EXR).
+    ScreenshotExr,
     /// Tab: the panel shown or hidden.
     Panel,
 }
@@ -69,6 +71,7 @@ impl Key {
         ("s", Key::Save),
         ("w", Key::Wind),
         ("p", Key::Screenshot),
+        ("e", Key::ScreenshotExr),
         ("tab", Key::Panel),
     ];
 

@@ -319,7 +319,7 @@ impl Mode for SkyMode {
                 Key::SunDown => p.sun_elevation_deg -= 1.0,
                 Key::Animate => self.animate = !self.animate,
                 // The window's own keys, and the stage's.
-                Key::Screenshot | Key::Panel | Key::Save | Key::Wind => {}
+                Key::Screenshot | Key::ScreenshotExr | Key::Panel | Key::Save | Key::Wind => {}
             },
             Input::Drag(dx, dy) if !p.fisheye => {
                 p.yaw_deg = (p.yaw_deg + 0.2 * *dx as f64).rem_euclid(360.0);

@@ -446,7 +446,7 @@ impl Mode for StageMode {
                 Key::SunDown => self.orbit(0.0, -step, 1.0)?,
                 Key::Animate => self.playing = !self.playing,
                 Key::Save => self.save()?,
-                Key::Screenshot | Key::Panel | Key::Wind => {}
+                Key::Screenshot | Key::ScreenshotExr | Key::Panel | Key::Wind => {}
             },
             Input::Drag(dx, dy) => self.orbit(-0.3 * dx, 0.3 * dy, 1.0)?,
             Input::Aim(light, x, y) => self.aim(*light, *x, *y)?,
