@@ -84,7 +84,7 @@
 //! let shafts = GpuShafts::with_pipelines(gpu, scene, pipelines.clone())?;
 //! // Each frame it is drawn.
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
-//! shafts.prepare(gpu, &mut encoder, &mut pass, ShaftsMethod::Planes);
+//! shafts.prepare(gpu, &mut encoder, &mut pass, ShaftsMethod::Planes)?;
 //! {
 //!     let mut render = atmo_gpu::display::cleared_pass(&mut encoder, target, "shafts", wgpu::Color::BLACK);
 //!     pass.draw(&mut render);

@@ -415,7 +415,7 @@ impl GpuShafts {
         encoder: &mut wgpu::CommandEncoder,
         pass: &mut ShaftsPass,
         method: ShaftsMethod,
-    ) {
+    ) -> Result<(), GpuError> {
         self.encode(gpu, encoder, method);
         let params = ShaftsFrameParams {
             corner: pass.corner.map(|c| c as f32),
@@ -428,13 +428,18 @@ impl GpuShafts {
         };
         gpu.queue
             .write_buffer(&pass.params, 0, bytemuck::bytes_of(&params));
-        pass.group = Some(gpu.bind_group(
-            &pass.pipeline.get_bind_group_layout(0),
-            &[
-                pass.params.as_entire_binding(),
-                self.out.as_entire_binding(),
-            ],
-        ));
+        // Bindings the device refuses are an error here, not a frame that draws nothing.
+        let group = gpu.scoped("the shafts' picture pass", || {
+            gpu.bind_group(
+                &pass.pipeline.get_bind_group_layout(0),
+                &[
+                    pass.params.as_entire_binding(),
+                    self.out.as_entire_binding(),
+                ],
+            )
+        })?;
+        pass.group = Some(group);
+        Ok(())
     }
 
     /// Records every pass of the frame into `encoder`, the picture ending in `out`.

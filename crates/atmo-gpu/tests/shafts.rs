@@ -112,7 +112,9 @@ fn the_shafts_draw_into_a_callers_target_as_they_read_back() {
     pass.corner = [8, 4];
     let view = target.create_view(&Default::default());
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    shafts.prepare(&gpu, &mut encoder, &mut pass, ShaftsMethod::Planes);
+    shafts
+        .prepare(&gpu, &mut encoder, &mut pass, ShaftsMethod::Planes)
+        .unwrap();
     {
         let cleared = wgpu::Color {
             r: 0.25,

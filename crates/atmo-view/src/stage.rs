@@ -492,7 +492,7 @@ impl Mode for StageMode {
                 )),
             };
             let shafts = GpuShafts::with_pipelines(gpu, &self.scene, pipelines.clone())?;
-            shafts.prepare(gpu, encoder, pass, ShaftsMethod::Planes);
+            shafts.prepare(gpu, encoder, pass, ShaftsMethod::Planes)?;
             picture.draw(encoder, |render| pass.draw(render));
         } else {
             write_frame(gpu, &picture.texture, &self.maps.render(&self.scene));
