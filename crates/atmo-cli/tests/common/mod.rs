@@ -97,8 +97,15 @@ pub const SMALL_CLOUD: [&str; 10] = [
 ];
 
 /// Whether this machine has a GPU adapter (in CI, where the driver is installed, it
-/// must: a missing one fails here rather than skipping the GPU checks).
+/// must: a missing one fails here rather than skipping the GPU checks). Probed once a
+/// test binary: tests running side by side share the answer (and not the probe's
+/// folder, which one of them would remove under the other).
 pub fn has_gpu() -> bool {
+    static FOUND: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *FOUND.get_or_init(probe_gpu)
+}
+
+fn probe_gpu() -> bool {
     let dir = scratch("probe-gpu");
     let out = dir.join("x.png");
     let o = atmo(&[
