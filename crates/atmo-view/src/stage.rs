@@ -74,9 +74,9 @@ impl StageMode {
     /// The scene file at `path` with `edits` (checked), posed at `time_s` into its show.
     pub fn new(path: &Path, edits: Vec<Edit>, time_s: f32) -> Result<StageMode> {
         atmo::error::check_range("time", time_s as f64, 0.0, 1e6)?;
-        let text = read(path)?;
+        let text = Scene::read_text(path)?;
         let origin = path.display().to_string();
-        let edited = edited(&text, &origin, &edits)?;
+        let edited = Document::edited(&text, &origin, &edits)?;
         let scene = load(path, &edited, &[], time_s)?;
         Ok(StageMode {
             path: path.to_path_buf(),
@@ -127,7 +127,7 @@ impl StageMode {
     fn rebuild(&mut self, text: String, edits: Vec<Edit>) -> Result<()> {
         let origin = self.path.display().to_string();
         let edits = merged(&edits);
-        let edited = edited(&text, &origin, &edits)?;
+        let edited = Document::edited(&text, &origin, &edits)?;
         let scene = load(&self.path, &edited, &self.size_edits(), self.time_s)?;
         let solid = |e: &&Edit| e.key.starts_with("object") || e.key.starts_with("render");
         let before: Vec<&Edit> = self.edits.iter().filter(solid).collect();
@@ -244,7 +244,7 @@ impl StageMode {
             return Ok(());
         }
         self.stamp = now;
-        let text = read(&self.path)?;
+        let text = Scene::read_text(&self.path)?;
         if text == self.text {
             return Ok(());
         }
@@ -310,26 +310,13 @@ impl StageMode {
     }
 }
 
-/// The file's text.
-fn read(path: &Path) -> atmo::Result<String> {
-    atmo::files::read_text(path, "scene file", atmo::files::TEXT_LIMIT_BYTES)
-}
-
-/// `text` with `edits`, parsed.
-fn edited(text: &str, origin: &str, edits: &[Edit]) -> atmo::Result<Document> {
-    let mut doc = Document::parse(text, origin)?;
-    for edit in edits {
-        doc.apply(edit)?;
-    }
-    Ok(doc)
-}
-
 /// The scene of the edited file with `more` edits (the picture's size), posed.
 fn load(path: &Path, edited: &Document, more: &[Edit], time_s: f32) -> atmo::Result<Scene> {
-    let origin = path.display().to_string();
-    let text = atmo::shafts::edits::apply(&edited.to_string(), &origin, more)?;
-    let folder = path.parent().unwrap_or(Path::new("."));
-    let mut scene = Scene::from_toml_str(&text, &origin, folder)?;
+    let mut doc = edited.clone();
+    for edit in more {
+        doc.apply(edit)?;
+    }
+    let mut scene = Scene::from_text_at(&doc.to_string(), path)?;
     scene.at_time(time_s);
     Ok(scene)
 }

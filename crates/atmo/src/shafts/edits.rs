@@ -97,6 +97,15 @@ impl Document {
             })
     }
 
+    /// `text` parsed, with `edits` made in order.
+    pub fn edited(text: &str, origin: &str, edits: &[Edit]) -> Result<Document> {
+        let mut doc = Document::parse(text, origin)?;
+        for edit in edits {
+            doc.apply(edit)?;
+        }
+        Ok(doc)
+    }
+
     /// Makes `edit`; a key that cannot be reached is an error naming it.
     pub fn apply(&mut self, edit: &Edit) -> Result<()> {
         apply_one(self.0.as_table_mut(), edit)
@@ -160,21 +169,15 @@ fn number(value: &Value) -> Option<f64> {
 
 /// `text` (a scene file, named `origin` in messages) with `edits` made in order.
 pub fn apply(text: &str, origin: &str, edits: &[Edit]) -> Result<String> {
-    let mut doc = Document::parse(text, origin)?;
-    for edit in edits {
-        doc.apply(edit)?;
-    }
-    Ok(doc.to_string())
+    Ok(Document::edited(text, origin, edits)?.to_string())
 }
 
 /// Loads the scene of the file at `path` with `edits` made to it first: the scene
 /// that `atmo shafts FILE --set ...` draws.
 pub fn load(path: &Path, edits: &[Edit]) -> Result<Scene> {
-    let text = crate::files::read_text(path, "scene file", crate::files::TEXT_LIMIT_BYTES)?;
-    let origin = path.display().to_string();
-    let text = apply(&text, &origin, edits)?;
-    let folder = path.parent().unwrap_or(Path::new("."));
-    Scene::from_toml_str(&text, &origin, folder)
+    let text = Scene::read_text(path)?;
+    let text = apply(&text, &path.display().to_string(), edits)?;
+    Scene::from_text_at(&text, path)
 }
 
 /// A key's parts: each table's name, and the index where it is an array of tables.

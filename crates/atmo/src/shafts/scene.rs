@@ -446,9 +446,19 @@ impl Scene {
     /// Loads and validates the scene file at `path`; gobo and OBJ paths in it are
     /// relative to its folder.
     pub fn from_file(path: &Path) -> Result<Scene> {
-        let text = crate::files::read_text(path, "scene file", crate::files::TEXT_LIMIT_BYTES)?;
+        Scene::from_text_at(&Scene::read_text(path)?, path)
+    }
+
+    /// The text of the scene file at `path` (through the bounded reader).
+    pub fn read_text(path: &Path) -> Result<String> {
+        crate::files::read_text(path, "scene file", crate::files::TEXT_LIMIT_BYTES)
+    }
+
+    /// The scene of `text` as if it were the file at `path` (named so in messages, its
+    /// relative paths from its folder): a file edited before it is read.
+    pub fn from_text_at(text: &str, path: &Path) -> Result<Scene> {
         let folder = path.parent().unwrap_or(Path::new("."));
-        Scene::from_toml_str(&text, &path.display().to_string(), folder)
+        Scene::from_toml_str(text, &path.display().to_string(), folder)
     }
 
     /// Parses and validates scene TOML; `origin` names it in messages, `folder` is where
