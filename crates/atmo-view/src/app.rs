@@ -18,6 +18,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use crate::input::{Input, Key};
+use crate::layer::PanelLayer;
 use crate::{Backend, Mode, Options, Picture};
 
 /// Opens the window and runs until it is closed or [`Options::frames`] are drawn. Bad
@@ -77,6 +78,8 @@ struct Running {
     mode: Box<dyn Mode>,
     picture: Picture,
     display: DisplayPass,
+    /// The panel, drawn by egui only when it may have changed.
+    layer: PanelLayer,
     egui: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
     /// Inputs from the window since the last frame.
@@ -116,7 +119,16 @@ impl ApplicationHandler for App {
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         let Some(r) = &mut self.window else { return };
-        let consumed = r.egui.on_window_event(&r.window, &event).consumed;
+        let response = r.egui.on_window_event(&r.window, &event);
+        let consumed = response.consumed;
+        if let WindowEvent::CursorMoved { position, .. } = event {
+            r.cursor = (position.x, position.y);
+        }
+        // What egui must see drawn: an event it took or one over the panel (a pointer
+        // elsewhere is the picture's; the layer's refresh clears a hover left behind).
+        if response.repaint && (consumed || r.layer.covers(r.cursor)) {
+            r.layer.invalidate();
+        }
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => r.resize(size),
@@ -174,7 +186,6 @@ impl ApplicationHandler for App {
                 }
             }
             WindowEvent::CursorMoved { position, .. } => {
-                r.cursor = (position.x, position.y);
                 if let Some(light) = r.aiming {
                     r.pending
                         .push(Input::Aim(light, position.x as f32, position.y as f32));
@@ -275,6 +286,8 @@ fn open(
     }
     surface.configure(&gpu.device, &config);
     let display = DisplayPass::new(&gpu, config.format).map_err(opening)?;
+    let layer =
+        PanelLayer::new(&gpu, config.format, (config.width, config.height)).map_err(opening)?;
     let picture = Picture::new(&gpu, (config.width, config.height)).map_err(opening)?;
     let context = egui::Context::default();
     let egui = egui_winit::State::new(
@@ -294,6 +307,7 @@ fn open(
         mode,
         picture,
         display,
+        layer,
         egui,
         egui_renderer,
         pending: Vec::new(),
@@ -317,8 +331,12 @@ impl Running {
         }
         (self.config.width, self.config.height) = (size.width, size.height);
         self.surface.configure(&self.gpu.device, &self.config);
-        match Picture::new(&self.gpu, (size.width, size.height)) {
-            Ok(picture) => self.picture = picture,
+        let made = Picture::new(&self.gpu, (size.width, size.height)).and_then(|picture| {
+            let layer = PanelLayer::new(&self.gpu, self.config.format, (size.width, size.height))?;
+            Ok((picture, layer))
+        });
+        match made {
+            Ok((picture, layer)) => (self.picture, self.layer) = (picture, layer),
             Err(e) => self.message = Some(e.to_string()),
         }
     }
@@ -367,7 +385,10 @@ impl Running {
 
     fn apply(&mut self, input: &Input) {
         match input {
-            Input::Key(Key::Panel) => self.show_panel = !self.show_panel,
+            Input::Key(Key::Panel) => {
+                self.show_panel = !self.show_panel;
+                self.layer.invalidate();
+            }
             Input::Key(key @ (Key::Screenshot | Key::ScreenshotExr)) => {
                 let kind = if *key == Key::Screenshot {
                     "png"
@@ -391,6 +412,7 @@ impl Running {
     fn refuse(&mut self, e: anyhow::Error) {
         eprintln!("atmo view: {e:#}");
         self.message = Some(format!("{e:#}"));
+        self.layer.invalidate();
     }
 
     /// Writes the picture to `path` as the still command would (atomically), and prints
@@ -402,6 +424,7 @@ impl Running {
         let still = self.mode.still_command(path, self.picture.size);
         println!("{still}");
         self.still = Some(still);
+        self.layer.invalidate();
         Ok(())
     }
 
@@ -425,14 +448,34 @@ impl Running {
         let target = texture.texture.create_view(&Default::default());
         self.display.display = self.mode.display();
         self.display.prepare(&self.gpu, &self.picture.view);
+        let extra = if self.show_panel && self.layer.due(Instant::now()) {
+            self.draw_panel(&mut encoder)
+        } else {
+            Vec::new()
+        };
+        {
+            let mut pass = cleared_pass(&mut encoder, &target, "the window", wgpu::Color::BLACK);
+            self.display.draw(&mut pass);
+            if self.show_panel {
+                self.layer.draw(&mut pass);
+            }
+        }
+        self.gpu
+            .queue
+            .submit(extra.into_iter().chain([encoder.finish()]));
+        self.window.pre_present_notify();
+        self.gpu.queue.present(texture);
+        Ok(())
+    }
+
+    /// Runs egui and records its drawing of the panel into the layer; the command
+    /// buffers egui needs submitted before `encoder` come back. The panel's edits are
+    /// inputs of the next frame, applied as any other.
+    fn draw_panel(&mut self, encoder: &mut wgpu::CommandEncoder) -> Vec<wgpu::CommandBuffer> {
         let raw = self.egui.take_egui_input(&self.window);
         let context = self.egui.egui_ctx().clone();
-        let mut edits = Vec::new();
-        let output = context.run_pass(raw, |ctx| {
-            if self.show_panel {
-                edits = self.panel(ctx);
-            }
-        });
+        let (mut edits, mut window) = (Vec::new(), None);
+        let output = context.run_pass(raw, |ctx| (edits, window) = self.panel(ctx));
         self.egui
             .handle_platform_output(&self.window, output.platform_output);
         let primitives = context.tessellate(output.shapes, output.pixels_per_point);
@@ -451,33 +494,31 @@ impl Running {
         let extra = self.egui_renderer.update_buffers(
             &self.gpu.device,
             &self.gpu.queue,
-            &mut encoder,
+            encoder,
             &primitives,
             &screen,
         );
-        {
-            let mut pass = cleared_pass(&mut encoder, &target, "the window", wgpu::Color::BLACK)
-                .forget_lifetime();
-            self.display.draw(&mut pass);
-            self.egui_renderer.render(&mut pass, &primitives, &screen);
-        }
-        self.gpu
-            .queue
-            .submit(extra.into_iter().chain([encoder.finish()]));
-        self.window.pre_present_notify();
-        self.gpu.queue.present(texture);
+        let repaint = output
+            .viewport_output
+            .get(&egui::ViewportId::ROOT)
+            .map_or(crate::layer::REFRESH, |v| v.repaint_delay);
+        let renderer = &self.egui_renderer;
+        self.layer
+            .record(encoder, window, output.pixels_per_point, repaint, |pass| {
+                renderer.render(pass, &primitives, &screen)
+            });
         for id in textures.free.drain() {
             self.egui_renderer.free_texture(&id);
         }
-        // Panel edits are inputs of the next frame, applied as any other.
         self.pending.extend(edits);
-        Ok(())
+        extra
     }
 
-    /// The panel: the mode's parameters, the times, the last message and still command.
-    fn panel(&mut self, ctx: &egui::Context) -> Vec<Input> {
+    /// The panel: the mode's parameters, the times, the last message and still command;
+    /// its edits and the rectangle it covers, points.
+    fn panel(&mut self, ctx: &egui::Context) -> (Vec<Input>, Option<egui::Rect>) {
         let mut edits = Vec::new();
-        egui::Window::new(self.mode.title())
+        let shown = egui::Window::new(self.mode.title())
             .default_width(300.0)
             .show(ctx, |ui| {
                 edits = self.mode.panel(ui);
@@ -508,6 +549,6 @@ impl Running {
                     self.mode.help()
                 ));
             });
-        edits
+        (edits, shown.map(|s| s.response.rect))
     }
 }

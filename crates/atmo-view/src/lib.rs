@@ -22,6 +22,7 @@
 mod app;
 pub mod clouds;
 pub mod input;
+mod layer;
 mod panel;
 pub mod sky;
 pub mod stage;

@@ -179,13 +179,16 @@ impl StageMode {
         self.edit([Edit::set("camera.position", vector(position))])
     }
 
-    /// Spotlight `light` aimed at what pixel (x, y) of the picture shows.
+    /// Light `light` aimed at what pixel (x, y) of the picture shows: a spotlight's
+    /// `aim` set to the point; a moving head's pan and tilt at the show's start, the
+    /// nearest within its ranges that point it there.
     fn aim(&mut self, light: usize, x: f32, y: f32) -> Result<()> {
         let spotlights = self.edited.count("spotlight");
-        if light >= spotlights {
+        let lights = spotlights + self.scene.show.fixtures.len();
+        if light >= lights {
             return Err(Error::Invalid(format!(
-                "light {light}: the mouse aims the scene's {spotlights} [[spotlight]]s; a \
-                 moving head is aimed by its pan and tilt"
+                "light {light}: the scene has {lights} lights ({spotlights} [[spotlight]]s, \
+                 then the moving heads)"
             ))
             .into());
         }
@@ -199,11 +202,24 @@ impl StageMode {
             .objects
             .hit(&ray, camera.far)
             .context("nothing under the pointer to aim at")?;
+        let point = ray.origin + hit.t * ray.dir;
+        let heads = &self.scene.show.fixtures;
+        if let Some(head) = light.checked_sub(spotlights).and_then(|k| heads.get(k)) {
+            let (pan, tilt) = head.toward(point, head.start.pan_tilt()).with_context(|| {
+                format!(
+                    "{} cannot point at {point}: beyond its pan {:?} and tilt {:?} deg",
+                    head.name, head.pan_range_deg, head.tilt_range_deg
+                )
+            })?;
+            let at = |key: &str| format!("fixture[{}].start.{key}", light - spotlights);
+            let edits = vec![
+                Edit::set(&at("pan_deg"), pan.to_string()),
+                Edit::set(&at("tilt_deg"), tilt.to_string()),
+            ];
+            return self.edit(edits);
+        }
         let at = format!("spotlight[{light}]");
-        let mut edits = vec![Edit::set(
-            &format!("{at}.aim"),
-            vector(ray.origin + hit.t * ray.dir),
-        )];
+        let mut edits = vec![Edit::set(&format!("{at}.aim"), vector(point))];
         if self.edited.get(&format!("{at}.direction")).is_some() {
             edits.insert(0, Edit::remove(&format!("{at}.direction")));
         }
@@ -296,7 +312,7 @@ impl StageMode {
 
     /// The panel's widgets for moving head `k`: its attributes at the show's start.
     fn fixture_panel(&self, ui: &mut egui::Ui, k: usize, edits: &mut Vec<Edit>) {
-        ui.label("at the show's start (the cues change them)");
+        ui.label("at the show's start (the cues change them); right drag: pan and tilt");
         let at = |key: &str| format!("fixture[{k}].start.{key}");
         // Where the start does not set them: along the axis, full (zoom: the widest,
         // which only the fixture's range knows).
@@ -580,7 +596,7 @@ impl Mode for StageMode {
     }
 
     fn aimed_light(&self) -> Option<usize> {
-        (self.selected < self.edited.count("spotlight")).then_some(self.selected)
+        (self.selected < self.light_names().len()).then_some(self.selected)
     }
 }
 
@@ -657,6 +673,44 @@ mod tests {
         let e = mode.apply(&Input::Aim(9, 20.0, 30.0)).unwrap_err();
         assert!(e.to_string().contains("5 [[spotlight]]s"), "{e}");
         std::fs::remove_dir_all(path.parent().unwrap()).unwrap();
+    }
+
+    #[test]
+    fn the_mouse_aims_a_moving_head_by_its_pan_and_tilt() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/show.toml");
+        let mut mode = StageMode::new(&path, vec![Edit::set("render.shadow_map", "64")], 0.0)
+            .expect("the show loads");
+        mode.resize((48, 32)).unwrap();
+        // Light 2 is the third head, "centre" (the show has no [[spotlight]]).
+        mode.apply(&Input::Aim(2, 12.0, 26.0)).unwrap();
+        let head = &mode.scene.show.fixtures[2];
+        let camera = &mode.scene.camera;
+        let ray = Ray {
+            origin: camera.position,
+            dir: camera.ray(12.0, 26.0).normalize(),
+        };
+        let point = ray.origin + mode.scene.objects.hit(&ray, camera.far).unwrap().t * ray.dir;
+        let (pan, tilt) = head.start.pan_tilt();
+        let edited = mode.edited.number("fixture[2].start.pan_deg");
+        assert_eq!(edited.map(|p| p as f32), Some(pan));
+        let beam = head.aim(pan, tilt).0;
+        assert!(
+            beam.dot((point - head.position).normalize()) > 1.0 - 1e-6,
+            "{pan} {tilt}"
+        );
+        // The light drawn at the show's start is that head so aimed.
+        assert!((mode.scene.lights[2].light_from_world * beam - Vec3::Z).length() < 1e-4);
+        // Beyond the head's tilt: refused, the aim kept.
+        let reach = tilt.abs() + 1.0;
+        let narrow = Input::Set(
+            "fixture[2].tilt_range_deg".into(),
+            format!("[-{reach}, {reach}]"),
+        );
+        mode.apply(&narrow).unwrap();
+        // The back wall, near the heads' height: some 80 deg from straight down.
+        let e = mode.apply(&Input::Aim(2, 24.0, 8.0)).unwrap_err();
+        assert!(e.to_string().contains("centre cannot point at"), "{e}");
+        assert_eq!(mode.scene.show.fixtures[2].start.pan_tilt(), (pan, tilt));
     }
 
     #[test]

@@ -958,6 +958,8 @@ impl FixtureSpec {
             falloff: self.falloff.into(),
             wheel: light.wheel,
             gobo_rotation_deg: self.gobo_rotation_deg,
+            pan_range_deg: limits.pan,
+            tilt_range_deg: limits.tilt,
             start,
         };
         Ok((fixture, light.limits))

@@ -51,6 +51,13 @@ pub struct State {
     pub gobo: usize,
 }
 
+impl State {
+    /// Pan and tilt, degrees.
+    pub fn pan_tilt(&self) -> (f32, f32) {
+        (self.channels[PAN], self.channels[TILT])
+    }
+}
+
 /// What a cue sets on one fixture; `None` leaves an attribute as it is.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Change {
@@ -100,6 +107,9 @@ pub struct Fixture {
     pub wheel: Vec<Gobo>,
     /// The gobo's turn at the show's start, degrees.
     pub gobo_rotation_deg: f32,
+    /// How far the yoke pans and the head tilts, degrees (low, high).
+    pub pan_range_deg: [f32; 2],
+    pub tilt_range_deg: [f32; 2],
     /// The attributes before any cue.
     pub start: State,
 }
@@ -230,6 +240,37 @@ impl Fixture {
         (turn * self.axis, turn * self.front)
     }
 
+    /// The pan and tilt, degrees, within the fixture's ranges, that aim the beam at
+    /// `target` (m), nearest to `from` (pan, tilt) as a desk moves a head: the least
+    /// total travel. `None` when no pan and tilt in the ranges reach it.
+    ///
+    /// [`Fixture::aim`] inverted: the beam at tilt `t` and pan `p` is
+    /// `axis cos t + sin t (front cos p + side sin p)`, `side = axis x front`, so for a
+    /// unit direction `d`: `t = +-acos(d . axis)`, `p = atan2(d . side, d . front)`
+    /// (plus 180 deg for the negative tilt), each pan also 360 deg round.
+    pub fn toward(&self, target: Vec3, from: (f32, f32)) -> Option<(f32, f32)> {
+        let d = (target - self.position).try_normalize()?;
+        let side = self.axis.cross(self.front);
+        let (c, x, y) = (d.dot(self.axis), d.dot(self.front), d.dot(side));
+        let sine = x.hypot(y);
+        let tilt = sine.atan2(c).to_degrees();
+        // Along the axis any pan will do: keep the one it has.
+        let pan = if sine < 1e-6 {
+            from.0
+        } else {
+            y.atan2(x).to_degrees()
+        };
+        let in_range = |v: f32, [lo, hi]: [f32; 2]| (lo..=hi).contains(&v);
+        [(pan, tilt), (pan + 180.0, -tilt)]
+            .into_iter()
+            .flat_map(|(p, t)| (-3..=3).map(move |k| (p + 360.0 * k as f32, t)))
+            .filter(|&(p, t)| in_range(p, self.pan_range_deg) && in_range(t, self.tilt_range_deg))
+            .min_by(|a, b| {
+                let travel = |(p, t): (f32, f32)| (p - from.0).abs() + (t - from.1).abs();
+                travel(*a).total_cmp(&travel(*b))
+            })
+    }
+
     /// The spotlight this fixture is in `state`, its gobo turned `gobo_deg`.
     pub fn light(&self, state: &State, gobo_deg: f32) -> Spotlight {
         let c = &state.channels;
@@ -305,6 +346,8 @@ mod tests {
             falloff: Falloff::Smooth,
             wheel: Vec::new(),
             gobo_rotation_deg: 10.0,
+            pan_range_deg: [-270.0, 270.0],
+            tilt_range_deg: [-135.0, 135.0],
             start: State {
                 channels: [0.0, 0.0, 40.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0],
                 gobo: 0,
@@ -336,6 +379,45 @@ mod tests {
         let (beam, up) = f.aim(30.0, 45.0);
         assert!((beam.y + 0.5f32.sqrt()).abs() < 1e-5);
         assert!(beam.dot(up).abs() < 1e-6);
+    }
+
+    #[test]
+    fn toward_inverts_aim_within_the_ranges_and_nearest_to_where_the_head_is() {
+        let mut f = head();
+        f.position = Vec3::new(1.0, 6.0, -2.0);
+        let hits = |(pan, tilt): (f32, f32), target: Vec3| {
+            let beam = f.aim(pan, tilt).0;
+            (beam - (target - f.position).normalize()).length() < 1e-4
+        };
+        for target in [
+            Vec3::new(3.0, 0.0, 1.0),
+            Vec3::new(-4.0, 0.0, -5.0),
+            Vec3::new(1.0, 8.0, 4.0),
+            Vec3::new(0.0, 6.0, -2.0),
+        ] {
+            for from in [(0.0, 0.0), (200.0, -100.0), (-250.0, 30.0)] {
+                let (pan, tilt) = f.toward(target, from).expect("in reach");
+                assert!(hits((pan, tilt), target), "{target} from {from:?}");
+                assert!((-270.0..=270.0).contains(&pan) && (-135.0..=135.0).contains(&tilt));
+            }
+        }
+        // Of the two ways to a point, the one nearer the head's pan: from 200 deg the
+        // yoke does not swing back through 0.
+        let target = Vec3::new(3.0, 0.0, 1.0);
+        let near_zero = f.toward(target, (0.0, 0.0)).unwrap();
+        let far = f.toward(target, (200.0, 0.0)).unwrap();
+        assert!(
+            near_zero.0.abs() < 180.0 && (far.0 - 200.0).abs() < 180.0,
+            "{far:?}"
+        );
+        assert!((near_zero.0 - far.0).abs() > 90.0);
+        // Straight down the axis keeps the pan; beyond the tilt's reach is none.
+        assert_eq!(
+            f.toward(Vec3::new(1.0, 0.0, -2.0), (42.0, 10.0)),
+            Some((42.0, 0.0))
+        );
+        f.tilt_range_deg = [-60.0, 60.0];
+        assert_eq!(f.toward(Vec3::new(1.0, 8.0, 4.0), (0.0, 0.0)), None);
     }
 
     #[test]

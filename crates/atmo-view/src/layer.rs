@@ -1,0 +1,141 @@
+//! The panel as a layer of its own: egui draws it into a texture only when it may look
+//! different (a person acts on it, egui asks, or [`REFRESH`] has passed), and every
+//! frame shows that texture over the picture, within the panel's rectangle alone.
+//!
+//! Why: on a software adapter (lavapipe, the only one on a machine without a GPU)
+//! rasterising egui's few thousand small triangles took 15-30 ms a frame (measured:
+//! `atmo view sky --table ... --backend cpu`, 54 ms a frame with the panel against 34 ms
+//! with it hidden), more than the sky itself; compositing the cached layer costs one
+//! texel read and a blend per pixel of the panel's rectangle.
+
+use std::time::{Duration, Instant};
+
+use atmo_gpu::display::cleared_pass;
+use atmo_gpu::{Gpu, GpuError};
+
+/// How stale the panel may get while nobody touches it: the values it shows (the
+/// altitude of a flight, the frame time) are redrawn at least this often.
+pub const REFRESH: Duration = Duration::from_millis(100);
+
+/// Points around the panel's window that its shadow may darken.
+const SHADOW_POINTS: f32 = 32.0;
+
+/// The panel's texture (the window's size and format, premultiplied alpha, transparent
+/// outside the panel) and the pass that puts it over a frame.
+pub struct PanelLayer {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    pipeline: wgpu::RenderPipeline,
+    group: wgpu::BindGroup,
+    /// The panel's pixels (x, y, width, height) in the window, once drawn.
+    rect: Option<[u32; 4]>,
+    /// When the layer is to be drawn again; `None`: at the next frame.
+    next: Option<Instant>,
+}
+
+impl PanelLayer {
+    /// A layer for a window of `size` pixels whose surface has `format`.
+    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat, size: (u32, u32)) -> Result<Self, GpuError> {
+        let source = atmo_gpu::wgsl::source("screen.wgsl") + include_str!("panel_layer.wgsl");
+        let module = gpu.shader("panel_layer.wgsl", &source)?;
+        let pipeline = gpu.screen_pipeline(
+            "the panel layer",
+            &module,
+            None,
+            &[Some(wgpu::ColorTargetState {
+                format,
+                blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+            None,
+        )?;
+        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("the panel layer"),
+            size: wgpu::Extent3d {
+                width: size.0,
+                height: size.1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let group = gpu.bind_group(
+            &pipeline.get_bind_group_layout(0),
+            &[wgpu::BindingResource::TextureView(&view)],
+        );
+        Ok(PanelLayer {
+            texture,
+            view,
+            pipeline,
+            group,
+            rect: None,
+            next: None,
+        })
+    }
+
+    /// Whether the layer is to be drawn again at `now`.
+    pub fn due(&self, now: Instant) -> bool {
+        self.next.is_none_or(|next| now >= next)
+    }
+
+    /// Asks for the layer to be drawn at the next frame.
+    pub fn invalidate(&mut self) {
+        self.next = None;
+    }
+
+    /// Whether the window's pixel `(x, y)` is over the panel (or its shadow).
+    pub fn covers(&self, (x, y): (f64, f64)) -> bool {
+        self.rect.is_some_and(|[left, top, width, height]| {
+            let (x, y) = (x - left as f64, y - top as f64);
+            (0.0..width as f64).contains(&x) && (0.0..height as f64).contains(&y)
+        })
+    }
+
+    /// Records egui's drawing of the panel into the layer (cleared first): `draw`
+    /// records into the pass. `window` is the panel's rectangle in points, `points`
+    /// pixels a point; egui asks to be run again in `repaint` at the latest.
+    pub fn record(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        window: Option<egui::Rect>,
+        points: f32,
+        repaint: Duration,
+        draw: impl FnOnce(&mut wgpu::RenderPass<'static>),
+    ) {
+        let mut pass = cleared_pass(
+            encoder,
+            &self.view,
+            "the panel layer",
+            wgpu::Color::TRANSPARENT,
+        )
+        .forget_lifetime();
+        draw(&mut pass);
+        let (width, height) = (self.texture.width(), self.texture.height());
+        self.rect = window.map(|rect| {
+            let rect = rect.expand(SHADOW_POINTS) * points;
+            let left = (rect.min.x.floor().max(0.0) as u32).min(width);
+            let top = (rect.min.y.floor().max(0.0) as u32).min(height);
+            let right = (rect.max.x.ceil().max(0.0) as u32).clamp(left, width);
+            let bottom = (rect.max.y.ceil().max(0.0) as u32).clamp(top, height);
+            [left, top, right - left, bottom - top]
+        });
+        self.next = Some(Instant::now() + repaint.min(REFRESH));
+    }
+
+    /// Records the layer over what `pass` (into the window's surface) holds, within the
+    /// panel's rectangle.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        let Some([x, y, width, height]) = self.rect.filter(|r| r[2] > 0 && r[3] > 0) else {
+            return;
+        };
+        pass.set_scissor_rect(x, y, width, height);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
