@@ -3,6 +3,13 @@
 //! atmo draw the sky where the depth buffer is still at the far plane, in the same
 //! encoder and render pass, with no read-back.
 //!
+//! The ground is lit and hazed by the same atmosphere: the sun's irradiance and the
+//! sky's on a horizontal surface from `atmo::sky::lighting::Lighting` (per sun), and the
+//! aerial perspective (`T(d) L + S(d)`, the light lost and gained between the eye and
+//! the ground) from atmo's froxels: `AerialRays::froxels` on the CPU, 32 x 18 columns
+//! x 32 slices, made again when the sun or the camera turns (a few ms) and uploaded as
+//! two 3-D textures the ground's shader samples at its pixel and distance.
+//!
 //! ```text
 //! cargo run --release -p atmo-gpu --example embed
 //! ```
@@ -10,7 +17,9 @@
 
 use std::sync::Arc;
 
-use atmo::sky::{SkyModel, SkySettings, View};
+use atmo::sky::aerial::{quadratic_slices, AerialRays, Froxels};
+use atmo::sky::lighting::{Lighting, LUMENS_PER_WATT};
+use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
 use atmo_gpu::sky::{DepthTarget, GpuSkyModel, SkyPass, SkyTarget};
@@ -22,23 +31,61 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-/// The program's own ground: a 40 km square at y = 0, lit by the sun (Lambert).
+/// The program's own ground: a 120 km square at y = 0 (flat: 60 km out the Earth's
+/// curve would drop it 280 m), a checkered Lambert surface lit
+/// by the sun and the sky, seen through the aerial perspective's froxels.
 const GROUND: &str = "
-struct Uniforms { clip_from_world: mat4x4<f32>, to_sun: vec4<f32> }
+struct Uniforms {
+    clip_from_world: mat4x4<f32>,
+    eye: vec4<f32>,
+    to_sun: vec4<f32>,
+    // Irradiance on a surface facing the sun, and the sky's on a horizontal one,
+    // linear sRGB W m^-2.
+    sun: vec4<f32>,
+    sky: vec4<f32>,
+    // x: the window's width, y: its height, z: the farthest slice, m, w: the slices.
+    froxels: vec4<f32>,
+    exposure: vec4<f32>,
+}
 @group(0) @binding(0) var<uniform> u: Uniforms;
+@group(0) @binding(1) var transmittance: texture_3d<f32>;
+@group(0) @binding(2) var inscatter: texture_3d<f32>;
+@group(0) @binding(3) var linear: sampler;
 struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
 @vertex fn vertex(@builtin(vertex_index) i: u32) -> Out {
     let corners = array(vec2(-1.0, -1.0), vec2(1.0, -1.0), vec2(1.0, 1.0),
                         vec2(-1.0, -1.0), vec2(1.0, 1.0), vec2(-1.0, 1.0));
-    let world = vec3(corners[i].x * 20000.0, 0.0, corners[i].y * 20000.0);
+    let world = vec3(corners[i].x * 60000.0, 0.0, corners[i].y * 60000.0);
     return Out(u.clip_from_world * vec4(world, 1.0), world);
 }
 @fragment fn fragment(in: Out) -> @location(0) vec4<f32> {
-    let cell = (i32(floor(in.world.x / 5.0)) + i32(floor(in.world.z / 5.0))) & 1;
-    let albedo = select(0.10, 0.16, cell == 1);
-    let light = max(u.to_sun.y, 0.0) * 1.2 + 0.15;
-    return vec4(vec3(albedo * light * 0.9, albedo * light, albedo * light * 0.7), 1.0);
+    // Fields 300 m across; where a pixel spans a field, their mean (no moire).
+    let cell = (i32(floor(in.world.x / 300.0)) + i32(floor(in.world.z / 300.0))) & 1;
+    let footprint = max(fwidth(in.world.x), fwidth(in.world.z)) / 300.0;
+    let field = mix(select(0.08, 0.16, cell == 1), 0.12, clamp(footprint, 0.0, 1.0));
+    let albedo = field * vec3(0.9, 1.0, 0.7);
+    let light = u.sun.rgb * max(u.to_sun.y, 0.0) + u.sky.rgb;
+    let radiance = albedo / 3.14159265 * light;
+    // The froxel under this pixel at this distance: slices at far (k / n)^2, so the
+    // slice coordinate is sqrt(d / far) n; nearer than the first, toward no air at all.
+    let d = distance(in.world, u.eye.xyz);
+    let k = sqrt(d / u.froxels.z) * u.froxels.w;
+    let at = vec3(in.clip.xy / u.froxels.xy, (k - 0.5) / u.froxels.w);
+    let near = clamp(k, 0.0, 1.0);
+    let t = mix(vec3(1.0), textureSampleLevel(transmittance, linear, at, 0.0).rgb, near);
+    let s = textureSampleLevel(inscatter, linear, at, 0.0).rgb * near;
+    return vec4((t * radiance + s) * u.exposure.x, 1.0);
 }";
+
+/// The froxels' columns over the window (rows: as many as keep them square) and
+/// slices, and how far the last slice is, m: the ground's far corners are 85 km away.
+const FROXEL_COLUMNS: u32 = 32;
+const SLICES: usize = 32;
+const FAR_M: f64 = 90_000.0;
+/// The eye's height above the ground, m: a low flight, where the haze shows.
+const EYE_M: f32 = 600.0;
+/// The elevation rows of the froxels' marked rays.
+const FROXEL_ROWS: usize = 512;
 
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -56,6 +103,15 @@ struct Scene {
     gpu: Gpu,
     sky: GpuSkyModel<SkyModel>,
     sky_pass: SkyPass,
+    /// The aerial perspective's rays (sun-independent, made once) and the froxels'
+    /// textures (transmittance, in-scattered radiance) the ground reads.
+    rays: AerialRays,
+    froxels: [wgpu::Texture; 2],
+    linear: wgpu::Sampler,
+    /// The sun's and the sky's irradiance (linear sRGB W m^-2) of the last sun.
+    light: [Vec3; 2],
+    /// The sun, yaw and window size the froxels and the light were made for.
+    made_for: Option<(f64, f64, (u32, u32))>,
     sun_elevation_deg: f64,
     yaw_deg: f64,
     dragging: Option<f64>,
@@ -120,6 +176,59 @@ impl ApplicationHandler for App {
     }
 }
 
+/// The froxels' two 3-D textures for a grid of `(columns, rows)` and [`SLICES`], and
+/// the ground's bindings: its uniforms, the textures and their sampler.
+fn froxel_bindings(
+    device: &wgpu::Device,
+    ground: &wgpu::RenderPipeline,
+    uniforms: &wgpu::Buffer,
+    linear: &wgpu::Sampler,
+    (columns, rows): (u32, u32),
+) -> ([wgpu::Texture; 2], wgpu::BindGroup) {
+    let froxels = ["transmittance", "inscatter"].map(|name| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(name),
+            size: wgpu::Extent3d {
+                width: columns,
+                height: rows,
+                depth_or_array_layers: SLICES as u32,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D3,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        })
+    });
+    let views = froxels
+        .each_ref()
+        .map(|t| t.create_view(&Default::default()));
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("ground"),
+        layout: &ground.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniforms.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(&views[0]),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(&views[1]),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::Sampler(linear),
+            },
+        ],
+    });
+    (froxels, group)
+}
+
 fn depth_view(device: &wgpu::Device, config: &wgpu::SurfaceConfiguration) -> wgpu::TextureView {
     device
         .create_texture(&wgpu::TextureDescriptor {
@@ -144,7 +253,7 @@ impl Scene {
         let attributes = Window::default_attributes().with_title("atmo in my own renderer");
         let window = Arc::new(event_loop.create_window(attributes).expect("a window"));
         // The program's own instance, adapter and device, as any wgpu program has;
-        // atmo needs FLOAT32_BLENDABLE on it.
+        // atmo needs FLOAT32_BLENDABLE on it; the ground filters the f32 froxels.
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
                 Box::new(event_loop.owned_display_handle()),
@@ -156,7 +265,8 @@ impl Scene {
         }))
         .expect("an adapter");
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            required_features: wgpu::Features::FLOAT32_BLENDABLE,
+            required_features: wgpu::Features::FLOAT32_BLENDABLE
+                | wgpu::Features::FLOAT32_FILTERABLE,
             ..Default::default()
         }))
         .expect("a device");
@@ -167,9 +277,13 @@ impl Scene {
         surface.configure(&device, &config);
         let gpu = Gpu::from_device(device.clone(), queue.clone(), adapter.get_info())
             .expect("atmo on this device");
-        // The sky by the shell method seen from 2 m; the maps are uploaded once.
-        let model =
-            SkyModel::new(&Atmosphere::earth(), &SkySettings::default(), 2.0).expect("a model");
+        // The sky by the shell method seen from the eye; the maps are uploaded once.
+        let model = SkyModel::new(&Atmosphere::earth(), &SkySettings::default(), EYE_M as f64)
+            .expect("a model");
+        let slices = quadratic_slices(SLICES, FAR_M);
+        let rays = model
+            .aerial_rays(FROXEL_ROWS, &slices)
+            .expect("the aerial rays");
         let sky = GpuSkyModel::new(&gpu, model).expect("the sky on the GPU");
         // The sky's pass for this program's targets: the surface and its depth buffer.
         let target = SkyTarget {
@@ -214,18 +328,16 @@ impl Scene {
         });
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ground"),
-            size: 80,
+            size: 160,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let ground_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ground"),
-            layout: &ground.get_bind_group_layout(0),
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniforms.as_entire_binding(),
-            }],
+        let linear = device.create_sampler(&wgpu::SamplerDescriptor {
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
         });
+        let (froxels, ground_group) = froxel_bindings(&device, &ground, &uniforms, &linear, (1, 1));
         Scene {
             depth: depth_view(&device, &config),
             window,
@@ -239,6 +351,11 @@ impl Scene {
             gpu,
             sky,
             sky_pass,
+            rays,
+            froxels,
+            linear,
+            light: [Vec3::ZERO; 2],
+            made_for: None,
             sun_elevation_deg: 8.0,
             yaw_deg: 180.0,
             dragging: None,
@@ -257,19 +374,30 @@ impl Scene {
         let target = texture.texture.create_view(&Default::default());
         let size = (self.config.width, self.config.height);
         // One camera for both: the program's matrices and atmo's view of the same eye.
-        let eye = Vec3::new(0.0, 2.0, 0.0);
+        let eye = Vec3::new(0.0, EYE_M, 0.0);
         let yaw = self.yaw_deg.to_radians() as f32;
-        let forward = Vec3::new(yaw.sin(), 0.05, -yaw.cos()).normalize();
+        let forward = Vec3::new(yaw.sin(), -0.1, -yaw.cos()).normalize();
         let fov_deg = 60.0f32;
         let camera = Camera::look_at(eye, eye + forward, Vec3::Y, Fov::Vertical(fov_deg), size)
             .expect("a camera");
         let aspect = size.0 as f32 / size.1 as f32;
-        let clip_from_world = Mat4::perspective_rh(fov_deg.to_radians(), aspect, 0.5, 50_000.0)
+        let clip_from_world = Mat4::perspective_rh(fov_deg.to_radians(), aspect, 1.0, 200_000.0)
             * Mat4::look_to_rh(eye, forward, Vec3::Y);
         let sun = Sun::from_degrees(self.sun_elevation_deg, 180.0).expect("a sun");
+        if self.made_for != Some((self.sun_elevation_deg, self.yaw_deg, size)) {
+            self.made_for = Some((self.sun_elevation_deg, self.yaw_deg, size));
+            self.light_and_haze(sun, eye, forward, fov_deg);
+        }
         let to_sun = sun.toward();
+        let [sunlight, skylight] = self.light;
         let mut uniforms = clip_from_world.to_cols_array().to_vec();
+        uniforms.extend([eye.x, eye.y, eye.z, 0.0]);
         uniforms.extend([to_sun.x, to_sun.y, to_sun.z, 0.0]);
+        uniforms.extend([sunlight.x, sunlight.y, sunlight.z, 0.0]);
+        uniforms.extend([skylight.x, skylight.y, skylight.z, 0.0]);
+        let (w, h) = (size.0 as f32, size.1 as f32);
+        uniforms.extend([w, h, FAR_M as f32, SLICES as f32]);
+        uniforms.extend([self.sky_pass.exposure, 0.0, 0.0, 0.0]);
         self.queue
             .write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&uniforms));
         let mut encoder = self.device.create_command_encoder(&Default::default());
@@ -313,6 +441,66 @@ impl Scene {
         self.queue.submit([encoder.finish()]);
         self.window.pre_present_notify();
         self.queue.present(texture);
+    }
+
+    /// The ground's light for `sun` (the sun's irradiance and the sky's on a
+    /// horizontal surface) and the aerial perspective's froxels over the window for an
+    /// eye at `eye` looking along `forward` with a vertical field of `fov_deg`.
+    fn light_and_haze(&mut self, sun: Sun, eye: Vec3, forward: Vec3, fov_deg: f32) {
+        let model = self.sky.model();
+        let lighting = Lighting::new(
+            &SkyPicture::new(model, sun),
+            model.atmosphere(),
+            model.altitude_m(),
+            sun,
+        );
+        let sunlight = Vec3::from(lighting.sun.colour.map(|c| c as f32))
+            * (lighting.sun.normal_lux / LUMENS_PER_WATT) as f32;
+        let skylight = Vec3::from(lighting.sky_irradiance_up.map(|c| c as f32));
+        self.light = [sunlight, skylight];
+        // A froxel camera of the window's aspect: as many rows as keep its pixels square.
+        let (w, h) = (self.config.width as f32, self.config.height as f32);
+        let columns = FROXEL_COLUMNS;
+        let rows = ((columns as f32 * h / w).round() as u32).clamp(1, 4 * columns);
+        if self.froxels[0].height() != rows {
+            (self.froxels, self.ground_group) = froxel_bindings(
+                &self.device,
+                &self.ground,
+                &self.uniforms,
+                &self.linear,
+                (columns, rows),
+            );
+        }
+        let camera = Camera::look_at(
+            eye,
+            eye + forward,
+            Vec3::Y,
+            Fov::Vertical(fov_deg),
+            (columns, rows),
+        )
+        .expect("a froxel camera");
+        let froxels: Froxels = self.rays.froxels(model, sun, &camera);
+        for (texture, values) in self
+            .froxels
+            .iter()
+            .zip([&froxels.transmittance, &froxels.inscatter])
+        {
+            let texels: Vec<[f32; 4]> = values.iter().map(|v| [v.x, v.y, v.z, 1.0]).collect();
+            self.queue.write_texture(
+                texture.as_image_copy(),
+                bytemuck::cast_slice(&texels),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(columns * 16),
+                    rows_per_image: Some(rows),
+                },
+                wgpu::Extent3d {
+                    width: columns,
+                    height: rows,
+                    depth_or_array_layers: SLICES as u32,
+                },
+            );
+        }
     }
 }
 

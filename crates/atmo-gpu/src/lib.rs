@@ -12,7 +12,9 @@
 //! only what is still at the far plane); each frame a sky's `prepare` records its maps
 //! into the caller's encoder, and [`sky::SkyPass::draw`] records one full-screen
 //! triangle into the caller's render pass. [`display::DisplayPass`] tone-maps an HDR
-//! picture onto an LDR target the same way. `examples/embed.rs` is a whole program.
+//! picture onto an LDR target the same way. `examples/embed.rs` is a whole program,
+//! whose own ground is also lit by atmo's sun and sky (`atmo::sky::lighting`) and hazed
+//! by its aerial perspective (`atmo::sky::aerial` froxels, sampled by its own shader).
 //!
 //! ```no_run
 //! # fn frame(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo,
