@@ -92,7 +92,10 @@ fn main() {
         Command::Clouds(args) => clouds::run(args).map_err(|e| with_flag(e, clouds::FLAGS)),
         Command::Precompute(args) => precompute::run(args),
         Command::Inspect(args) => inspect::run(args),
-        Command::View(args) => view::run(args).map_err(|e| with_flag(e, sky::FLAGS)),
+        Command::View(args) => {
+            let flags = args.flags();
+            view::run(args).map_err(|e| with_flag(e, flags))
+        }
         Command::Sun(args) => sun::run(args).map_err(|e| with_flag(e, sky::FLAGS)),
         Command::Bench(args) => bench::run(args),
     };

@@ -229,6 +229,11 @@ fn bad_input_before_the_window_exits_2_with_a_message() {
             "no parameter 'colour' in the clouds",
         ),
         (vec![CLOUD, CUMULUS, SMALL, "--fov", "200"], "--fov"),
+        // The cloud's own flags, named as `atmo clouds` names them.
+        (
+            vec![CLOUD, CUMULUS, SMALL, "--resolution", "1"],
+            "--resolution",
+        ),
     ];
     refused_before_the_window(&dir, cases);
     let shot = dir.join("x.png");

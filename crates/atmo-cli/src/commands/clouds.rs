@@ -457,6 +457,8 @@ impl Cloud {
             }
         };
         check_range("--wind-s", still.wind_s as f64, 0.0, 1e5)?;
+        IntensityBuffer::check_resolution(still.resolution)?;
+        check_range("buffer.forward", still.forward as f64, 0.0, 1.0)?;
         let calm = particles;
         let particles = blown(&calm, still.wind_s);
         let (position, look_at) = placement(&particles, still)?;

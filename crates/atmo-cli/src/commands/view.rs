@@ -24,6 +24,18 @@ pub struct ViewArgs {
     mode: ViewMode,
 }
 
+impl ViewArgs {
+    /// The library's fields that the mode's flags set, for error messages (the
+    /// stage's errors name its scene keys and flags themselves).
+    pub fn flags(&self) -> &'static [(&'static str, &'static str)] {
+        match self.mode {
+            ViewMode::Sky(_) => super::sky::FLAGS,
+            ViewMode::Clouds(_) => super::clouds::FLAGS,
+            ViewMode::Stage(_) => &[],
+        }
+    }
+}
+
 #[derive(Subcommand)]
 enum ViewMode {
     /// The sky, live: drag to look, arrows move the sun, R / F climb and descend,
