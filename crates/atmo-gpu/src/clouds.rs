@@ -8,6 +8,8 @@
 //! [`GpuClouds::prepare`] records the draw into the caller's encoder and a
 //! [`CloudsPass`] puts the cloud over the caller's own target, with no read-back.
 
+use std::cell::RefCell;
+
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::Lighting;
@@ -86,6 +88,9 @@ pub struct GpuClouds {
     splat: wgpu::ComputePipeline,
     prefix: wgpu::ComputePipeline,
     draw: wgpu::RenderPipeline,
+    /// [`GpuClouds::render`]'s composite, into an RGBA f32 picture (a cell: `render`
+    /// reads the cloud while it prepares the pass).
+    composite: RefCell<CloudsPass>,
 }
 
 impl GpuClouds {
@@ -128,6 +133,7 @@ impl GpuClouds {
         let prefix = module("clouds_prefix.wgsl")?;
         let draw = module("clouds_draw.wgsl")?;
         Ok(GpuClouds {
+            composite: RefCell::new(CloudsPass::new(gpu, wgpu::TextureFormat::Rgba32Float)?),
             particles: particles.to_vec(),
             particle_buffer,
             resolution: resolution as u32,
@@ -236,9 +242,9 @@ impl GpuClouds {
     }
 
     /// The cloud seen by `camera` over `background` (or black), as
-    /// `atmo::clouds::render::render`: particles sorted by depth on the CPU, drawn back
-    /// to front, the picture read back and the higher octaves added to it. An error
-    /// before the first light pass.
+    /// `atmo::clouds::render::render`: [`GpuClouds::prepare`] and a [`CloudsPass`] over
+    /// the background, submitted and read back (the same recording a program of one's
+    /// own makes). An error before the first light pass.
     pub fn render(
         &self,
         gpu: &Gpu,
@@ -256,24 +262,30 @@ impl GpuClouds {
                 .into());
             }
         }
-        let billboards = self.billboards(gpu, camera, light)?;
-        // The picture over the background, and the higher octaves' light apart (its
-        // alpha, 1 - the cloud's transmittance, scales it).
         let target = target_texture(gpu, w, h, background);
-        let higher = target_texture(gpu, w, h, None);
-        let views = [&target, &higher].map(|t| t.create_view(&Default::default()));
+        let view = target.create_view(&Default::default());
+        let mut composite = self.composite.borrow_mut();
+        let mut prepared = Ok(());
         let gpu_ms = gpu.run("the cloud draw", |encoder| {
-            self.record(encoder, &billboards, &views)
-        })?;
-        let mut frame = crate::frame_of(w, h, &gpu.read_texture("the cloud frame", &target, w, h)?);
-        let octaves = light.scattering;
-        if octaves.count > 1 {
-            let bytes = gpu.read_texture("the higher octaves", &higher, w, h)?;
-            let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-            for (pixel, t) in frame.pixels.iter_mut().zip(texels) {
-                *pixel += octaves.higher_share(1.0 - t[3]) * Vec3::new(t[0], t[1], t[2]);
-            }
-        }
+            prepared = self.prepare(gpu, encoder, &mut composite, camera, light);
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("the cloud over the background"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                ..Default::default()
+            });
+            composite.draw(&mut pass);
+        });
+        prepared?;
+        let gpu_ms = gpu_ms?;
+        let frame = crate::frame_of(w, h, &gpu.read_texture("the cloud frame", &target, w, h)?);
         Ok(Rendered { frame, gpu_ms })
     }
 
