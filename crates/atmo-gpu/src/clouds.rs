@@ -268,19 +268,8 @@ impl GpuClouds {
         let mut prepared = Ok(());
         let gpu_ms = gpu.run("the cloud draw", |encoder| {
             prepared = self.prepare(gpu, encoder, &mut composite, camera, light);
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("the cloud over the background"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                ..Default::default()
-            });
+            let mut pass =
+                crate::display::loaded_pass(encoder, &view, "the cloud over the background");
             composite.draw(&mut pass);
         });
         prepared?;

@@ -168,6 +168,25 @@ pub fn cleared_pass<'e>(
     label: &str,
     colour: wgpu::Color,
 ) -> wgpu::RenderPass<'e> {
+    target_pass(encoder, target, label, wgpu::LoadOp::Clear(colour))
+}
+
+/// A render pass into `target` alone over what it holds: for a pass that puts a
+/// picture over another (the clouds over a sky).
+pub fn loaded_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &wgpu::TextureView,
+    label: &str,
+) -> wgpu::RenderPass<'e> {
+    target_pass(encoder, target, label, wgpu::LoadOp::Load)
+}
+
+fn target_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &wgpu::TextureView,
+    label: &str,
+    load: wgpu::LoadOp<wgpu::Color>,
+) -> wgpu::RenderPass<'e> {
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -175,7 +194,7 @@ pub fn cleared_pass<'e>(
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(colour),
+                load,
                 store: wgpu::StoreOp::Store,
             },
         })],

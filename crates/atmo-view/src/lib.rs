@@ -31,7 +31,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use atmo::image::{Display, Frame};
-use atmo_gpu::display::{cleared_pass, picture_texture};
+use atmo_gpu::display::{cleared_pass, loaded_pass, picture_texture};
 use atmo_gpu::{Gpu, GpuError};
 
 pub use app::{run, Timings};
@@ -164,19 +164,7 @@ impl Picture {
         encoder: &mut wgpu::CommandEncoder,
         draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("over the picture"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..Default::default()
-        });
+        let mut pass = loaded_pass(encoder, &self.view, "over the picture");
         draw(&mut pass);
     }
 
