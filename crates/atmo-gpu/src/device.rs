@@ -15,7 +15,9 @@ const REQUIRED_FEATURES: &[(wgpu::Features, &str)] = &[(
     "float32 blending (additive planes and billboards in f32 targets)",
 )];
 
-/// A device and queue, with what is known of the adapter behind them.
+/// A device and queue, with what is known of the adapter behind them. A clone is the
+/// same device (wgpu's handles are shared).
+#[derive(Clone)]
 pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,

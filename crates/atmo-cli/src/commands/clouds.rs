@@ -232,21 +232,22 @@ pub fn scene_arguments(path: &std::path::Path, long_flags: &[&str]) -> atmo::Res
 /// The wind's time a frame of `--animate wind` (and of the window's wind), s.
 pub const WIND_STEP_S: f32 = 4.0;
 
-/// The light pass and the drawing, on the CPU or the GPU (whose device the caller
-/// passes to each call).
+/// The light pass and the drawing, on the CPU or on a GPU.
 enum Renderer {
     /// The buffer and its resolution (none before the first light pass).
     Cpu(Option<IntensityBuffer>, usize),
-    Gpu(Box<GpuClouds>),
+    /// The device and the cloud on it.
+    Gpu(Box<(Gpu, GpuClouds)>),
 }
 
 impl Renderer {
     /// The renderer for `cloud`: on `gpu` where there is one, else on the CPU.
     fn new(gpu: Option<&Gpu>, cloud: &Cloud) -> Result<Renderer> {
         Ok(match gpu {
-            Some(gpu) => Renderer::Gpu(Box::new(
+            Some(gpu) => Renderer::Gpu(Box::new((
+                gpu.clone(),
                 GpuClouds::new(gpu, &cloud.particles, cloud.resolution).map_err(gpu_error)?,
-            )),
+            ))),
             None => Renderer::Cpu(None, cloud.resolution),
         })
     }
@@ -254,17 +255,14 @@ impl Renderer {
     /// The intensity buffer of `particles` (which may have moved) lit from `to_sun`.
     fn light(
         &mut self,
-        gpu: Option<&Gpu>,
         particles: &[Particle],
         to_sun: Vec3,
         forward: f32,
         splat: Splat,
     ) -> Result<()> {
-        match (self, gpu) {
-            (Renderer::Cpu(Some(buffer), _), _) => {
-                buffer.update(particles, to_sun, forward, splat)?
-            }
-            (Renderer::Cpu(buffer, resolution), _) => {
+        match self {
+            Renderer::Cpu(Some(buffer), _) => buffer.update(particles, to_sun, forward, splat)?,
+            Renderer::Cpu(buffer, resolution) => {
                 *buffer = Some(IntensityBuffer::new(
                     particles,
                     to_sun,
@@ -273,37 +271,36 @@ impl Renderer {
                     splat,
                 )?)
             }
-            (Renderer::Gpu(clouds), Some(gpu)) => {
+            Renderer::Gpu(on) => {
+                let (gpu, clouds) = &mut **on;
                 clouds.move_particles(gpu, particles).map_err(gpu_error)?;
                 clouds
                     .light(gpu, to_sun, forward, splat)
                     .map_err(gpu_error)?;
             }
-            (Renderer::Gpu(_), None) => unreachable!("a GPU renderer is made with a device"),
         }
         Ok(())
     }
 
     fn draw(
         &self,
-        gpu: Option<&Gpu>,
         particles: &[Particle],
         camera: &Camera,
         light: &Lighting,
         background: Option<&Frame>,
     ) -> Result<Frame> {
-        Ok(match (self, gpu) {
-            (Renderer::Cpu(buffer, _), _) => {
+        Ok(match self {
+            Renderer::Cpu(buffer, _) => {
                 let buffer = buffer.as_ref().expect("a light pass comes first");
                 render(particles, buffer, camera, light, background)?
             }
-            (Renderer::Gpu(clouds), Some(gpu)) => {
+            Renderer::Gpu(on) => {
+                let (gpu, clouds) = &**on;
                 clouds
                     .render(gpu, camera, light, background)
                     .map_err(gpu_error)?
                     .frame
             }
-            (Renderer::Gpu(_), None) => unreachable!("a GPU renderer is made with a device"),
         })
     }
 }
@@ -720,7 +717,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     let (forward, splat) = (cloud.forward, cloud.splat);
     let mut particles = cloud.particles.clone();
     let start = Instant::now();
-    renderer.light(gpu, &particles, sun.toward(), forward, splat)?;
+    renderer.light(&particles, sun.toward(), forward, splat)?;
     let light_ms = start.elapsed().as_secs_f64() * 1e3;
     // Everything is validated now (the light pass checked the buffer's settings).
     if let Some(path) = &args.save_particles {
@@ -731,7 +728,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         None => {
             let start = Instant::now();
             let (light, background) = cloud.lighting(sky.as_ref(), sun, camera)?;
-            let frame = renderer.draw(gpu, &particles, camera, &light, background.as_ref())?;
+            let frame = renderer.draw(&particles, camera, &light, background.as_ref())?;
             let draw_ms = start.elapsed().as_secs_f64() * 1e3;
             frame.write(&args.output, display.exposure, display.tone)?;
             eprintln!(
@@ -765,9 +762,9 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                             sun
                         }
                     };
-                    renderer.light(gpu, &particles, sun.toward(), forward, splat)?;
+                    renderer.light(&particles, sun.toward(), forward, splat)?;
                     let (light, background) = cloud.lighting(sky.as_ref(), sun, camera)?;
-                    *frame = renderer.draw(gpu, &particles, camera, &light, background.as_ref())?;
+                    *frame = renderer.draw(&particles, camera, &light, background.as_ref())?;
                     Ok(())
                 },
             )?;
@@ -863,7 +860,7 @@ impl WindowClouds {
             }
         };
         if self.lit != Some(sun) {
-            renderer.light(gpu, particles, sun.toward(), cloud.forward, cloud.splat)?;
+            renderer.light(particles, sun.toward(), cloud.forward, cloud.splat)?;
             self.lit = Some(sun);
         }
         let height = camera.position.y;
@@ -886,7 +883,7 @@ impl CloudPictures for WindowClouds {
     fn draw(&mut self, p: &CloudParams, size: (u32, u32)) -> Result<Frame> {
         let (camera, light, background) = self.prepare(None, p, size)?;
         let (_, renderer) = self.renderer.as_ref().expect("made by prepare");
-        renderer.draw(None, &self.particles, &camera, &light, background.as_ref())
+        renderer.draw(&self.particles, &camera, &light, background.as_ref())
     }
 
     fn draw_on(
@@ -897,9 +894,10 @@ impl CloudPictures for WindowClouds {
         p: &CloudParams,
     ) -> Result<()> {
         let (camera, light, background) = self.prepare(Some(gpu), p, picture.size)?;
-        let Some((_, Renderer::Gpu(clouds))) = &self.renderer else {
+        let Some((_, Renderer::Gpu(on))) = &self.renderer else {
             unreachable!("prepare made the GPU's renderer")
         };
+        let clouds = &on.1;
         let behind = background.unwrap_or_else(|| Frame::new(picture.size.0, picture.size.1));
         write_frame(gpu, &picture.texture, &behind);
         let pass = match &mut self.pass {
