@@ -139,3 +139,78 @@ impl PanelLayer {
         pass.draw(0..3, 0..1);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use atmo::image::{Display, Frame, ToneMap};
+    use atmo_gpu::display::{picture_texture, write_frame, DisplayPass};
+
+    #[test]
+    fn the_layer_is_put_over_the_frame_within_the_panel_and_redrawn_when_due() {
+        let gpu = match Gpu::new(None) {
+            Ok(gpu) => gpu,
+            Err(GpuError::NoAdapter { .. }) if std::env::var("CI").as_deref() != Ok("true") => {
+                return;
+            }
+            Err(e) => panic!("GPU setup failed: {e}"),
+        };
+        let (w, h) = (32, 24);
+        let format = wgpu::TextureFormat::Rgba32Float;
+        let mut layer = PanelLayer::new(&gpu, format, (w, h)).unwrap();
+        assert!(layer.due(Instant::now()), "a new layer is drawn at once");
+        // The "panel": an opaque 0.25 everywhere in the layer, shown through the display
+        // pass (clamped, sRGB-encoded: the target stores what it is given).
+        let mut grey = Frame::new(w, h);
+        grey.pixels.fill(glam::Vec3::splat(0.25));
+        let picture = picture_texture(&gpu, w, h).unwrap();
+        write_frame(&gpu, &picture, &grey);
+        let mut panel = DisplayPass::new(&gpu, format).unwrap();
+        panel.display = Display {
+            exposure: 1.0,
+            tone: ToneMap::Clamp,
+        };
+        panel.prepare(&gpu, &picture.create_view(&Default::default()));
+        let target = picture_texture(&gpu, w, h).unwrap();
+        let target_view = target.create_view(&Default::default());
+        let blue = wgpu::Color {
+            r: 0.0,
+            g: 0.0,
+            b: 1.0,
+            a: 1.0,
+        };
+        // A window from (20, 20) to (40, 32) points at a quarter pixel a point: with its
+        // shadow's 32 points, the pixels [0, 18) x [0, 16).
+        let window = egui::Rect::from_min_max(egui::pos2(20.0, 20.0), egui::pos2(40.0, 32.0));
+        gpu.run("the layer", |encoder| {
+            layer.record(encoder, Some(window), 0.25, Duration::MAX, |pass| {
+                panel.draw(pass)
+            });
+            let mut pass = cleared_pass(encoder, &target_view, "the frame", blue);
+            layer.draw(&mut pass);
+        })
+        .unwrap();
+        assert!(!layer.due(Instant::now()), "drawn: not due for {REFRESH:?}");
+        assert!(layer.due(Instant::now() + REFRESH));
+        layer.invalidate();
+        assert!(layer.due(Instant::now()));
+        let bytes = gpu.read_texture("the frame", &target, w, h).unwrap();
+        let frame = atmo_gpu::frame_of(w, h, &bytes);
+        let encoded = atmo::image::srgb_encode(0.25);
+        for (x, y, inside) in [
+            (0, 0, true),
+            (17, 15, true),
+            (18, 15, false),
+            (17, 16, false),
+        ] {
+            let want = if inside {
+                glam::Vec3::splat(encoded)
+            } else {
+                glam::Vec3::Z
+            };
+            let got = frame.pixels[(y * w + x) as usize];
+            assert!((got - want).abs().max_element() < 1e-5, "({x}, {y}): {got}");
+            assert_eq!(layer.covers((x as f64 + 0.5, y as f64 + 0.5)), inside);
+        }
+    }
+}
