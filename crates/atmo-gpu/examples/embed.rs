@@ -6,9 +6,10 @@
 //! The ground is lit and hazed by the same atmosphere: the sun's irradiance and the
 //! sky's on a horizontal surface from `atmo::sky::lighting::Lighting` (per sun), and the
 //! aerial perspective (`T(d) L + S(d)`, the light lost and gained between the eye and
-//! the ground) from atmo's froxels: `AerialRays::froxels` on the CPU, 32 x 18 columns
-//! x 32 slices, made again when the sun or the camera turns (a few ms) and uploaded as
-//! two 3-D textures the ground's shader samples at its pixel and distance.
+//! the ground) from atmo's froxels: `AerialRays::froxels` on the CPU, 32 columns x as
+//! many rows as keep them square x 32 slices, made again when the sun or the camera
+//! turns (a few ms) and uploaded as two 3-D textures the ground's shader samples at its
+//! pixel and distance.
 //!
 //! ```text
 //! cargo run --release -p atmo-gpu --example embed
@@ -108,10 +109,11 @@ struct Scene {
     rays: AerialRays,
     froxels: [wgpu::Texture; 2],
     linear: wgpu::Sampler,
-    /// The sun's and the sky's irradiance (linear sRGB W m^-2) of the last sun.
-    light: [Vec3; 2],
-    /// The sun, yaw and window size the froxels and the light were made for.
-    made_for: Option<(f64, f64, (u32, u32))>,
+    /// The sun's and the sky's irradiance (linear sRGB W m^-2), and the sun's elevation
+    /// they were made for.
+    light: Option<(f64, [Vec3; 2])>,
+    /// The sun, yaw and window size the froxels were made for.
+    hazed_for: Option<(f64, f64, (u32, u32))>,
     sun_elevation_deg: f64,
     yaw_deg: f64,
     dragging: Option<f64>,
@@ -354,8 +356,8 @@ impl Scene {
             rays,
             froxels,
             linear,
-            light: [Vec3::ZERO; 2],
-            made_for: None,
+            light: None,
+            hazed_for: None,
             sun_elevation_deg: 8.0,
             yaw_deg: 180.0,
             dragging: None,
@@ -384,12 +386,12 @@ impl Scene {
         let clip_from_world = Mat4::perspective_rh(fov_deg.to_radians(), aspect, 1.0, 200_000.0)
             * Mat4::look_to_rh(eye, forward, Vec3::Y);
         let sun = Sun::from_degrees(self.sun_elevation_deg, 180.0).expect("a sun");
-        if self.made_for != Some((self.sun_elevation_deg, self.yaw_deg, size)) {
-            self.made_for = Some((self.sun_elevation_deg, self.yaw_deg, size));
-            self.light_and_haze(sun, eye, forward, fov_deg);
+        let [sunlight, skylight] = self.light(sun);
+        if self.hazed_for != Some((self.sun_elevation_deg, self.yaw_deg, size)) {
+            self.hazed_for = Some((self.sun_elevation_deg, self.yaw_deg, size));
+            self.haze(sun, eye, forward, fov_deg);
         }
         let to_sun = sun.toward();
-        let [sunlight, skylight] = self.light;
         let mut uniforms = clip_from_world.to_cols_array().to_vec();
         uniforms.extend([eye.x, eye.y, eye.z, 0.0]);
         uniforms.extend([to_sun.x, to_sun.y, to_sun.z, 0.0]);
@@ -443,10 +445,15 @@ impl Scene {
         self.queue.present(texture);
     }
 
-    /// The ground's light for `sun` (the sun's irradiance and the sky's on a
-    /// horizontal surface) and the aerial perspective's froxels over the window for an
-    /// eye at `eye` looking along `forward` with a vertical field of `fov_deg`.
-    fn light_and_haze(&mut self, sun: Sun, eye: Vec3, forward: Vec3, fov_deg: f32) {
+    /// The ground's light for `sun`: the sun's irradiance on a surface facing it and
+    /// the sky's on a horizontal one, made again only when the sun has moved.
+    fn light(&mut self, sun: Sun) -> [Vec3; 2] {
+        let elevation = self.sun_elevation_deg;
+        if let Some((made_for, light)) = self.light {
+            if made_for == elevation {
+                return light;
+            }
+        }
         let model = self.sky.model();
         let lighting = Lighting::new(
             &SkyPicture::new(model, sun),
@@ -457,7 +464,14 @@ impl Scene {
         let sunlight = Vec3::from(lighting.sun.colour.map(|c| c as f32))
             * (lighting.sun.normal_lux / LUMENS_PER_WATT) as f32;
         let skylight = Vec3::from(lighting.sky_irradiance_up.map(|c| c as f32));
-        self.light = [sunlight, skylight];
+        self.light = Some((elevation, [sunlight, skylight]));
+        [sunlight, skylight]
+    }
+
+    /// The aerial perspective's froxels over the window for `sun` and an eye at `eye`
+    /// looking along `forward` with a vertical field of `fov_deg`, uploaded.
+    fn haze(&mut self, sun: Sun, eye: Vec3, forward: Vec3, fov_deg: f32) {
+        let model = self.sky.model();
         // A froxel camera of the window's aspect: as many rows as keep its pixels square.
         let (w, h) = (self.config.width as f32, self.config.height as f32);
         let columns = FROXEL_COLUMNS;

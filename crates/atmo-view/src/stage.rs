@@ -183,8 +183,7 @@ impl StageMode {
     /// `aim` set to the point; a moving head's pan and tilt at the show's start, the
     /// nearest within its ranges that point it there.
     fn aim(&mut self, light: usize, x: f32, y: f32) -> Result<()> {
-        let spotlights = self.edited.count("spotlight");
-        let lights = spotlights + self.scene.show.fixtures.len();
+        let (spotlights, lights) = (self.edited.count("spotlight"), self.light_count());
         if light >= lights {
             return Err(Error::Invalid(format!(
                 "light {light}: the scene has {lights} lights ({spotlights} [[spotlight]]s, \
@@ -203,15 +202,15 @@ impl StageMode {
             .hit(&ray, camera.far)
             .context("nothing under the pointer to aim at")?;
         let point = ray.origin + hit.t * ray.dir;
-        let heads = &self.scene.show.fixtures;
-        if let Some(head) = light.checked_sub(spotlights).and_then(|k| heads.get(k)) {
+        if let Some(k) = light.checked_sub(spotlights) {
+            let head = &self.scene.show.fixtures[k];
             let (pan, tilt) = head.toward(point, head.start.pan_tilt()).with_context(|| {
                 format!(
                     "{} cannot point at {point}: beyond its pan {:?} and tilt {:?} deg",
                     head.name, head.pan_range_deg, head.tilt_range_deg
                 )
             })?;
-            let at = |key: &str| format!("fixture[{}].start.{key}", light - spotlights);
+            let at = |key: &str| format!("fixture[{k}].start.{key}");
             let edits = vec![
                 Edit::set(&at("pan_deg"), pan.to_string()),
                 Edit::set(&at("tilt_deg"), tilt.to_string()),
@@ -274,6 +273,11 @@ impl StageMode {
         Ok(())
     }
 
+    /// How many lights the scene has: its spotlights and its moving heads.
+    fn light_count(&self) -> usize {
+        self.edited.count("spotlight") + self.scene.show.fixtures.len()
+    }
+
     /// The lights by name, in scene order: the spotlights, then the moving heads.
     fn light_names(&self) -> Vec<String> {
         let spotlights = self.edited.count("spotlight");
@@ -329,9 +333,7 @@ impl StageMode {
 /// The scene of the edited file with `more` edits (the picture's size), posed.
 fn load(path: &Path, edited: &Document, more: &[Edit], time_s: f32) -> atmo::Result<Scene> {
     let mut doc = edited.clone();
-    for edit in more {
-        doc.apply(edit)?;
-    }
+    doc.apply_all(more)?;
     let mut scene = Scene::from_text_at(&doc.to_string(), path)?;
     scene.at_time(time_s);
     Ok(scene)
@@ -596,7 +598,7 @@ impl Mode for StageMode {
     }
 
     fn aimed_light(&self) -> Option<usize> {
-        (self.selected < self.light_names().len()).then_some(self.selected)
+        (self.selected < self.light_count()).then_some(self.selected)
     }
 }
 

@@ -100,15 +100,18 @@ impl Document {
     /// `text` parsed, with `edits` made in order.
     pub fn edited(text: &str, origin: &str, edits: &[Edit]) -> Result<Document> {
         let mut doc = Document::parse(text, origin)?;
-        for edit in edits {
-            doc.apply(edit)?;
-        }
+        doc.apply_all(edits)?;
         Ok(doc)
     }
 
     /// Makes `edit`; a key that cannot be reached is an error naming it.
     pub fn apply(&mut self, edit: &Edit) -> Result<()> {
         apply_one(self.0.as_table_mut(), edit)
+    }
+
+    /// Makes `edits` in order; the first that cannot be made is the error.
+    pub fn apply_all(&mut self, edits: &[Edit]) -> Result<()> {
+        edits.iter().try_for_each(|edit| self.apply(edit))
     }
 
     /// The value at `key`, if there is one.
