@@ -6,7 +6,7 @@
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::render::{render, Haze, Lighting};
-use atmo::clouds::{Cumulus, Octaves, Particle};
+use atmo::clouds::{CloudShadow, Cumulus, Octaves, Particle};
 use atmo::reference::clouds::{PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
 use glam::{DVec3, Vec3};
@@ -197,5 +197,53 @@ fn every_order_matches_the_path_tracer() {
         );
         assert!(t > 2.5 * s, "{name}: higher orders add light: {t} vs {s}");
         assert!((m / t - 1.0).abs() < 0.12, "{name}: {m} vs {t}");
+    }
+}
+
+#[test]
+fn the_shadow_on_the_ground_matches_the_path_tracer() {
+    // Measured with 2000 paths at 21 points 150 m apart across the shadow: the cloud
+    // scatters 1 to 3 % of the sun's irradiance onto its shadow (0.3-2 % around it),
+    // more with the sun in front of the camera than behind the cloud. Where the
+    // cloud's optical depth is over 3, the mean irradiance of the map with
+    // SCATTERED_DOWN is 0.98 (sun in front) and 1.43 (behind) of the path tracer's; the
+    // geometric shadow alone 0.33 and 0.39.
+    let particles = cloud();
+    let c = centre(&particles);
+    for (name, to_sun, cloud) in lit(&particles).step_by(2) {
+        let shadow = CloudShadow::new(&particles, to_sun, 256).unwrap();
+        // Where the sun's ray through the cloud's centre meets the ground, and points
+        // across the shadow from there, where the cloud's optical depth is over 3.
+        let hit = c - c.y / to_sun.y * to_sun;
+        let across = Vec3::new(-to_sun.z, 0.0, to_sun.x).normalize();
+        let points: Vec<Vec3> = (0..21)
+            .map(|k| hit + across * ((k as f32 - 10.0) * 150.0))
+            .filter(|p| shadow.depth_at(*p) > 3.0)
+            .collect();
+        assert!(
+            points.len() >= 4,
+            "{name}: the shadow is crossed: {}",
+            points.len()
+        );
+        let (mut traced, mut mapped, mut geometric) = (0.0, 0.0, 0.0);
+        for (k, p) in points.iter().enumerate() {
+            let r = cloud.ground_irradiance(p.as_dvec3(), 1500, k as u64 + 11);
+            traced += r.total();
+            mapped += (to_sun.y * shadow.sunlight(*p)) as f64;
+            geometric += (to_sun.y * (-shadow.depth_at(*p)).exp()) as f64;
+        }
+        eprintln!(
+            "{name}: in the shadow, map / path tracer {:.2}, geometric / path tracer {:.2}",
+            mapped / traced,
+            geometric / traced
+        );
+        assert!(
+            (mapped / traced - 1.0).abs() < 0.5,
+            "{name}: {mapped} vs {traced}"
+        );
+        assert!(
+            geometric < 0.6 * traced,
+            "{name}: the cloud lights its shadow"
+        );
     }
 }

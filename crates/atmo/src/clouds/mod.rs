@@ -5,7 +5,8 @@
 //! filled in any particle order by the multiplicative form (7).
 //!
 //! [`harris`] is the baseline light pass the buffer is measured against; [`render`](mod@render)
-//! draws the billboards; [`files`] reads and writes particles.
+//! draws the billboards; [`shadow`] is the cloud's shadow on the ground; [`files`] reads
+//! and writes particles.
 
 pub mod buffer;
 pub mod files;
@@ -14,9 +15,11 @@ pub mod harris;
 pub mod octaves;
 pub mod particles;
 pub mod render;
+pub mod shadow;
 
 pub use buffer::{IntensityBuffer, Splat};
 pub use generator::Cumulus;
 pub use octaves::Octaves;
 pub use particles::Particle;
 pub use render::{render, Haze, Lighting};
+pub use shadow::CloudShadow;

@@ -73,8 +73,17 @@ impl Particle {
         if x >= CUT_EXPONENT {
             return 0.0;
         }
-        let axis = self.density * s * (2.0 * std::f32::consts::PI).sqrt();
-        axis * FADE_SCALE * ((-x).exp() - (-CUT_EXPONENT).exp())
+        let (scale, floor) = self.faded_column_parts();
+        scale * ((-x).exp() - floor)
+    }
+
+    /// [`Particle::faded_column`] as `max(0, scale (g - floor))` with
+    /// `g = exp(-b2 / 2 s^2)`: `(scale, floor)`, for a caller that builds `g` from the
+    /// Gaussian's separable factors.
+    #[inline]
+    pub fn faded_column_parts(&self) -> (f32, f32) {
+        let axis = self.density * self.sigma() * (2.0 * std::f32::consts::PI).sqrt();
+        (axis * FADE_SCALE, (-CUT_EXPONENT).exp())
     }
 
     /// Optical depth along a line passing `b` m from the centre, between the line

@@ -12,7 +12,7 @@ use crate::atmosphere::PhaseFunction;
 use crate::clouds::buffer::{IntensityBuffer, FOOTPRINT};
 use crate::clouds::generator::SplitMix64;
 use crate::clouds::particles::Particle;
-use crate::reference::sampling::{mean_and_error, PhaseSampler};
+use crate::reference::sampling::{mean_and_error, sample_cosine, PhaseSampler};
 use crate::view::Camera;
 
 /// The fraction of sunlight arriving at `point` through `particles` with nothing
@@ -429,6 +429,27 @@ impl<'a> ReferenceCloud<'a> {
         mean_and_error((0..settings.paths).map(|_| self.path(origin, dir, orders, &mut rng)))
     }
 
+    /// The irradiance on a horizontal surface at `point` (beneath the cloud, `y` up) per
+    /// unit sun irradiance, in two parts: the sun's own, `mu_s T` with the exact
+    /// transmittance, and the light the cloud scatters down onto it,
+    /// `integral L cos dw` over the upper hemisphere, as `pi` times the mean of `paths`
+    /// cosine-weighted directions each followed through every order
+    /// ([`ReferenceCloud::path_traced`]'s paths), with its standard error.
+    pub fn ground_irradiance(&self, point: DVec3, paths: usize, seed: u64) -> GroundIrradiance {
+        let mu_s = self.light.to_sun.y.max(0.0);
+        let direct = mu_s * self.volume.transmittance(point, self.light.to_sun);
+        let mut rng = SplitMix64::new(seed);
+        let (mean, error) = mean_and_error((0..paths).map(|_| {
+            let dir = sample_cosine(DVec3::Y, &mut rng);
+            self.path(point, dir, MAX_ORDER, &mut rng)
+        }));
+        GroundIrradiance {
+            direct,
+            scattered: std::f64::consts::PI * mean,
+            error: std::f64::consts::PI * error,
+        }
+    }
+
     fn path(&self, mut origin: DVec3, mut dir: DVec3, orders: usize, rng: &mut SplitMix64) -> f64 {
         let mut weight = 1.0;
         let mut total = 0.0;
@@ -480,6 +501,23 @@ impl<'a> ReferenceCloud<'a> {
                 self.path_traced(origin, dir, settings, seed)
             })
             .collect()
+    }
+}
+
+/// [`ReferenceCloud::ground_irradiance`]: per unit sun irradiance, W m^-2 per W m^-2.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundIrradiance {
+    /// The sun's, unscattered: `mu_s T`.
+    pub direct: f64,
+    /// Scattered down by the cloud, every order, and its standard error.
+    pub scattered: f64,
+    pub error: f64,
+}
+
+impl GroundIrradiance {
+    /// Both parts.
+    pub fn total(&self) -> f64 {
+        self.direct + self.scattered
     }
 }
 
