@@ -140,6 +140,10 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
             "--ambient",
         ),
         (
+            vec!["--generate", "cumulus", "--ground-albedo", "1.5"],
+            "--ground-albedo",
+        ),
+        (
             vec!["--generate", "cumulus", "--camera", "0,1900,0"],
             "--camera = [0, 1900, 0] is inside particle",
         ),
@@ -219,6 +223,51 @@ fn clouds_in_front_of_the_sky() {
     // The sky behind: the top corner is blue, not black.
     let corner = img.get_pixel(2, 2).0;
     assert!(corner[2] > 80 && corner[2] > corner[0], "{corner:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Seen from straight above with the sun 45 degrees high in the east, the cloud's
+/// shadow lies its height (some 1.9 km) west of it on the ground: dark there, the open
+/// ground lit, on the painted ground and on the sky module's.
+#[test]
+fn the_cloud_casts_its_shadow_on_the_ground() {
+    let dir = scratch("clouds-ground");
+    for ground in [&["--ground-albedo", "0.3"][..], &["--sky"][..]] {
+        let out = dir.join("ground.png");
+        let mut args = vec!["clouds", "--generate", "cumulus", "--particles", "2000"];
+        args.extend(["--camera", "0,9000,1", "--look-at", "0,0,0", "--fov", "60"]);
+        args.extend([
+            "--sun-elevation",
+            "45",
+            "--sun-azimuth",
+            "90",
+            "--resolution",
+            "48",
+        ]);
+        args.extend([
+            "--width",
+            "120",
+            "--height",
+            "120",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        args.extend(ground);
+        let o = atmo(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let img = image::open(&out).unwrap().to_luma8();
+        // 60 degrees over 120 pixels at 9 km: 87 m a pixel; the shadow's middle some
+        // 22 pixels left of the picture's centre, the cloud at the centre.
+        let at = |x: u32, y: u32| img.get_pixel(x, y).0[0] as f64;
+        let (shadow, open) = (at(38, 60), at(60, 100));
+        assert!(open > 30.0, "{ground:?}: the open ground is lit: {open}");
+        // In 8-bit sRGB levels: the painted ground's shadow is black (no ambient light);
+        // the sky's keeps the sky's light and the haze of 9 km of air (134 vs 193).
+        assert!(
+            shadow < 0.8 * open,
+            "{ground:?}: shadow {shadow} vs open {open}"
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

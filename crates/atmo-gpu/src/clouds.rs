@@ -13,6 +13,7 @@ use std::cell::RefCell;
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::Lighting;
+use atmo::clouds::shadow::CloudShadow;
 use atmo::image::Frame;
 use atmo::view::Camera;
 use glam::Vec3;
@@ -582,4 +583,15 @@ pub(crate) fn target_texture(
         size,
     );
     texture
+}
+
+/// The cloud's shadow map as an R32 float texture (`resolution`^2, the optical depth of
+/// the whole cloud along the sun's ray through each texel), for an engine to project
+/// onto its terrain with [`CloudShadow::uv_rows`] and a linear sampler: the sunlight
+/// reaching a point beneath the cloud is `exp(-depth)` of the sun's, plus
+/// [`atmo::clouds::shadow::SCATTERED_DOWN`] of what it takes out
+/// ([`CloudShadow::sunlight`]). Made again when the sun or the particles move.
+pub fn shadow_texture(gpu: &Gpu, shadow: &CloudShadow) -> wgpu::Texture {
+    let n = shadow.resolution as u32;
+    gpu.float_texture("the cloud's shadow", &shadow.depth, n, n)
 }

@@ -160,6 +160,43 @@ impl Gpu {
             }))
     }
 
+    /// An R32 float texture of `width` x `rows` holding `values` row after row, for
+    /// shaders to sample (`label` names it in the device's messages).
+    pub fn float_texture(
+        &self,
+        label: &str,
+        values: &[f32],
+        width: u32,
+        rows: u32,
+    ) -> wgpu::Texture {
+        let size = wgpu::Extent3d {
+            width,
+            height: rows,
+            depth_or_array_layers: 1,
+        };
+        let texture = self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        self.queue.write_texture(
+            texture.as_image_copy(),
+            bytemuck::cast_slice(values),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(width * 4),
+                rows_per_image: None,
+            },
+            size,
+        );
+        texture
+    }
+
     /// Refuses a 2-D texture side `side` above the device's `max_texture_dimension_2d`.
     pub fn check_texture_side(&self, what: &str, side: u32, setting: &str) -> Result<(), GpuError> {
         let max = self.limits().max_texture_dimension_2d;

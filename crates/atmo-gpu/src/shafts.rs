@@ -307,7 +307,8 @@ impl GpuShafts {
             "the mesh sizes or the gobo images",
         )?;
         let phase = PhaseTable::new(&scene.haze);
-        let phase_texture = table_texture(gpu, &phase.values, PhaseTable::SIZE as u32, 1);
+        let phase_texture =
+            gpu.float_texture("the phase table", &phase.values, PhaseTable::SIZE as u32, 1);
         // Each light's map, row after row (see GpuLight::map_row).
         let mut maps: Vec<f32> = scene
             .lights
@@ -323,7 +324,8 @@ impl GpuShafts {
             map_rows,
             "the number of lights with measured profiles that are not rotationally symmetric",
         )?;
-        let map_texture = table_texture(gpu, &maps, LightMap::SIZE as u32, map_rows);
+        let map_texture =
+            gpu.float_texture("the light maps", &maps, LightMap::SIZE as u32, map_rows);
         let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("the planes"),
             size: wgpu::Extent3d {
@@ -624,36 +626,6 @@ fn bind_group_layout(gpu: &Gpu, read_only: bool) -> wgpu::BindGroupLayout {
                 texture(10),
             ],
         })
-}
-
-/// An R32 float texture of `width` x `rows` holding `values` row after row.
-fn table_texture(gpu: &Gpu, values: &[f32], width: u32, rows: u32) -> wgpu::Texture {
-    let size = wgpu::Extent3d {
-        width,
-        height: rows,
-        depth_or_array_layers: 1,
-    };
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("table"),
-        size,
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::R32Float,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    gpu.queue.write_texture(
-        texture.as_image_copy(),
-        bytemuck::cast_slice(values),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(width * 4),
-            rows_per_image: None,
-        },
-        size,
-    );
-    texture
 }
 
 /// The scene's static data as the shaders read it.

@@ -10,13 +10,14 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::{Cumulus, SplitMix64};
 use atmo::clouds::harris::light_per_particle;
 use atmo::clouds::render::{render, Haze, Lighting};
-use atmo::clouds::Octaves;
+use atmo::clouds::{CloudShadow, Octaves};
 use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::clouds::{transmittance, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
 use atmo_gpu::clouds::GpuClouds;
 use atmo_gpu::{Gpu, Rendered};
 use glam::Vec3;
+use rayon::prelude::*;
 use serde_json::json;
 
 use super::{emit, median, report, time_gpu, time_ms, Case};
@@ -106,6 +107,53 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
         format!(
             "clouds.frame      {:>6} particles 1280 x 720: {frame_ms:.1} ms (every order)",
             particles.len()
+        ),
+    );
+    // The cloud's shadow on the ground, made with each light pass where a picture shows
+    // the ground: its time beside the light pass's, and its transmittance on a grid of
+    // ground points 125 m apart around the shadow against the exact one.
+    let mut lit = buffer.clone();
+    let light_ms = median(
+        (0..runs.min(5))
+            .map(|_| {
+                time_ms(|| {
+                    lit.update(&particles, to_sun, forward, Splat::Pieces)
+                        .expect("validated")
+                })
+            })
+            .collect(),
+    );
+    let shadow_ms = median(
+        (0..runs.min(5))
+            .map(|_| {
+                time_ms(|| drop(CloudShadow::new(&particles, to_sun, 256).expect("validated")))
+            })
+            .collect(),
+    );
+    let shadow = CloudShadow::new(&particles, to_sun, 256)?;
+    let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
+    let hit = centre - centre.y / to_sun.y * to_sun;
+    let errors: Vec<f64> = (0..24 * 24)
+        .into_par_iter()
+        .map(|k| {
+            let p = hit + Vec3::new((k % 24) as f32 - 11.5, 0.0, (k / 24) as f32 - 11.5) * 125.0;
+            let exact = transmittance(&particles, to_sun, p);
+            ((-shadow.depth_at(p)).exp() as f64 - exact).abs()
+        })
+        .collect();
+    let (mean_err, max_err) = (
+        errors.iter().sum::<f64>() / errors.len() as f64,
+        errors.iter().copied().fold(0.0, f64::max),
+    );
+    emit(
+        json,
+        json!({"bench": "clouds.shadow", "params": {"particles": particles.len(), "resolution": 256},
+               "median_ms": shadow_ms, "baseline": "clouds.light-pass", "baseline_median_ms": light_ms,
+               "ratio": light_ms / shadow_ms, "error": {"transmittance_mean_abs": mean_err, "transmittance_max_abs": max_err}}),
+        format!(
+            "clouds.shadow     {:>6} particles 256^2: {shadow_ms:.1} ms   light pass 256^3 {light_ms:.1} ms   ratio {:.1}   transmittance error mean {mean_err:.1e} max {max_err:.1e}",
+            particles.len(),
+            light_ms / shadow_ms
         ),
     );
     // Every order against the path tracer, on a small picture of the same view.

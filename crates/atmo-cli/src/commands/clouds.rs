@@ -11,6 +11,7 @@ use atmo::clouds::files;
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::{render, Haze, Lighting};
+use atmo::clouds::shadow::{CloudShadow, Ground};
 use atmo::clouds::Octaves;
 use atmo::error::check_range;
 use atmo::files::check_folder;
@@ -170,6 +171,13 @@ pub struct CloudStill {
     /// sunlight coloured by the atmosphere down to the cloud and by the sky's light.
     #[arg(long)]
     sky: bool,
+    /// The ground beneath the cloud (the plane y = 0 of the world frame), its
+    /// reflectance in [0, 1]: drawn lit by the sun through the cloud's shadow (what
+    /// crosses the cloud and a share of what it scatters down) and by the ambient
+    /// light. With --sky the sky module's ground is there anyway (albedo 0.1 unless
+    /// this sets it) and the cloud's shadow is taken out of its sunlight.
+    #[arg(long, value_name = "ALBEDO")]
+    ground_albedo: Option<f32>,
     /// Multiplies radiance before the tone map (PNG only); default 10, or 0.15 with
     /// --sky (whose radiance is in the atmosphere's units).
     #[arg(long)]
@@ -228,6 +236,9 @@ pub fn scene_arguments(path: &std::path::Path, long_flags: &[&str]) -> atmo::Res
     }
     Ok(argv)
 }
+
+/// Texels a side of the cloud's shadow on the ground (some 10 m each across a cumulus).
+const SHADOW_RESOLUTION: usize = 256;
 
 /// The wind's time a frame of `--animate wind` (and of the window's wind), s.
 pub const WIND_STEP_S: f32 = 4.0;
@@ -409,6 +420,7 @@ pub struct Cloud {
     scattering: Octaves,
     ambient: Ambient,
     sky: bool,
+    ground_albedo: Option<f32>,
     /// `atmo clouds`'s flags for all of this but the sun, the camera and the display.
     flags: String,
 }
@@ -460,6 +472,9 @@ impl Cloud {
         let particles = blown(&calm, still.wind_s);
         let (position, look_at) = placement(&particles, still)?;
         let ambient = Ambient::parse(still.ambient.as_deref(), still.sky)?;
+        if let Some(albedo) = still.ground_albedo {
+            check_range("--ground-albedo", albedo as f64, 0.0, 1.0)?;
+        }
         let scattering = match still.scattering {
             ScatteringArg::Single => Octaves::SINGLE,
             ScatteringArg::Multiple => {
@@ -514,6 +529,7 @@ impl Cloud {
             scattering,
             ambient,
             sky: still.sky,
+            ground_albedo: still.ground_albedo,
             flags: fixed_flags(still),
         })
     }
@@ -523,21 +539,32 @@ impl Cloud {
         Sun::from_degrees(self.sun_elevation as f64, azimuth_deg as f64)
     }
 
-    /// The sky around the cloud seen from `camera`, where the picture has one.
-    fn sky_for(&self, camera: &Camera) -> atmo::Result<Option<SkyAround>> {
+    /// The sky around `particles` seen from `camera`, where the picture has one.
+    fn sky_for(&self, particles: &[Particle], camera: &Camera) -> atmo::Result<Option<SkyAround>> {
         self.sky
-            .then(|| SkyAround::new(&self.particles, camera))
+            .then(|| SkyAround::new(particles, camera, self.ground_albedo))
             .transpose()
     }
 
-    /// Sunlight and sky light at the cloud for `sun`, and what `camera` sees behind it.
+    /// The cloud's shadow for `sun`, where the picture shows the ground (with --sky or
+    /// --ground-albedo): made with each light pass.
+    fn shadow(&self, particles: &[Particle], sun: Sun) -> atmo::Result<Option<CloudShadow>> {
+        (self.sky || self.ground_albedo.is_some())
+            .then(|| CloudShadow::new(particles, sun.toward(), SHADOW_RESOLUTION))
+            .transpose()
+    }
+
+    /// Sunlight and sky light at the cloud for `sun`, and what `camera` sees behind it:
+    /// the sky and the ground (where the picture has them), the ground under the
+    /// cloud's `shadow`.
     fn lighting(
         &self,
         sky: Option<&SkyAround>,
+        shadow: Option<&CloudShadow>,
         sun: Sun,
         camera: &Camera,
     ) -> atmo::Result<(Lighting, Option<Frame>)> {
-        let (sunlight, ambient, haze, background) = match (sky, self.ambient) {
+        let (sunlight, ambient, haze, mut background) = match (sky, self.ambient) {
             (None, Ambient::Rgb(rgb)) => (Vec3::ONE, rgb, Haze::CLEAR, None),
             (None, Ambient::Sky) => unreachable!("Ambient::parse needs --sky for it"),
             (Some(sky), ambient) => {
@@ -549,6 +576,19 @@ impl Cloud {
                 (sunlight, ambient, haze, Some(background))
             }
         };
+        let ground = match (sky, self.ground_albedo) {
+            (Some(sky), _) => {
+                let atmosphere = sky.at_camera.atmosphere();
+                let altitude = SkyAround::altitude(atmosphere, camera.position.y as f64);
+                Some(Ground::seen_through(atmosphere, altitude, sun))
+            }
+            (None, Some(albedo)) => Some(Ground::painted(albedo, sunlight, sun.toward(), ambient)),
+            (None, None) => None,
+        };
+        if let (Some(shadow), Some(ground)) = (shadow, ground) {
+            let frame = background.get_or_insert_with(|| Frame::new(camera.width, camera.height));
+            shadow.shade_ground(frame, camera, &ground);
+        }
         let light = Lighting {
             to_sun: sun.toward(),
             sun: sunlight,
@@ -687,6 +727,9 @@ fn fixed_flags(still: &CloudStill) -> String {
     if still.sky {
         flags.push("--sky".into());
     }
+    if let Some(albedo) = still.ground_albedo {
+        flags.push(format!("--ground-albedo {albedo}"));
+    }
     if let Some(ambient) = &still.ambient {
         flags.push(format!("--ambient {ambient}"));
     }
@@ -709,7 +752,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         }
     }
     let camera = &cloud.camera;
-    let sky = cloud.sky_for(camera)?;
+    let sky = cloud.sky_for(&cloud.particles, camera)?;
     let sun = cloud.sun_at(cloud.sun_azimuth)?;
     let gpu = args.device.open()?;
     let gpu = gpu.as_ref();
@@ -718,6 +761,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     let mut particles = cloud.particles.clone();
     let start = Instant::now();
     renderer.light(&particles, sun.toward(), forward, splat)?;
+    let mut shadow = cloud.shadow(&particles, sun)?;
     let light_ms = start.elapsed().as_secs_f64() * 1e3;
     // Everything is validated now (the light pass checked the buffer's settings).
     if let Some(path) = &args.save_particles {
@@ -727,7 +771,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     match args.animate {
         None => {
             let start = Instant::now();
-            let (light, background) = cloud.lighting(sky.as_ref(), sun, camera)?;
+            let (light, background) = cloud.lighting(sky.as_ref(), shadow.as_ref(), sun, camera)?;
             let frame = renderer.draw(&particles, camera, &light, background.as_ref())?;
             let draw_ms = start.elapsed().as_secs_f64() * 1e3;
             frame.write(&args.output, display.exposure, display.tone)?;
@@ -763,7 +807,9 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                         }
                     };
                     renderer.light(&particles, sun.toward(), forward, splat)?;
-                    let (light, background) = cloud.lighting(sky.as_ref(), sun, camera)?;
+                    shadow = cloud.shadow(&particles, sun)?;
+                    let (light, background) =
+                        cloud.lighting(sky.as_ref(), shadow.as_ref(), sun, camera)?;
                     *frame = renderer.draw(&particles, camera, &light, background.as_ref())?;
                     Ok(())
                 },
@@ -789,8 +835,9 @@ pub struct WindowClouds {
     wind_s: f32,
     /// The renderer, and whether it is the GPU's.
     renderer: Option<(bool, Renderer)>,
-    /// The sun the intensity buffer was lit by.
+    /// The sun the intensity buffer was lit by, and the cloud's shadow then.
     lit: Option<Sun>,
+    shadow: Option<CloudShadow>,
     /// The sky around the cloud, and the camera height it was made for.
     sky: Option<(f32, Option<SkyAround>)>,
     /// On the GPU: the pass that puts the cloud over what is behind it.
@@ -805,6 +852,7 @@ impl WindowClouds {
             cloud,
             renderer: None,
             lit: None,
+            shadow: None,
             sky: None,
             pass: None,
         }
@@ -861,20 +909,19 @@ impl WindowClouds {
         };
         if self.lit != Some(sun) {
             renderer.light(particles, sun.toward(), cloud.forward, cloud.splat)?;
+            self.shadow = cloud.shadow(particles, sun)?;
             self.lit = Some(sun);
         }
         let height = camera.position.y;
         let sky = match &mut self.sky {
             Some((h, sky)) if *h == height => sky,
             slot => {
-                let sky = cloud
-                    .sky
-                    .then(|| SkyAround::new(particles, &camera))
-                    .transpose()?;
+                let sky = cloud.sky_for(particles, &camera)?;
                 &mut slot.insert((height, sky)).1
             }
         };
-        let (light, background) = cloud.lighting(sky.as_ref(), sun, &camera)?;
+        let (light, background) =
+            cloud.lighting(sky.as_ref(), self.shadow.as_ref(), sun, &camera)?;
         Ok((camera, light, background))
     }
 }
@@ -927,18 +974,35 @@ struct SkyAround {
 }
 
 impl SkyAround {
-    fn new(particles: &[Particle], camera: &Camera) -> atmo::Result<SkyAround> {
-        let atmosphere = Atmosphere::earth();
+    /// The sky around `particles` seen from `camera`, over a ground of `ground_albedo`
+    /// (the Earth atmosphere's where not given).
+    fn new(
+        particles: &[Particle],
+        camera: &Camera,
+        ground_albedo: Option<f32>,
+    ) -> atmo::Result<SkyAround> {
+        let mut atmosphere = Atmosphere::earth();
+        if let Some(albedo) = ground_albedo {
+            atmosphere.ground_albedo = albedo as f64;
+        }
         let settings = SkySettings::default();
         let height =
             particles.iter().map(|p| p.position.y as f64).sum::<f64>() / particles.len() as f64;
-        let top = atmosphere.top_radius_m - atmosphere.bottom_radius_m - 1.0;
-        let altitude = |h: f64| h.clamp(0.0, top);
+        let altitude = |h: f64| SkyAround::altitude(&atmosphere, h);
         Ok(SkyAround {
             at_cloud: Daylight::new(&atmosphere, &settings, altitude(height))?,
             at_camera: SkyModel::new(&atmosphere, &settings, altitude(camera.position.y as f64))?,
             centre: SkyAround::centre_of(particles),
         })
+    }
+
+    /// The world frame's height `y` m as an altitude the sky module takes: inside
+    /// `atmosphere`.
+    fn altitude(atmosphere: &Atmosphere, y: f64) -> f64 {
+        y.clamp(
+            0.0,
+            atmosphere.top_radius_m - atmosphere.bottom_radius_m - 1.0,
+        )
     }
 
     /// The cloud's centre: its particles' mean position, m.
