@@ -51,8 +51,10 @@ pub fn run(options: Options, mode: Box<dyn Mode>) -> Result<Timings> {
 }
 
 /// What each frame took, ms, in order: from one frame's start to the next's (drawing,
-/// display and presentation), and the method's own draw (on the GPU backend, the
-/// recording of its passes; their execution falls in the frame time).
+/// display and presentation), and the method's own draw on the frames where it drew
+/// (on the GPU backend, the recording of its passes; their execution falls in the
+/// frame time). A frame where nothing the mode shows changed keeps its picture and has
+/// no method time.
 #[derive(Debug, Clone, Default)]
 pub struct Timings {
     pub frame_ms: Vec<f64>,
@@ -97,7 +99,9 @@ struct Running {
     still: Option<String>,
     last_frame: Option<Instant>,
     frame_ms: f64,
+    /// The method's time on the last frame it drew, and whether this frame drew.
     method_ms: f64,
+    drew: bool,
 }
 
 impl ApplicationHandler for App {
@@ -138,7 +142,9 @@ impl ApplicationHandler for App {
                     if r.frame > 1 {
                         self.timings.frame_ms.push(r.frame_ms);
                     }
-                    self.timings.method_ms.push(r.method_ms);
+                    if r.drew {
+                        self.timings.method_ms.push(r.method_ms);
+                    }
                     if !more {
                         event_loop.exit();
                     }
@@ -321,6 +327,7 @@ fn open(
         last_frame: None,
         frame_ms: 0.0,
         method_ms: 0.0,
+        drew: false,
     })
 }
 
@@ -364,7 +371,10 @@ impl Running {
             });
         let start = Instant::now();
         let drawn = self.mode.draw(&self.gpu, &mut encoder, &self.picture);
-        self.method_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.drew = matches!(drawn, Ok(true));
+        if self.drew {
+            self.method_ms = start.elapsed().as_secs_f64() * 1e3;
+        }
         if let Err(e) = drawn {
             self.refuse(e);
         }

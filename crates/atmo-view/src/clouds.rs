@@ -218,10 +218,10 @@ impl Mode for CloudsMode {
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         picture: &Picture,
-    ) -> Result<()> {
+    ) -> Result<bool> {
         let now = (self.params.clone(), picture.size, self.on_gpu);
         if self.drawn.as_ref() == Some(&now) {
-            return Ok(());
+            return Ok(false);
         }
         let drawn = if self.on_gpu {
             self.pictures.draw_on(gpu, encoder, picture, &self.params)
@@ -232,7 +232,7 @@ impl Mode for CloudsMode {
         match drawn {
             Ok(()) => {
                 self.drawn = Some(now);
-                Ok(())
+                Ok(true)
             }
             Err(e) => {
                 if let Some((last, _, _)) = &self.drawn {

@@ -51,13 +51,14 @@ pub trait Mode {
     /// Advances a frame: an animation, a file changed on disk. An error is shown and
     /// the last good state stays.
     fn update(&mut self) -> Result<()>;
-    /// Draws the picture into `picture`, on the mode's backend.
+    /// Draws the picture into `picture`, on the mode's backend: `true` when it drew,
+    /// `false` when nothing it shows changed and the picture stays as it was.
     fn draw(
         &mut self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         picture: &Picture,
-    ) -> Result<()>;
+    ) -> Result<bool>;
     /// How the picture is shown (and written as PNG).
     fn display(&self) -> Display;
     /// The still command that draws this picture to `output` at `size`.

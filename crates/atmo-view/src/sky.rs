@@ -353,7 +353,7 @@ impl Mode for SkyMode {
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         picture: &Picture,
-    ) -> Result<()> {
+    ) -> Result<bool> {
         let p = &self.params;
         let (sun, view) = (p.sun()?, p.view(picture.size)?);
         let stale = match &self.drawer {
@@ -386,7 +386,7 @@ impl Mode for SkyMode {
                 picture.draw(encoder, |render| pass.draw(render));
             }
         }
-        Ok(())
+        Ok(true)
     }
 
     fn still_command(&self, output: &std::path::Path, (width, height): (u32, u32)) -> String {

@@ -483,10 +483,10 @@ impl Mode for StageMode {
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         picture: &Picture,
-    ) -> Result<()> {
+    ) -> Result<bool> {
         self.resize(picture.size)?;
         if !self.dirty {
-            return Ok(());
+            return Ok(false);
         }
         if self.on_gpu {
             let (pipelines, pass) = match &mut self.passes {
@@ -503,7 +503,7 @@ impl Mode for StageMode {
             write_frame(gpu, &picture.texture, &self.maps.render(&self.scene));
         }
         self.dirty = false;
-        Ok(())
+        Ok(true)
     }
 
     fn display(&self) -> Display {
