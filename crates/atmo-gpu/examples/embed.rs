@@ -6,10 +6,10 @@
 //! The ground is lit and hazed by the same atmosphere: the sun's irradiance and the
 //! sky's on a horizontal surface from `atmo::sky::lighting::Lighting` (per sun), and the
 //! aerial perspective (`T(d) L + S(d)`, the light lost and gained between the eye and
-//! the ground) from atmo's froxels: `AerialRays::froxels` on the CPU, 32 columns x as
-//! many rows as keep them square x 32 slices, made again when the sun or the camera
-//! turns (a few ms) and uploaded as two 3-D textures the ground's shader samples at its
-//! pixel and distance.
+//! the ground) from atmo's froxels: `GpuAerial::prepare` records their compute pass into
+//! the program's encoder, 32 columns x as many rows as keep them square x 32 slices,
+//! again when the sun or the camera turns, writing two 3-D textures
+//! (`AerialTextures`) the ground's shader samples at its pixel and distance.
 //!
 //! ```text
 //! cargo run --release -p atmo-gpu --example embed
@@ -18,12 +18,12 @@
 
 use std::sync::Arc;
 
-use atmo::sky::aerial::{quadratic_slices, AerialRays, Froxels};
+use atmo::sky::aerial::quadratic_slices;
 use atmo::sky::lighting::{Lighting, LUMENS_PER_WATT};
 use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
-use atmo_gpu::sky::{DepthTarget, GpuSkyModel, SkyPass, SkyTarget};
+use atmo_gpu::sky::{AerialTextures, DepthTarget, GpuAerial, GpuSkyModel, SkyPass, SkyTarget};
 use atmo_gpu::Gpu;
 use glam::{Mat4, Vec3};
 use winit::application::ApplicationHandler;
@@ -104,10 +104,10 @@ struct Scene {
     gpu: Gpu,
     sky: GpuSkyModel<SkyModel>,
     sky_pass: SkyPass,
-    /// The aerial perspective's rays (sun-independent, made once) and the froxels'
-    /// textures (transmittance, in-scattered radiance) the ground reads.
-    rays: AerialRays,
-    froxels: [wgpu::Texture; 2],
+    /// The aerial perspective's pass (its rays, sun-independent, uploaded once) and the
+    /// froxels' textures (transmittance, in-scattered radiance) the ground reads.
+    aerial: GpuAerial,
+    froxels: AerialTextures,
     linear: wgpu::Sampler,
     /// The sun's and the sky's irradiance (linear sRGB W m^-2), and the sun's elevation
     /// they were made for.
@@ -178,35 +178,20 @@ impl ApplicationHandler for App {
     }
 }
 
-/// The froxels' two 3-D textures for a grid of `(columns, rows)` and [`SLICES`], and
-/// the ground's bindings: its uniforms, the textures and their sampler.
+/// atmo's froxel textures for a grid of `(columns, rows)` and [`SLICES`], and the
+/// ground's bindings: its uniforms, the textures and their sampler.
 fn froxel_bindings(
-    device: &wgpu::Device,
+    gpu: &Gpu,
     ground: &wgpu::RenderPipeline,
     uniforms: &wgpu::Buffer,
     linear: &wgpu::Sampler,
     (columns, rows): (u32, u32),
-) -> ([wgpu::Texture; 2], wgpu::BindGroup) {
-    let froxels = ["transmittance", "inscatter"].map(|name| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(name),
-            size: wgpu::Extent3d {
-                width: columns,
-                height: rows,
-                depth_or_array_layers: SLICES as u32,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D3,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        })
-    });
-    let views = froxels
-        .each_ref()
-        .map(|t| t.create_view(&Default::default()));
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+) -> (AerialTextures, wgpu::BindGroup) {
+    let froxels =
+        AerialTextures::new(gpu, (columns, rows, SLICES as u32)).expect("the froxel textures");
+    let views =
+        [&froxels.transmittance, &froxels.inscatter].map(|t| t.create_view(&Default::default()));
+    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("ground"),
         layout: &ground.get_bind_group_layout(0),
         entries: &[
@@ -287,6 +272,7 @@ impl Scene {
             .aerial_rays(FROXEL_ROWS, &slices)
             .expect("the aerial rays");
         let sky = GpuSkyModel::new(&gpu, model).expect("the sky on the GPU");
+        let aerial = GpuAerial::new(&gpu, &sky, rays).expect("the aerial pass");
         // The sky's pass for this program's targets: the surface and its depth buffer.
         let target = SkyTarget {
             format: config.format,
@@ -339,7 +325,7 @@ impl Scene {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let (froxels, ground_group) = froxel_bindings(&device, &ground, &uniforms, &linear, (1, 1));
+        let (froxels, ground_group) = froxel_bindings(&gpu, &ground, &uniforms, &linear, (1, 1));
         Scene {
             depth: depth_view(&device, &config),
             window,
@@ -353,7 +339,7 @@ impl Scene {
             gpu,
             sky,
             sky_pass,
-            rays,
+            aerial,
             froxels,
             linear,
             light: None,
@@ -387,9 +373,12 @@ impl Scene {
             * Mat4::look_to_rh(eye, forward, Vec3::Y);
         let sun = Sun::from_degrees(self.sun_elevation_deg, 180.0).expect("a sun");
         let [sunlight, skylight] = self.light(sun);
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        // atmo records the froxels into the program's encoder when the sun or the view
+        // turned...
         if self.hazed_for != Some((self.sun_elevation_deg, self.yaw_deg, size)) {
             self.hazed_for = Some((self.sun_elevation_deg, self.yaw_deg, size));
-            self.haze(sun, eye, forward, fov_deg);
+            self.haze(&mut encoder, sun, eye, forward, fov_deg);
         }
         let to_sun = sun.toward();
         let mut uniforms = clip_from_world.to_cols_array().to_vec();
@@ -402,8 +391,7 @@ impl Scene {
         uniforms.extend([self.sky_pass.exposure, 0.0, 0.0, 0.0]);
         self.queue
             .write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&uniforms));
-        let mut encoder = self.device.create_command_encoder(&Default::default());
-        // atmo records this sun's maps into the program's encoder...
+        // ... and this sun's maps...
         let view = View {
             camera,
             sun_disc: true,
@@ -468,17 +456,23 @@ impl Scene {
         [sunlight, skylight]
     }
 
-    /// The aerial perspective's froxels over the window for `sun` and an eye at `eye`
-    /// looking along `forward` with a vertical field of `fov_deg`, uploaded.
-    fn haze(&mut self, sun: Sun, eye: Vec3, forward: Vec3, fov_deg: f32) {
-        let model = self.sky.model();
+    /// Records into `encoder` the aerial perspective's froxels over the window for `sun`
+    /// and an eye at `eye` looking along `forward` with a vertical field of `fov_deg`.
+    fn haze(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        sun: Sun,
+        eye: Vec3,
+        forward: Vec3,
+        fov_deg: f32,
+    ) {
         // A froxel camera of the window's aspect: as many rows as keep its pixels square.
         let (w, h) = (self.config.width as f32, self.config.height as f32);
         let columns = FROXEL_COLUMNS;
         let rows = ((columns as f32 * h / w).round() as u32).clamp(1, 4 * columns);
-        if self.froxels[0].height() != rows {
+        if self.froxels.size.1 != rows {
             (self.froxels, self.ground_group) = froxel_bindings(
-                &self.device,
+                &self.gpu,
                 &self.ground,
                 &self.uniforms,
                 &self.linear,
@@ -493,28 +487,9 @@ impl Scene {
             (columns, rows),
         )
         .expect("a froxel camera");
-        let froxels: Froxels = self.rays.froxels(model, sun, &camera);
-        for (texture, values) in self
-            .froxels
-            .iter()
-            .zip([&froxels.transmittance, &froxels.inscatter])
-        {
-            let texels: Vec<[f32; 4]> = values.iter().map(|v| [v.x, v.y, v.z, 1.0]).collect();
-            self.queue.write_texture(
-                texture.as_image_copy(),
-                bytemuck::cast_slice(&texels),
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(columns * 16),
-                    rows_per_image: Some(rows),
-                },
-                wgpu::Extent3d {
-                    width: columns,
-                    height: rows,
-                    depth_or_array_layers: SLICES as u32,
-                },
-            );
-        }
+        self.aerial
+            .prepare(&self.gpu, encoder, &self.sky, sun, &camera, &self.froxels)
+            .expect("the froxels");
     }
 }
 

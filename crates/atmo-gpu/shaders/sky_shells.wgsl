@@ -319,7 +319,8 @@ struct AerialParams {
     sin_sun: f32,
     columns: u32,
     slices: u32,
-    pad0: u32,
+    // Froxel columns across the picture (the rest are its rows).
+    width: u32,
     // Where each region starts in `marked`, in vec4s.
     rows_at: u32,
     samples_at: u32,
@@ -338,8 +339,10 @@ struct AerialParams {
 @group(0) @binding(4) var<storage, read> marked: array<vec4<f32>>;
 // Per column: (row, cosine of the angle to the sun).
 @group(0) @binding(5) var<storage, read> columns: array<vec2<f32>>;
-// Out: [slice][column][6]: in-scattered radiance RGB, transmittance RGB.
-@group(0) @binding(6) var<storage, read_write> froxels: array<f32>;
+// Out: at (column across, column down, slice) the in-scattered radiance and the
+// transmittance, linear sRGB.
+@group(0) @binding(6) var inscatter_out: texture_storage_3d<rgba32float, write>;
+@group(0) @binding(7) var transmittance_out: texture_storage_3d<rgba32float, write>;
 
 // Lane `l` of a spectrum to linear sRGB.
 fn lane_rgb(v: vec4<f32>, l: u32) -> vec3<f32> {
@@ -395,14 +398,10 @@ fn aerial_main(@builtin(global_invocation_id) id: vec3<u32>) {
                 inscattered += lane_rgb(here, l);
                 through += lane_rgb(marked[at + 1u + 2u * n + l] * data[params.irradiance_at + l], l);
             }
-            let out = ((m - m_first) * aerial.columns + k) * 6u;
-            froxels[out] = inscattered.x;
-            froxels[out + 1u] = inscattered.y;
-            froxels[out + 2u] = inscattered.z;
+            let froxel = vec3<u32>(k % aerial.width, k / aerial.width, m - m_first);
             let t = through / max(aerial.white.xyz, vec3<f32>(1e-30));
-            froxels[out + 3u] = t.x;
-            froxels[out + 4u] = t.y;
-            froxels[out + 5u] = t.z;
+            textureStore(inscatter_out, froxel, vec4<f32>(inscattered, 1.0));
+            textureStore(transmittance_out, froxel, vec4<f32>(t, 1.0));
             m++;
         }
         for (var l = 0u; l < n; l++) {

@@ -505,11 +505,23 @@ impl Gpu {
         width: u32,
         height: u32,
     ) -> Result<Vec<u8>, GpuError> {
+        self.read_texture_layers(what, texture, (width, height, 1))
+    }
+
+    /// Copies an RGBA f32 texture of `width` x `height` x `depth` (a 3-D texture's
+    /// slices, or layers) back, rows unpadded, slice after slice.
+    pub fn read_texture_layers(
+        &self,
+        what: &str,
+        texture: &wgpu::Texture,
+        (width, height, depth): (u32, u32, u32),
+    ) -> Result<Vec<u8>, GpuError> {
         let row = width as u64 * 16;
         let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as u64);
+        let rows = height as u64 * depth as u64;
         let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(what),
-            size: padded * height as u64,
+            size: padded * rows,
             usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -521,17 +533,17 @@ impl Gpu {
                     layout: wgpu::TexelCopyBufferLayout {
                         offset: 0,
                         bytes_per_row: Some(padded as u32),
-                        rows_per_image: None,
+                        rows_per_image: Some(height),
                     },
                 },
                 wgpu::Extent3d {
                     width,
                     height,
-                    depth_or_array_layers: 1,
+                    depth_or_array_layers: depth,
                 },
             );
         })?;
-        let bytes = self.read(what, &buffer, 0, padded * height as u64)?;
+        let bytes = self.read(what, &buffer, 0, padded * rows)?;
         Ok(bytes
             .chunks(padded as usize)
             .flat_map(|r| &r[..row as usize])

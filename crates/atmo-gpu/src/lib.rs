@@ -14,7 +14,9 @@
 //! triangle into the caller's render pass. [`display::DisplayPass`] tone-maps an HDR
 //! picture onto an LDR target the same way. `examples/embed.rs` is a whole program,
 //! whose own ground is also lit by atmo's sun and sky (`atmo::sky::lighting`) and hazed
-//! by its aerial perspective (`atmo::sky::aerial` froxels, sampled by its own shader).
+//! by its aerial perspective: [`sky::GpuAerial::prepare`] records the froxels' compute
+//! pass into the caller's encoder, writing two 3-D textures ([`sky::AerialTextures`])
+//! that its own shader samples.
 //!
 //! ```no_run
 //! # fn frame(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo,

@@ -10,7 +10,9 @@ use atmo::sky::{Order, SkyModel, SkySettings};
 use atmo::sky::{SkyPicture, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
-use atmo_gpu::sky::{DepthTarget, GpuAerial, GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget};
+use atmo_gpu::sky::{
+    AerialTextures, DepthTarget, GpuAerial, GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget,
+};
 use common::{assert_close, gpu, mean_level};
 use glam::Vec3;
 
@@ -365,5 +367,10 @@ fn the_aerial_froxels_equal_the_cpu_froxels() {
         for (a, b) in out.transmittance.iter().zip(&cpu.transmittance) {
             assert!((*a - *b).abs().max_element() <= 1e-4, "{a} vs {b}");
         }
+        // Textures of another size than the camera's grid are refused, not written.
+        let small = AerialTextures::new(&gpu, (camera.width, camera.height, 3)).unwrap();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let refused = aerial.prepare(&gpu, &mut encoder, &sky, sun, &camera, &small);
+        assert!(refused.unwrap_err().to_string().contains("aerial textures"));
     }
 }
