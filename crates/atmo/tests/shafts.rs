@@ -735,6 +735,51 @@ fn bad_shows_are_refused_naming_the_field_and_its_range() {
     assert!(error_of(&twice).contains("fixture[1].name = \"a\" is used twice"));
     let start = show_scene("").replace("gobo = 2", "gobo = 5");
     assert!(error_of(&start).contains("fixture[1] (b).start.gobo = 5"));
+    for (prism, wanted) in [
+        (
+            "{ facets = 1, angle_deg = 8.0 }",
+            "fixture[0] (a).prism.facets = 1",
+        ),
+        (
+            "{ facets = 3, angle_deg = 70.0 }",
+            "fixture[0] (a).prism.angle_deg = 70",
+        ),
+        ("{ facets = 3 }", "missing field `angle_deg`"),
+    ] {
+        let text = prismed(&show_scene(""), prism);
+        let message = error_of(&text);
+        assert!(message.contains(wanted), "{prism}: {message:?}");
+    }
+}
+
+/// `scene` (a [`show_scene`]) with `prism` on head a.
+fn prismed(scene: &str, prism: &str) -> String {
+    scene.replacen(
+        "name = \"a\"\n",
+        &format!("name = \"a\"\nprism = {prism}\n"),
+        1,
+    )
+}
+
+#[test]
+fn a_prism_makes_a_light_a_facet_and_they_move_together() {
+    let text = prismed(&show_scene(CUES), "{ facets = 3, angle_deg = 8.0 }");
+    let mut scene = parse(&text).unwrap();
+    // The spotlight, head a's three facets, head b.
+    assert_eq!(scene.lights.len(), 5);
+    let whole: Vec3 = scene.lights[1..4].iter().map(|l| l.intensity).sum();
+    let plain = parse(&show_scene(CUES)).unwrap();
+    assert!((whole - plain.lights[1].intensity).abs().max_element() < 1e-2);
+    let mut maps = atmo::shafts::planes::ShadowMaps::default();
+    maps.update(&scene);
+    scene.at_time(1.5);
+    assert_eq!(scene.lights.len(), 5);
+    maps.update(&scene);
+    assert_eq!(
+        maps.rebuilt, 3,
+        "head a's facets, all of them, and no other"
+    );
+    assert_physical(&SamplePlanes::new(&scene).render());
 }
 
 /// `integral I dOmega` of `light`'s luminance, lm (cd sr): its luminous flux.
@@ -820,4 +865,20 @@ fn a_gdtf_fixture_sends_its_flux_and_keeps_its_modes_ranges() {
             assert!(message.contains(w), "{to}: {message:?} lacks {w:?}");
         }
     }
+}
+
+/// Every stage scene shipped in scenes/ reads (cumulus.toml is a cloud scene, a list of
+/// `atmo clouds` flags).
+#[test]
+fn every_shipped_stage_scene_reads() {
+    let mut read = 0;
+    for entry in std::fs::read_dir(scenes()).unwrap() {
+        let path = entry.unwrap().path();
+        let toml = path.extension() == Some("toml".as_ref());
+        if toml && path.file_name() != Some("cumulus.toml".as_ref()) {
+            Scene::from_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            read += 1;
+        }
+    }
+    assert!(read >= 6, "{read}");
 }

@@ -12,7 +12,7 @@ use super::gdtf;
 use super::haze::Haze;
 use super::objects::{Object, Objects};
 use super::photometry::Photometry;
-use super::show::{profile_solid_angle, Change, Cue, Fixture, Show, State, CHANNELS};
+use super::show::{profile_solid_angle, Change, Cue, Fixture, Prism, Show, State, CHANNELS};
 use super::spotlight::{light_frame, Falloff, Gobo, Profile, Sampling, Spotlight};
 use super::PlaneSettings;
 use crate::atmosphere::phase::PhaseFunction;
@@ -117,6 +117,38 @@ struct FixtureSpec {
     /// open, full, white, no gobo).
     #[serde(default)]
     start: AttributesSpec,
+    /// A prism in the beam: `{ facets = 3, angle_deg = 8, rotation_deg = 0 }`.
+    prism: Option<PrismSpec>,
+}
+
+/// A fixture's prism, as the scene gives it (see [`Prism`]).
+#[derive(Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+struct PrismSpec {
+    facets: u32,
+    angle_deg: f32,
+    #[serde(default)]
+    rotation_deg: f32,
+}
+
+impl PrismSpec {
+    /// The prism, every number in its range (2 to 16 facets, each beam at most 60 deg
+    /// off the head's).
+    fn validate(&self, at: &str) -> Result<Prism> {
+        check_range(&format!("{at}.facets"), self.facets as f64, 2.0, 16.0)?;
+        check_range(&format!("{at}.angle_deg"), self.angle_deg as f64, 0.0, 60.0)?;
+        check_range(
+            &format!("{at}.rotation_deg"),
+            self.rotation_deg as f64,
+            -360.0,
+            360.0,
+        )?;
+        Ok(Prism {
+            facets: self.facets,
+            angle_deg: self.angle_deg,
+            rotation_deg: self.rotation_deg,
+        })
+    }
 }
 
 /// What a fixture's attributes may be: pan, tilt and zoom ranges (degrees) and the
@@ -540,7 +572,7 @@ impl Scene {
     /// The scene at `time_s` seconds into its show: its moving heads posed as its cues
     /// have them then (the other lights do not change).
     pub fn at_time(&mut self, time_s: f32) {
-        let first = self.lights.len() - self.show.fixtures.len();
+        let first = self.lights.len() - self.show.light_count();
         self.lights.truncate(first);
         self.lights.extend(self.show.pose(time_s));
     }
@@ -961,6 +993,10 @@ impl FixtureSpec {
             pan_range_deg: limits.pan,
             tilt_range_deg: limits.tilt,
             start,
+            prism: self
+                .prism
+                .map(|p| p.validate(&field("prism")))
+                .transpose()?,
         };
         Ok((fixture, light.limits))
     }

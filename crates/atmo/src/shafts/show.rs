@@ -2,7 +2,8 @@
 //!
 //! A [`Fixture`] is a moving head: a base where it is hung, a yoke that pans about the
 //! base's axis and a head that tilts, a zoom (the beam angle), an iris, a dimmer, a
-//! colour (RGB, CMY or colour temperature) and a gobo wheel whose gobo turns. Its
+//! colour (RGB, CMY or colour temperature), a gobo wheel whose gobo turns and a
+//! prism that splits the beam into copies around it ([`Prism`]). Its
 //! attributes change by [`Cue`]s: at a cue's time each attribute it sets starts a
 //! linear fade, over the cue's fade time, from the value it has at that moment (even in
 //! the middle of an earlier fade) to the cue's; a gobo change snaps at the cue's start.
@@ -112,6 +113,19 @@ pub struct Fixture {
     pub tilt_range_deg: [f32; 2],
     /// The attributes before any cue.
     pub start: State,
+    /// A prism in the beam, if the head has one.
+    pub prism: Option<Prism>,
+}
+
+/// A prism in a head's beam: `facets` copies of the beam, each turned `angle_deg` off
+/// the head's axis toward its own side, the sides `360 / facets` degrees apart from
+/// `rotation_deg` (measured from the gobo's up, toward its right), each carrying an
+/// equal share of the light. A circular prism of a moving head, as a desk shows it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prism {
+    pub facets: u32,
+    pub angle_deg: f32,
+    pub rotation_deg: f32,
 }
 
 /// Fixtures and their cues.
@@ -223,11 +237,20 @@ impl Show {
         self.fixtures[f].gobo_rotation_deg + turned
     }
 
-    /// The spotlights of the fixtures at time `t`, s, in fixture order.
+    /// The spotlights of the fixtures at time `t`, s, in fixture order (a head with a
+    /// prism gives one per facet).
     pub fn pose(&self, t: f32) -> Vec<Spotlight> {
         (0..self.fixtures.len())
-            .map(|f| self.fixtures[f].light(&self.state(f, t), self.gobo_angle_deg(f, t)))
+            .flat_map(|f| self.fixtures[f].lights(&self.state(f, t), self.gobo_angle_deg(f, t)))
             .collect()
+    }
+
+    /// How many spotlights [`Show::pose`] gives.
+    pub fn light_count(&self) -> usize {
+        self.fixtures
+            .iter()
+            .map(|f| f.prism.map_or(1, |p| p.facets as usize))
+            .sum()
     }
 }
 
@@ -271,10 +294,38 @@ impl Fixture {
             })
     }
 
-    /// The spotlight this fixture is in `state`, its gobo turned `gobo_deg`.
-    pub fn light(&self, state: &State, gobo_deg: f32) -> Spotlight {
+    /// The spotlights this fixture is in `state`, its gobo turned `gobo_deg`: its beam,
+    /// or through its prism one beam a facet, each with its share of the light.
+    pub fn lights(&self, state: &State, gobo_deg: f32) -> Vec<Spotlight> {
         let c = &state.channels;
         let (beam, up) = self.aim(c[PAN], c[TILT]);
+        let Some(prism) = self.prism else {
+            return vec![self.light_along(state, gobo_deg, beam, up, 1.0)];
+        };
+        let right = beam.cross(up);
+        let share = 1.0 / prism.facets as f32;
+        (0..prism.facets)
+            .map(|k| {
+                // The facet's side, and the turn that takes the beam toward it.
+                let side = (prism.rotation_deg + 360.0 * k as f32 * share).to_radians();
+                let toward = up * side.cos() + right * side.sin();
+                let turn = Quat::from_axis_angle(beam.cross(toward), prism.angle_deg.to_radians());
+                self.light_along(state, gobo_deg, turn * beam, turn * up, share)
+            })
+            .collect()
+    }
+
+    /// The spotlight of this fixture in `state` along `beam` with the gobo's `up`
+    /// (unit, perpendicular), carrying `share` of its light.
+    fn light_along(
+        &self,
+        state: &State,
+        gobo_deg: f32,
+        beam: Vec3,
+        up: Vec3,
+        share: f32,
+    ) -> Spotlight {
+        let c = &state.channels;
         let frame: Mat3 = light_frame(beam, up).expect("up is perpendicular to the beam");
         // The same flux in a narrower cone: the on-axis intensity grows as the profile's
         // solid angle shrinks. The iris cuts the cone, not the intensity on the axis.
@@ -292,7 +343,7 @@ impl Fixture {
         Spotlight::new(
             self.position,
             frame,
-            colour * (self.intensity * gather * c[DIMMER]),
+            colour * (self.intensity * gather * c[DIMMER] * share),
             field_half,
             Profile::Beam {
                 beam_half,
@@ -352,7 +403,48 @@ mod tests {
                 channels: [0.0, 0.0, 40.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0],
                 gobo: 0,
             },
+            prism: None,
         }
+    }
+
+    /// Three facets: each beam 10 deg off the head's, 120 deg apart around it, the
+    /// first toward the gobo's up, the light shared equally.
+    #[test]
+    fn a_prism_splits_the_beam_into_facets_around_it() {
+        let mut f = head();
+        let mut state = f.start;
+        (state.channels[PAN], state.channels[TILT]) = (30.0, 20.0);
+        let whole = f.lights(&state, 0.0).remove(0);
+        f.prism = Some(Prism {
+            facets: 3,
+            angle_deg: 10.0,
+            rotation_deg: 0.0,
+        });
+        let facets = f.lights(&state, 0.0);
+        assert_eq!(facets.len(), 3);
+        let show = Show {
+            fixtures: vec![head(), f.clone()],
+            cues: Vec::new(),
+        };
+        assert_eq!((show.light_count(), show.pose(0.0).len()), (4, 4));
+        let total: Vec3 = facets.iter().map(|l| l.intensity).sum();
+        assert!(
+            (total - whole.intensity).abs().max_element() < 1e-3,
+            "{total}"
+        );
+        let (beam, up) = (whole.light_from_world.row(2), whole.light_from_world.row(1));
+        let around = |d: Vec3| (d - beam * d.dot(beam)).normalize();
+        for (k, l) in facets.iter().enumerate() {
+            let d = l.light_from_world.row(2);
+            assert!(
+                (d.dot(beam).acos().to_degrees() - 10.0).abs() < 1e-3,
+                "{k}: {d}"
+            );
+            let next = facets[(k + 1) % 3].light_from_world.row(2);
+            assert!((around(d).dot(around(next)) + 0.5).abs() < 1e-4);
+            assert_eq!(l.position, whole.position);
+        }
+        assert!(around(facets[0].light_from_world.row(2)).dot(up) > 0.9999);
     }
 
     fn set(pairs: &[(usize, f32)]) -> Change {
@@ -459,9 +551,9 @@ mod tests {
     fn a_narrower_zoom_gathers_the_flux_and_the_iris_cuts_the_cone() {
         let f = head();
         let mut state = f.start;
-        let wide = f.light(&state, 0.0);
+        let wide = f.lights(&state, 0.0).remove(0);
         state.channels[ZOOM] = 20.0;
-        let narrow = f.light(&state, 0.0);
+        let narrow = f.lights(&state, 0.0).remove(0);
         // The same flux: the ratio of the profiles' solid angles, near the ratio of
         // the cones' cross-sections (7 % off it at these angles).
         let ratio = narrow.intensity.x / wide.intensity.x;
@@ -473,7 +565,7 @@ mod tests {
             "{ratio} {small_angles}"
         );
         state.channels[IRIS] = 0.5;
-        let irised = f.light(&state, 0.0);
+        let irised = f.lights(&state, 0.0).remove(0);
         assert_eq!(irised.intensity, narrow.intensity);
         assert!((irised.field_half - 0.5 * narrow.field_half).abs() < 1e-6);
         assert!((narrow.field_half - 1.25 * 10f32.to_radians()).abs() < 1e-6);
