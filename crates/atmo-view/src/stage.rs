@@ -320,12 +320,15 @@ impl StageMode {
         let at = |key: &str| format!("fixture[{k}].start.{key}");
         // Where the start does not set them: along the axis, full (zoom: the widest,
         // which only the fixture's range knows).
-        let list = vec![
+        let mut list = vec![
             Slider::new(at("pan_deg"), "pan, deg", -540.0..=540.0).or(0.0),
             Slider::new(at("tilt_deg"), "tilt, deg", -270.0..=270.0).or(0.0),
             Slider::new(at("zoom_deg"), "zoom, deg", 1.0..=90.0),
             Slider::new(at("dimmer"), "dimmer", 0.0..=1.0).or(1.0),
         ];
+        if self.scene.show.fixtures[k].prism.is_some() {
+            list.push(Slider::new(at("prism_deg"), "prism turn, deg", -360.0..=360.0).or(0.0));
+        }
         sliders(ui, &self.edited, list, edits);
     }
 }

@@ -780,6 +780,18 @@ fn a_prism_makes_a_light_a_facet_and_they_move_together() {
         "head a's facets, all of them, and no other"
     );
     assert_physical(&SamplePlanes::new(&scene).render());
+    // A cue turns the prism: half way through its fade, 30 of its 60 degrees, the
+    // first facet that far from the gobo's up toward its right.
+    let turning = "[[cue]]\ntime_s = 1.0\nfade_s = 1.0\nset.a = { prism_deg = 60.0 }\n";
+    let text = prismed(&show_scene(turning), "{ facets = 3, angle_deg = 8.0 }");
+    let mut scene = parse(&text).unwrap();
+    scene.at_time(1.5);
+    let (beam, up) = scene.show.fixtures[0].aim(0.0, 10.0);
+    let right = beam.cross(up);
+    let facet = scene.lights[1].light_from_world.row(2);
+    let across = (facet - beam * facet.dot(beam)).normalize();
+    let turned = across.dot(right).atan2(across.dot(up)).to_degrees();
+    assert!((turned - 30.0).abs() < 1e-3, "{turned}");
 }
 
 /// `integral I dOmega` of `light`'s luminance, lm (cd sr): its luminous flux.

@@ -117,7 +117,8 @@ struct FixtureSpec {
     /// open, full, white, no gobo).
     #[serde(default)]
     start: AttributesSpec,
-    /// A prism in the beam: `{ facets = 3, angle_deg = 8, rotation_deg = 0 }`.
+    /// A prism in the beam: `{ facets = 3, angle_deg = 8 }` (its turn is the
+    /// `prism_deg` attribute).
     prism: Option<PrismSpec>,
 }
 
@@ -127,8 +128,6 @@ struct FixtureSpec {
 struct PrismSpec {
     facets: u32,
     angle_deg: f32,
-    #[serde(default)]
-    rotation_deg: f32,
 }
 
 impl PrismSpec {
@@ -137,16 +136,9 @@ impl PrismSpec {
     fn validate(&self, at: &str) -> Result<Prism> {
         check_range(&format!("{at}.facets"), self.facets as f64, 2.0, 16.0)?;
         check_range(&format!("{at}.angle_deg"), self.angle_deg as f64, 0.0, 60.0)?;
-        check_range(
-            &format!("{at}.rotation_deg"),
-            self.rotation_deg as f64,
-            -360.0,
-            360.0,
-        )?;
         Ok(Prism {
             facets: self.facets,
             angle_deg: self.angle_deg,
-            rotation_deg: self.rotation_deg,
         })
     }
 }
@@ -196,6 +188,7 @@ struct AttributesSpec {
     kelvin: Option<f32>,
     gobo: Option<usize>,
     gobo_speed_dps: Option<f32>,
+    prism_deg: Option<f32>,
 }
 
 /// A cue: at `time_s`, the attributes it sets per fixture fade over `fade_s`.
@@ -970,6 +963,7 @@ impl FixtureSpec {
                 white.y,
                 white.z,
                 0.0,
+                0.0,
             ],
             gobo: 0,
         };
@@ -1160,6 +1154,10 @@ impl AttributesSpec {
                 3600.0,
             )?;
             change.channels[8] = Some(speed);
+        }
+        if let Some(turn) = self.prism_deg {
+            check_range(&format!("{at}.prism_deg"), turn as f64, -3600.0, 3600.0)?;
+            change.channels[9] = Some(turn);
         }
         if let Some(slot) = self.gobo {
             let slots = limits.slots;

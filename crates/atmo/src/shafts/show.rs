@@ -20,7 +20,7 @@ use glam::{Mat3, Quat, Vec3};
 use super::spotlight::{light_frame, Falloff, Gobo, Profile, Spotlight};
 
 /// The attributes of a fixture that fade, in this order in a [`State`].
-pub const CHANNELS: [&str; 9] = [
+pub const CHANNELS: [&str; 10] = [
     "pan_deg",
     "tilt_deg",
     "zoom_deg",
@@ -30,6 +30,7 @@ pub const CHANNELS: [&str; 9] = [
     "green",
     "blue",
     "gobo_speed_dps",
+    "prism_deg",
 ];
 
 /// Index of a channel in [`CHANNELS`].
@@ -40,14 +41,16 @@ const IRIS: usize = 3;
 const DIMMER: usize = 4;
 const RED: usize = 5;
 const SPEED: usize = 8;
+const PRISM: usize = 9;
 
 /// A fixture's attributes at one moment.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct State {
     /// The fading attributes, as [`CHANNELS`] names them: pan and tilt (degrees), zoom
     /// (the beam's full angle, degrees), iris (0-1 of the aperture), dimmer (0-1),
-    /// colour (linear RGB) and the gobo's turning speed (degrees per second).
-    pub channels: [f32; 9],
+    /// colour (linear RGB), the gobo's turning speed (degrees per second) and the
+    /// prism's turn (degrees).
+    pub channels: [f32; 10],
     /// The gobo wheel's slot: 0 open, `k` the wheel's `k`-th gobo.
     pub gobo: usize,
 }
@@ -63,7 +66,7 @@ impl State {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Change {
     /// New values of the fading attributes ([`CHANNELS`]).
-    pub channels: [Option<f32>; 9],
+    pub channels: [Option<f32>; 10],
     /// A new gobo slot.
     pub gobo: Option<usize>,
 }
@@ -118,14 +121,14 @@ pub struct Fixture {
 }
 
 /// A prism in a head's beam: `facets` copies of the beam, each turned `angle_deg` off
-/// the head's axis toward its own side, the sides `360 / facets` degrees apart from
-/// `rotation_deg` (measured from the gobo's up, toward its right), each carrying an
-/// equal share of the light. A circular prism of a moving head, as a desk shows it.
+/// the head's axis toward its own side, the sides `360 / facets` degrees apart from the
+/// head's `prism_deg` channel (measured from the gobo's up, toward its right; cues fade
+/// it, so the prism turns), each carrying an equal share of the light. A circular
+/// prism of a moving head, as a desk runs it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Prism {
     pub facets: u32,
     pub angle_deg: f32,
-    pub rotation_deg: f32,
 }
 
 /// Fixtures and their cues.
@@ -307,7 +310,7 @@ impl Fixture {
         (0..prism.facets)
             .map(|k| {
                 // The facet's side, and the turn that takes the beam toward it.
-                let side = (prism.rotation_deg + 360.0 * k as f32 * share).to_radians();
+                let side = (c[PRISM] + 360.0 * k as f32 * share).to_radians();
                 let toward = up * side.cos() + right * side.sin();
                 let turn = Quat::from_axis_angle(beam.cross(toward), prism.angle_deg.to_radians());
                 self.light_along(state, gobo_deg, turn * beam, turn * up, share)
@@ -400,7 +403,7 @@ mod tests {
             pan_range_deg: [-270.0, 270.0],
             tilt_range_deg: [-135.0, 135.0],
             start: State {
-                channels: [0.0, 0.0, 40.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0],
+                channels: [0.0, 0.0, 40.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0],
                 gobo: 0,
             },
             prism: None,
@@ -418,7 +421,6 @@ mod tests {
         f.prism = Some(Prism {
             facets: 3,
             angle_deg: 10.0,
-            rotation_deg: 0.0,
         });
         let facets = f.lights(&state, 0.0);
         assert_eq!(facets.len(), 3);
@@ -445,6 +447,11 @@ mod tests {
             assert_eq!(l.position, whole.position);
         }
         assert!(around(facets[0].light_from_world.row(2)).dot(up) > 0.9999);
+        // The prism turned a quarter: the first facet toward the gobo's right.
+        state.channels[PRISM] = 90.0;
+        let turned = f.lights(&state, 0.0);
+        let right = beam.cross(up);
+        assert!(around(turned[0].light_from_world.row(2)).dot(right) > 0.9999);
     }
 
     fn set(pairs: &[(usize, f32)]) -> Change {
