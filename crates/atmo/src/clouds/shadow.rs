@@ -67,10 +67,11 @@ impl CloudShadow {
         let texel = (max - min).max(Vec2::splat(1e-3)) / (resolution as f32 - 2.0).max(1.0);
         let min = min - texel;
         let n = resolution;
-        // Each particle's centre across the light, the texel range it covers, and its
-        // Gaussian's factor along `x` at each texel centre there (the blob is
-        // separable: `exp(-b^2 / 2s^2)` is the product of the factors along `x` and `z`).
-        let footprints: Vec<(Vec2, [usize; 4], Vec<f32>)> = particles
+        // Each particle's centre across the light, the texel range it covers, its
+        // Gaussian's exponent per m^2, `-1 / 2s^2`, and its factor along `x` at each
+        // texel centre there (the blob is separable: `exp(-b^2 / 2s^2)` is the product
+        // of the factors along `x` and `z`).
+        let footprints: Vec<(Vec2, [usize; 4], f32, Vec<f32>)> = particles
             .par_iter()
             .map(|p| {
                 let c = across(p);
@@ -87,13 +88,13 @@ impl CloudShadow {
                         (k * dx * dx).exp()
                     })
                     .collect();
-                (c, range, along_x)
+                (c, range, k, along_x)
             })
             .collect();
         // The particles touching each row, in particle order (so the sums do not depend
         // on the thread count).
         let mut rows: Vec<Vec<u32>> = vec![Vec::new(); n];
-        for (k, (_, [_, _, z0, z1], _)) in footprints.iter().enumerate() {
+        for (k, (_, [_, _, z0, z1], _, _)) in footprints.iter().enumerate() {
             for row in &mut rows[*z0..*z1] {
                 row.push(k as u32);
             }
@@ -106,10 +107,9 @@ impl CloudShadow {
             .for_each(|(iz, (line, touching))| {
                 let z = min.y + (iz as f32 + 0.5) * texel.y;
                 for k in touching {
-                    let (c, [x0, x1, _, _], along_x) = &footprints[k as usize];
-                    let p = &particles[k as usize];
-                    let (scale, floor) = p.faded_column_parts();
-                    let along_z = (-0.5 * (z - c.y) * (z - c.y) / (p.sigma() * p.sigma())).exp();
+                    let (c, [x0, x1, _, _], exponent, along_x) = &footprints[k as usize];
+                    let (scale, floor) = particles[k as usize].faded_column_parts();
+                    let along_z = (exponent * (z - c.y) * (z - c.y)).exp();
                     for (tau, g) in line[*x0..*x1].iter_mut().zip(along_x) {
                         *tau += (scale * (g * along_z - floor)).max(0.0);
                     }
@@ -195,13 +195,17 @@ pub struct Ground {
     pub paint: Option<Vec3>,
 }
 
-/// Distances at which [`Ground::sunlit`] is given.
+/// Distances at which [`Ground::sunlit`] is given: geometric from 10 m to 200 km.
 pub const GROUND_DISTANCES: usize = 32;
+/// The nearest and the farthest of them, m.
+const NEAREST_M: f32 = 10.0;
+const FARTHEST_M: f32 = 200_000.0;
 
 impl Ground {
-    /// The distances of [`Ground::sunlit`]'s samples, m: geometric from 10 m to 200 km.
+    /// The distances of [`Ground::sunlit`]'s samples, m.
     pub fn distances_m() -> [f32; GROUND_DISTANCES] {
-        std::array::from_fn(|k| 10.0 * 20_000f32.powf(k as f32 / (GROUND_DISTANCES - 1) as f32))
+        let ratio = FARTHEST_M / NEAREST_M;
+        std::array::from_fn(|k| NEAREST_M * ratio.powf(k as f32 / (GROUND_DISTANCES - 1) as f32))
     }
 
     /// A ground of reflectance `albedo` lit by `sun` (irradiance facing the sun) from
@@ -250,7 +254,8 @@ impl Ground {
     /// [`Ground::sunlit`] at `distance` m, linear in the logarithm between samples.
     fn sunlit_at(&self, distance: f32) -> Vec3 {
         let last = (GROUND_DISTANCES - 1) as f32;
-        let x = ((distance / 10.0).max(1.0).ln() / 20_000f32.ln() * last).min(last);
+        let x = (distance / NEAREST_M).max(1.0).ln() / (FARTHEST_M / NEAREST_M).ln();
+        let x = (x * last).min(last);
         let k = (x as usize).min(GROUND_DISTANCES - 2);
         self.sunlit[k].lerp(self.sunlit[k + 1], x - k as f32)
     }

@@ -1115,49 +1115,38 @@ impl AttributesSpec {
     /// against its range.
     fn validate(&self, at: &str, limits: &Limits) -> Result<Change> {
         let mut change = Change::default();
-        let ranges = [
-            limits.pan,
-            limits.tilt,
-            limits.zoom,
-            [0.05, 1.0],
-            [0.0, 1.0],
+        // The fading attributes that are numbers: channel, value and range, checked in
+        // this order (the colour between the dimmer and the gobo's speed).
+        let numbers = [
+            (0, self.pan_deg, limits.pan),
+            (1, self.tilt_deg, limits.tilt),
+            (2, self.zoom_deg, limits.zoom),
+            (3, self.iris, [0.05, 1.0]),
+            (4, self.dimmer, [0.0, 1.0]),
+            (8, self.gobo_speed_dps, [-3600.0, 3600.0]),
+            (9, self.prism_deg, [-3600.0, 3600.0]),
         ];
-        let values = [
-            self.pan_deg,
-            self.tilt_deg,
-            self.zoom_deg,
-            self.iris,
-            self.dimmer,
-        ];
-        for (c, (value, [lo, hi])) in values.iter().zip(ranges).enumerate() {
-            if let Some(v) = value {
-                check_range(
-                    &format!("{at}.{}", CHANNELS[c]),
-                    *v as f64,
-                    lo as f64,
-                    hi as f64,
-                )?;
-                change.channels[c] = Some(*v);
+        let mut set = |list: &[(usize, Option<f32>, [f32; 2])]| {
+            for &(c, value, [lo, hi]) in list {
+                if let Some(v) = value {
+                    check_range(
+                        &format!("{at}.{}", CHANNELS[c]),
+                        v as f64,
+                        lo as f64,
+                        hi as f64,
+                    )?;
+                    change.channels[c] = Some(v);
+                }
             }
-        }
+            Ok::<(), Error>(())
+        };
+        set(&numbers[..5])?;
         let colour = colour(at, self.color, (true, self.cmy), self.kelvin)?;
+        set(&numbers[5..])?;
         if let Some(rgb) = colour {
             for c in 0..3 {
                 change.channels[5 + c] = Some(rgb[c]);
             }
-        }
-        if let Some(speed) = self.gobo_speed_dps {
-            check_range(
-                &format!("{at}.gobo_speed_dps"),
-                speed as f64,
-                -3600.0,
-                3600.0,
-            )?;
-            change.channels[8] = Some(speed);
-        }
-        if let Some(turn) = self.prism_deg {
-            check_range(&format!("{at}.prism_deg"), turn as f64, -3600.0, 3600.0)?;
-            change.channels[9] = Some(turn);
         }
         if let Some(slot) = self.gobo {
             let slots = limits.slots;
