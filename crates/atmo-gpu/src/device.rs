@@ -508,15 +508,17 @@ impl Gpu {
         self.read_texture_layers(what, texture, (width, height, 1))
     }
 
-    /// Copies an RGBA f32 texture of `width` x `height` x `depth` (a 3-D texture's
-    /// slices, or layers) back, rows unpadded, slice after slice.
+    /// Copies a texture of `width` x `height` x `depth` (a 3-D texture's slices, or
+    /// layers; an uncompressed format, RGBA f32 for atmo's pictures) back, rows
+    /// unpadded, slice after slice.
     pub fn read_texture_layers(
         &self,
         what: &str,
         texture: &wgpu::Texture,
         (width, height, depth): (u32, u32, u32),
     ) -> Result<Vec<u8>, GpuError> {
-        let row = width as u64 * 16;
+        let texel = texture.format().block_copy_size(None).unwrap_or(16);
+        let row = width as u64 * texel as u64;
         let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as u64);
         let rows = height as u64 * depth as u64;
         let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {

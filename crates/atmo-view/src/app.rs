@@ -6,9 +6,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use atmo::image::TexelOrder;
 use atmo::Error;
 use atmo_gpu::device::choose_adapter;
-use atmo_gpu::display::{cleared_pass, DisplayPass};
+use atmo_gpu::display::{cleared_pass, loaded_pass, DisplayPass};
 use atmo_gpu::{Gpu, GpuError};
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -80,6 +81,10 @@ struct Running {
     mode: Box<dyn Mode>,
     picture: Picture,
     display: DisplayPass,
+    /// The surface's texel order where it takes copies of 8-bit texels: a frame drawn
+    /// on the CPU is copied into it, levels made on the CPU (else it goes through the
+    /// display pass).
+    direct: Option<TexelOrder>,
     /// The panel, drawn by egui only when it may have changed.
     layer: PanelLayer,
     egui: egui_winit::State,
@@ -236,6 +241,20 @@ fn key_of(code: KeyCode) -> Option<Key> {
     })
 }
 
+/// The order of the channels of an 8-bit surface format that stores what it is given
+/// (whether it is called sRGB or not, the bytes are the encoded levels).
+fn texel_order(format: wgpu::TextureFormat) -> Option<TexelOrder> {
+    match format {
+        wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb => {
+            Some(TexelOrder::Bgra)
+        }
+        wgpu::TextureFormat::Rgba8Unorm | wgpu::TextureFormat::Rgba8UnormSrgb => {
+            Some(TexelOrder::Rgba)
+        }
+        _ => None,
+    }
+}
+
 /// A GPU error found while opening the window: what the user can act on is bad input.
 fn opening(e: GpuError) -> anyhow::Error {
     match e {
@@ -290,6 +309,12 @@ fn open(
     if options.frames.is_some() {
         config.present_mode = wgpu::PresentMode::AutoNoVsync;
     }
+    let copies = surface.get_capabilities(&adapter).usages;
+    let direct =
+        texel_order(config.format).filter(|_| copies.contains(wgpu::TextureUsages::COPY_DST));
+    if direct.is_some() {
+        config.usage |= wgpu::TextureUsages::COPY_DST;
+    }
     surface.configure(&gpu.device, &config);
     let display = DisplayPass::new(&gpu, config.format).map_err(opening)?;
     let layer =
@@ -313,6 +338,7 @@ fn open(
         mode,
         picture,
         display,
+        direct,
         layer,
         egui,
         egui_renderer,
@@ -370,7 +396,7 @@ impl Running {
                 label: Some("a frame"),
             });
         let start = Instant::now();
-        let drawn = self.mode.draw(&self.gpu, &mut encoder, &self.picture);
+        let drawn = self.mode.draw(&self.gpu, &mut encoder, &mut self.picture);
         self.drew = matches!(drawn, Ok(true));
         if self.drew {
             self.method_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -457,15 +483,23 @@ impl Running {
         };
         let target = texture.texture.create_view(&Default::default());
         self.display.display = self.mode.display();
-        self.display.prepare(&self.gpu, &self.picture.view);
+        let copied =
+            self.picture
+                .put_onto(&self.gpu, &texture.texture, self.direct, &mut self.display);
         let extra = if self.show_panel && self.layer.due(Instant::now()) {
             self.draw_panel(&mut encoder)
         } else {
             Vec::new()
         };
         {
-            let mut pass = cleared_pass(&mut encoder, &target, "the window", wgpu::Color::BLACK);
-            self.display.draw(&mut pass);
+            let mut pass = if copied {
+                loaded_pass(&mut encoder, &target, "the window")
+            } else {
+                let mut pass =
+                    cleared_pass(&mut encoder, &target, "the window", wgpu::Color::BLACK);
+                self.display.draw(&mut pass);
+                pass
+            };
             if self.show_panel {
                 self.layer.draw(&mut pass);
             }

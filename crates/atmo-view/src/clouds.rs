@@ -7,7 +7,6 @@
 
 use anyhow::Result;
 use atmo::image::{Display, Frame, ToneMap};
-use atmo_gpu::display::write_frame;
 use atmo_gpu::Gpu;
 use glam::Vec3;
 
@@ -117,7 +116,7 @@ pub trait CloudPictures {
         &mut self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        picture: &Picture,
+        picture: &mut Picture,
         params: &CloudParams,
     ) -> Result<()>;
     /// `atmo clouds`'s flags for the cloud and its light: all but [`CloudParams`].
@@ -217,7 +216,7 @@ impl Mode for CloudsMode {
         &mut self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        picture: &Picture,
+        picture: &mut Picture,
     ) -> Result<bool> {
         let now = (self.params.clone(), picture.size, self.on_gpu);
         if self.drawn.as_ref() == Some(&now) {
@@ -227,7 +226,7 @@ impl Mode for CloudsMode {
             self.pictures.draw_on(gpu, encoder, picture, &self.params)
         } else {
             let frame = self.pictures.draw(&self.params, picture.size);
-            frame.map(|frame| write_frame(gpu, &picture.texture, &frame))
+            frame.map(|frame| *picture.frame() = frame)
         };
         match drawn {
             Ok(()) => {

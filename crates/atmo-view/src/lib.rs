@@ -6,12 +6,14 @@
 //! those of `atmo shafts --set`) and the clouds ([`clouds`], the sun moved and the
 //! camera orbited around a cloud of `atmo clouds`).
 //!
-//! The picture is drawn into an RGBA f32 texture ([`Picture`]) by the same code as the
-//! stills: on the GPU through `atmo_gpu` (the sky's [`SkyPass`] recorded into this
-//! program's encoder), or on the CPU by `atmo`'s methods and uploaded; then
-//! `atmo_gpu`'s display pass tone-maps it onto the window's surface.
-//! A screenshot reads the picture back and writes it as the stills do, so a
-//! screenshot and the still command's file can be compared level for level.
+//! The picture ([`Picture`]) is drawn by the same code as the stills: on the GPU
+//! through `atmo_gpu` into an RGBA f32 texture (the sky's [`SkyPass`] recorded into
+//! this program's encoder), which `atmo_gpu`'s display pass tone-maps onto the window's
+//! surface; or on the CPU by `atmo`'s methods into a frame, whose 8-bit levels (those
+//! the still writes to PNG, by [`atmo::image::Levels`]) are copied into the surface.
+//! A screenshot reads the picture back (or takes the CPU's frame) and writes it as the
+//! stills do, so a screenshot and the still command's file can be compared level for
+//! level.
 //!
 //! Runs without a person: [`Options::frames`] draws that many frames and saves the
 //! last ([`Options::screenshot`]); a [`Script`] replays key presses, mouse drags and
@@ -30,8 +32,8 @@ pub mod stage;
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use atmo::image::{Display, Frame};
-use atmo_gpu::display::{cleared_pass, loaded_pass, picture_texture};
+use atmo::image::{Display, Frame, Levels, TexelOrder};
+use atmo_gpu::display::{cleared_pass, loaded_pass, picture_texture, write_frame, DisplayPass};
 use atmo_gpu::{Gpu, GpuError};
 
 pub use app::{run, Timings};
@@ -57,7 +59,7 @@ pub trait Mode {
         &mut self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        picture: &Picture,
+        picture: &mut Picture,
     ) -> Result<bool>;
     /// How the picture is shown (and written as PNG).
     fn display(&self) -> Display;
@@ -128,12 +130,28 @@ pub struct Options {
     pub adapter: Option<String>,
 }
 
-/// The picture a mode draws each frame: linear radiance, RGBA f32, the window's size.
+/// The picture a mode draws each frame, the window's size: on the GPU, linear radiance
+/// in an RGBA f32 texture; on the CPU, a frame ([`Picture::frame`]).
 pub struct Picture {
     pub texture: wgpu::Texture,
     pub view: wgpu::TextureView,
     /// Width and height, pixels.
     pub size: (u32, u32),
+    /// The frame drawn on the CPU, while the picture is one.
+    cpu: Option<CpuFrame>,
+}
+
+/// A frame drawn on the CPU and how far it has reached the window: its 8-bit texels
+/// for a surface that takes copies (made again only when the frame or the display
+/// changed: an idle frame re-sends them), or the f32 texture.
+struct CpuFrame {
+    frame: Frame,
+    /// The texels of `frame` under `levels`, unless `drawn` since.
+    texels: Vec<u8>,
+    levels: Option<Levels>,
+    /// The frame was drawn since its texels were made / since it was uploaded.
+    texels_stale: bool,
+    upload_stale: bool,
 }
 
 impl Picture {
@@ -144,16 +162,36 @@ impl Picture {
             texture,
             view,
             size,
+            cpu: None,
         })
     }
 
+    /// The frame a CPU method draws the picture into (the picture's size; what was
+    /// drawn last, or black when new): the picture is this frame from now on.
+    pub fn frame(&mut self) -> &mut Frame {
+        let (width, height) = self.size;
+        let cpu = self.cpu.get_or_insert_with(|| CpuFrame {
+            frame: Frame::new(width, height),
+            texels: Vec::new(),
+            levels: None,
+            texels_stale: true,
+            upload_stale: true,
+        });
+        if (cpu.frame.width, cpu.frame.height) != (width, height) {
+            cpu.frame = Frame::new(width, height);
+        }
+        (cpu.texels_stale, cpu.upload_stale) = (true, true);
+        &mut cpu.frame
+    }
+
     /// Records a render pass into the picture, cleared to black, in which `draw`
-    /// records its draws.
+    /// records its draws: the picture is the texture from now on.
     pub fn draw(
-        &self,
+        &mut self,
         encoder: &mut wgpu::CommandEncoder,
         draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
     ) {
+        self.cpu = None;
         let mut pass = cleared_pass(encoder, &self.view, "the picture", wgpu::Color::BLACK);
         draw(&mut pass);
     }
@@ -161,18 +199,185 @@ impl Picture {
     /// Records a render pass over the picture as it is (what was written into it stays
     /// behind), in which `draw` records its draws.
     pub fn draw_over(
-        &self,
+        &mut self,
         encoder: &mut wgpu::CommandEncoder,
         draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
     ) {
+        self.cpu = None;
         let mut pass = loaded_pass(encoder, &self.view, "over the picture");
         draw(&mut pass);
     }
 
-    /// The picture read back.
+    /// Puts the picture onto `target` (a window's surface texture; `order` its texels'
+    /// where it takes copies of them) as `display` shows it: `true` when a CPU frame's
+    /// levels were written into it (to be submitted with the next commands; what the
+    /// target held is gone, draws go over it), `false` when `display` is made ready to
+    /// draw the texture (a GPU picture, or a target that takes no copies).
+    ///
+    /// Why the copy: 4 bytes a pixel, levels made on the CPU, where the display pass
+    /// reads 16 and tone-maps each on the adapter, which on a software one takes
+    /// milliseconds of the same two cores a frame.
+    pub(crate) fn put_onto(
+        &mut self,
+        gpu: &Gpu,
+        target: &wgpu::Texture,
+        order: Option<TexelOrder>,
+        display: &mut DisplayPass,
+    ) -> bool {
+        let size = target.size();
+        let fits = (size.width, size.height) == self.size;
+        let texels = match order {
+            Some(order) if fits => self.texels(display.display, order),
+            _ => None,
+        };
+        match texels {
+            Some(texels) => {
+                gpu.queue.write_texture(
+                    target.as_image_copy(),
+                    texels,
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(4 * size.width),
+                        rows_per_image: None,
+                    },
+                    size,
+                );
+                true
+            }
+            None => {
+                self.upload(gpu);
+                display.prepare(gpu, &self.view);
+                false
+            }
+        }
+    }
+
+    /// The CPU's frame as 4-byte texels in `order` under `display`, made again only
+    /// where the frame or the display changed; `None` when the picture is the GPU's.
+    fn texels(&mut self, display: Display, order: TexelOrder) -> Option<&[u8]> {
+        let cpu = self.cpu.as_mut()?;
+        let levels = match cpu.levels.take() {
+            Some(levels) if levels.display() == display => levels,
+            _ => {
+                cpu.texels_stale = true;
+                Levels::new(display)
+            }
+        };
+        if cpu.texels_stale {
+            cpu.frame.to_texels(&levels, order, &mut cpu.texels);
+            cpu.texels_stale = false;
+        }
+        cpu.levels = Some(levels);
+        Some(&cpu.texels)
+    }
+
+    /// Uploads the CPU's frame into the texture where it changed, for a surface that
+    /// takes no copies (the display pass shows the texture).
+    fn upload(&mut self, gpu: &Gpu) {
+        if let Some(cpu) = self.cpu.as_mut().filter(|cpu| cpu.upload_stale) {
+            write_frame(gpu, &self.texture, &cpu.frame);
+            cpu.upload_stale = false;
+        }
+    }
+
+    /// The picture: the CPU's frame, or the texture read back.
     fn read(&self, gpu: &Gpu) -> Result<Frame, GpuError> {
+        if let Some(cpu) = &self.cpu {
+            return Ok(cpu.frame.clone());
+        }
         let (width, height) = self.size;
         let bytes = gpu.read_texture("the screenshot", &self.texture, width, height)?;
         Ok(atmo_gpu::frame_of(width, height, &bytes))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use atmo::image::ToneMap;
+
+    /// A frame drawn on the CPU reaches an 8-bit target as the still's PNG levels,
+    /// copied or through the display pass, and is encoded again when it or the display
+    /// changes.
+    #[test]
+    fn a_cpu_frame_reaches_the_target_as_the_stills_levels() {
+        let gpu = match Gpu::new(None) {
+            Ok(gpu) => gpu,
+            Err(GpuError::NoAdapter { .. }) if std::env::var("CI").as_deref() != Ok("true") => {
+                return;
+            }
+            Err(e) => panic!("GPU setup failed: {e}"),
+        };
+        let (w, h) = (7, 3);
+        let format = wgpu::TextureFormat::Bgra8Unorm;
+        let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("a window's surface, as a test makes one"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let mut display = DisplayPass::new(&gpu, format).unwrap();
+        let mut picture = Picture::new(&gpu, (w, h)).unwrap();
+        let fill = |picture: &mut Picture, scale: f32| {
+            for (k, p) in picture.frame().pixels.iter_mut().enumerate() {
+                *p = scale * glam::Vec3::new(k as f32, 0.5 * k as f32, 0.1) / 10.0;
+            }
+        };
+        // What the still writes, in the target's order.
+        let still = |picture: &mut Picture, display: Display| -> Vec<u8> {
+            let rgb = picture.frame().to_srgb8(display.exposure, display.tone);
+            rgb.chunks(3)
+                .flat_map(|c| [c[2], c[1], c[0], 255])
+                .collect()
+        };
+        let read = |target: &wgpu::Texture| gpu.read_texture("the target", target, w, h).unwrap();
+        for (scale, exposure, tone) in [
+            (1.0, 1.0, ToneMap::Clamp),
+            (1.0, 0.3, ToneMap::Exponential),
+            (2.0, 0.3, ToneMap::Exponential),
+            (2.0, 0.3, ToneMap::Aces),
+        ] {
+            display.display = Display { exposure, tone };
+            fill(&mut picture, scale);
+            let expected = still(&mut picture, display.display);
+            assert!(picture.put_onto(&gpu, &target, Some(TexelOrder::Bgra), &mut display));
+            assert_eq!(read(&target), expected, "{scale} {exposure} {tone:?}");
+            // A target that takes no copies: the display pass, within a level.
+            assert!(!picture.put_onto(&gpu, &target, None, &mut display));
+            gpu.run("the display pass", |encoder| {
+                let mut pass = cleared_pass(
+                    encoder,
+                    &target.create_view(&Default::default()),
+                    "t",
+                    wgpu::Color::BLACK,
+                );
+                display.draw(&mut pass);
+            })
+            .unwrap();
+            for (a, b) in read(&target).iter().zip(&expected) {
+                assert!(a.abs_diff(*b) <= 1, "{a} {b}");
+            }
+        }
+        // The screenshot is the frame itself.
+        assert_eq!(
+            &picture.read(&gpu).unwrap(),
+            &picture.cpu.as_ref().unwrap().frame
+        );
+        // Drawn on the GPU, the picture is the texture again: no texels to copy.
+        picture.draw_over(
+            &mut gpu.device.create_command_encoder(&Default::default()),
+            |_| {},
+        );
+        assert!(!picture.put_onto(&gpu, &target, Some(TexelOrder::Bgra), &mut display));
     }
 }

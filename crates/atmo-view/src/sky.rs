@@ -5,12 +5,11 @@
 use std::sync::Arc;
 
 use anyhow::Result;
-use atmo::image::{Display, Frame, ToneMap};
+use atmo::image::{Display, ToneMap};
 use atmo::sky::table::SkylightTable;
 use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::{Atmosphere, Error};
-use atmo_gpu::display::write_frame;
 use atmo_gpu::sky::{GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget};
 use atmo_gpu::Gpu;
 use glam::Vec3;
@@ -182,9 +181,9 @@ impl Default for SkyParams {
 /// (one a run: the sizes of the variants do not matter).
 #[allow(clippy::large_enum_variant)]
 enum Drawer {
-    CpuTable(Arc<SkylightTable>, Frame),
+    CpuTable(Arc<SkylightTable>),
     /// The model, built at its altitude.
-    CpuShells(SkyModel, Frame),
+    CpuShells(SkyModel),
     GpuTable(GpuSkyTable<Arc<SkylightTable>>, SkyPass),
     GpuShells(GpuSkyModel<SkyModel>, SkyPass),
 }
@@ -267,7 +266,7 @@ impl SkyMode {
     fn make_drawer(&self, gpu: &Gpu) -> Result<Drawer> {
         let pass = || SkyPass::new(gpu, SkyTarget::HEADLESS);
         Ok(match (&self.source, self.on_gpu) {
-            (SkySource::Table(t), false) => Drawer::CpuTable(t.clone(), Frame::new(1, 1)),
+            (SkySource::Table(t), false) => Drawer::CpuTable(t.clone()),
             (SkySource::Table(t), true) => {
                 Drawer::GpuTable(GpuSkyTable::new(gpu, t.clone())?, pass()?)
             }
@@ -282,7 +281,7 @@ impl SkyMode {
                 if on_gpu {
                     Drawer::GpuShells(GpuSkyModel::new(gpu, model)?, pass()?)
                 } else {
-                    Drawer::CpuShells(model, Frame::new(1, 1))
+                    Drawer::CpuShells(model)
                 }
             }
         })
@@ -352,12 +351,12 @@ impl Mode for SkyMode {
         &mut self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        picture: &Picture,
+        picture: &mut Picture,
     ) -> Result<bool> {
         let p = &self.params;
         let (sun, view) = (p.sun()?, p.view(picture.size)?);
         let stale = match &self.drawer {
-            Some(Drawer::CpuShells(m, _)) => m.altitude_m() != p.altitude_m,
+            Some(Drawer::CpuShells(m)) => m.altitude_m() != p.altitude_m,
             Some(Drawer::GpuShells(m, _)) => m.model().altitude_m() != p.altitude_m,
             Some(_) => false,
             None => true,
@@ -367,15 +366,11 @@ impl Mode for SkyMode {
         }
         let altitude = p.altitude_m;
         match self.drawer.as_mut().expect("made above") {
-            Drawer::CpuTable(table, frame) => {
-                let frame = resized(frame, picture.size);
-                SkyPicture::from_table(table, sun, altitude)?.render_into(&view, frame);
-                write_frame(gpu, &picture.texture, frame);
+            Drawer::CpuTable(table) => {
+                SkyPicture::from_table(table, sun, altitude)?.render_into(&view, picture.frame());
             }
-            Drawer::CpuShells(model, frame) => {
-                let frame = resized(frame, picture.size);
-                SkyPicture::new(model, sun).render_into(&view, frame);
-                write_frame(gpu, &picture.texture, frame);
+            Drawer::CpuShells(model) => {
+                SkyPicture::new(model, sun).render_into(&view, picture.frame());
             }
             Drawer::GpuTable(sky, pass) => {
                 sky.prepare(gpu, encoder, pass, sun, altitude, &view)?;
@@ -442,13 +437,6 @@ impl Mode for SkyMode {
 }
 
 /// `frame` at `size`, reallocated only when the size changed.
-fn resized(frame: &mut Frame, (width, height): (u32, u32)) -> &mut Frame {
-    if (frame.width, frame.height) != (width, height) {
-        *frame = Frame::new(width, height);
-    }
-    frame
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

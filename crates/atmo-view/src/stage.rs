@@ -22,7 +22,6 @@ use atmo::shafts::edits::{merged, Document, Edit};
 use atmo::shafts::planes::ShadowMaps;
 use atmo::shafts::Scene;
 use atmo::Error;
-use atmo_gpu::display::write_frame;
 use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPass, ShaftsPipelines};
 use atmo_gpu::Gpu;
 use glam::Vec3;
@@ -485,7 +484,7 @@ impl Mode for StageMode {
         &mut self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        picture: &Picture,
+        picture: &mut Picture,
     ) -> Result<bool> {
         self.resize(picture.size)?;
         if !self.dirty {
@@ -503,7 +502,7 @@ impl Mode for StageMode {
             shafts.prepare(gpu, encoder, pass, ShaftsMethod::Planes)?;
             picture.draw(encoder, |render| pass.draw(render));
         } else {
-            write_frame(gpu, &picture.texture, &self.maps.render(&self.scene));
+            *picture.frame() = self.maps.render(&self.scene);
         }
         self.dirty = false;
         Ok(true)

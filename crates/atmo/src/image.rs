@@ -9,6 +9,7 @@ use glam::Vec3;
 use image::ImageResult;
 #[cfg(any(feature = "png", feature = "exr"))]
 use image::{ExtendedColorType, ImageEncoder};
+use rayon::prelude::*;
 
 use crate::error::{check_range, Error, Result};
 
@@ -33,6 +34,9 @@ impl ToneMap {
             ToneMap::Clamp => x.min(1.0),
             ToneMap::Exponential => 1.0 - (-x).exp(),
             ToneMap::Aces => {
+                // Past 1e18 the squares would overflow to infinity over infinity (NaN,
+                // shown black); the curve is 1 there long since.
+                let x = x.min(1e18);
                 ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
             }
         }
@@ -69,6 +73,106 @@ impl Display {
     #[inline]
     pub fn value(&self, x: f32) -> f32 {
         srgb_encode(self.tone.apply(x * self.exposure))
+    }
+}
+
+/// The 8-bit level of every linear value under one [`Display`], found by a table
+/// instead of an `exp` and a `powf` per value: the levels of
+/// `(display.value(x) * 255 + 0.5) as u8` (see [`Levels::exact`]), many times
+/// faster, which is what lets a window show a CPU-drawn frame each frame.
+///
+/// Written here, not taken from a crate: the point is exactness to atmo's own curves
+/// (any exposure, any [`ToneMap`]). The displayed level never falls as radiance rises,
+/// so level `k` begins at one radiance, `starts[k]`; non-negative floats order as their
+/// bits do, so a value's top bits pick a bucket whose first level is tabled, and two
+/// comparisons of bits (no branch) step to the value's level within the bucket.
+///
+/// Why two are enough: a bucket is 2^-8 (0.39 %) of its values wide, and two levels'
+/// starts are at least 0.66 % apart in radiance (a level is 1/255 of the encoded value
+/// v, at least 0.39 % of it; v grows no faster than x^0.59 under the sRGB curve's 1/2.4
+/// power and ACES, whose steepest relative slope is 1.41, and at most as x in the
+/// curve's linear toe, where the levels are over 10 % apart): one start a bucket, at
+/// most, with room.
+#[derive(Debug, Clone)]
+pub struct Levels {
+    display: Display,
+    /// The bits of the least value shown at level `k` (for `k` in 1..=255), 0 for
+    /// level 0, and `u32::MAX` past 255.
+    starts: [u32; 257],
+    /// The level of each bucket's least value: bucket `b` holds the values whose bits
+    /// shifted by [`Levels::SHIFT`] are `b`.
+    buckets: Vec<u8>,
+}
+
+impl Levels {
+    /// Bits below a bucket's: 15 keeps 8 of the mantissa's 23 (64 K buckets).
+    const SHIFT: u32 = 15;
+    /// The bits of +infinity: every non-negative value's bits are at most these.
+    const INFINITY: u32 = 0x7f80_0000;
+
+    /// The table of `display` (a fraction of a millisecond to make).
+    pub fn new(display: Display) -> Self {
+        let level = |bits: u32| Self::exact(display, f32::from_bits(bits));
+        let mut starts = [u32::MAX; 257];
+        starts[0] = 0;
+        for k in 1..=255u32 {
+            // The least bits shown at `k` or above, by bisection between the last start
+            // and infinity; none when even infinity is shown below `k`.
+            let (mut low, mut high) = (starts[k as usize - 1], Self::INFINITY);
+            if (level(high) as u32) < k {
+                break;
+            }
+            while low < high {
+                let middle = low + (high - low) / 2;
+                if level(middle) as u32 >= k {
+                    high = middle;
+                } else {
+                    low = middle + 1;
+                }
+            }
+            starts[k as usize] = low;
+        }
+        let mut buckets = vec![0u8; (Self::INFINITY >> Self::SHIFT) as usize + 1];
+        let mut k = 0;
+        for (b, bucket) in buckets.iter_mut().enumerate() {
+            let first = (b as u32) << Self::SHIFT;
+            while first >= starts[k + 1] {
+                k += 1;
+            }
+            *bucket = k as u8;
+        }
+        Levels {
+            display,
+            starts,
+            buckets,
+        }
+    }
+
+    /// The display this table is of.
+    pub fn display(&self) -> Display {
+        self.display
+    }
+
+    /// The level of `x` as the formula gives it, without the table (which agrees with
+    /// it but for values within an ulp or two of a level's start, where the formula's
+    /// rounding may jitter between two levels).
+    #[inline]
+    pub fn exact(display: Display, x: f32) -> u8 {
+        (display.value(x) * 255.0 + 0.5).clamp(0.0, 255.0) as u8
+    }
+
+    /// The level of `x` (negative and NaN: 0, as the tone maps take them).
+    #[inline]
+    pub fn level(&self, x: f32) -> u8 {
+        let bits = if x > 0.0 {
+            x.to_bits().min(Self::INFINITY)
+        } else {
+            0
+        };
+        let mut k = self.buckets[(bits >> Self::SHIFT) as usize] as usize;
+        k += (bits >= self.starts[k + 1]) as usize;
+        k += (bits >= self.starts[k + 1]) as usize;
+        k as u8
     }
 }
 
@@ -134,6 +238,13 @@ impl ImageKind {
     }
 }
 
+/// The order of an 8-bit texel's colour channels (alpha last).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TexelOrder {
+    Rgba,
+    Bgra,
+}
+
 /// A picture in linear sRGB radiance (the atmosphere's irradiance units per sr).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Frame {
@@ -168,12 +279,35 @@ impl Frame {
 
     /// 8-bit sRGB bytes after multiplying by `exposure` and tone mapping.
     pub fn to_srgb8(&self, exposure: f32, tone: ToneMap) -> Vec<u8> {
-        let display = Display { exposure, tone };
+        let levels = Levels::new(Display { exposure, tone });
         self.pixels
             .iter()
             .flat_map(|p| p.to_array())
-            .map(|v| (display.value(v) * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
+            .map(|v| levels.level(v))
             .collect()
+    }
+
+    /// The frame as 4-byte texels of `levels`, `order` their channels' order (alpha
+    /// 255), into `texels` (resized): what an 8-bit texture of a display takes, rows
+    /// in parallel.
+    pub fn to_texels(&self, levels: &Levels, order: TexelOrder, texels: &mut Vec<u8>) {
+        let width = self.width as usize;
+        texels.resize(4 * self.pixels.len(), 0);
+        let texel = |p: &Vec3| {
+            let [r, g, b] = [levels.level(p.x), levels.level(p.y), levels.level(p.z)];
+            match order {
+                TexelOrder::Rgba => [r, g, b, 255],
+                TexelOrder::Bgra => [b, g, r, 255],
+            }
+        };
+        texels
+            .par_chunks_mut(4 * width)
+            .zip(self.pixels.par_chunks(width))
+            .for_each(|(row, pixels)| {
+                for (t, p) in row.chunks_exact_mut(4).zip(pixels) {
+                    t.copy_from_slice(&texel(p));
+                }
+            });
     }
 
     /// Writes the frame to `path` (.png or .exr), atomically. A frame with a NaN or
@@ -339,6 +473,79 @@ mod tests {
         }
         assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
         assert!((srgb_encode(0.5) - 0.7354).abs() < 1e-3);
+    }
+
+    #[test]
+    fn the_levels_table_gives_the_files_levels_exactly() {
+        for tone in [ToneMap::Clamp, ToneMap::Exponential, ToneMap::Aces] {
+            for exposure in [0.15, 0.6, 1.0, 7.3] {
+                let display = Display { exposure, tone };
+                let levels = Levels::new(display);
+                let check = |x: f32| {
+                    assert_eq!(
+                        levels.level(x),
+                        Levels::exact(display, x),
+                        "{tone:?} exposure {exposure} at {x:e}"
+                    )
+                };
+                // Either side of every level's start, where a slip would show first.
+                // There the formula's own rounding may jitter between two levels for an
+                // ulp (0.14498337 at 0.15 ACES: 29, the next float 28, then 29): the
+                // table gives the formula's level within two ulps.
+                for &start in levels.starts.iter().filter(|&&s| s < u32::MAX) {
+                    for bits in start.saturating_sub(2)..=start + 2 {
+                        let near = (bits.saturating_sub(2)..=bits + 2)
+                            .map(|b| Levels::exact(display, f32::from_bits(b)));
+                        let level = levels.level(f32::from_bits(bits));
+                        assert!(near.into_iter().any(|l| l == level), "{tone:?} {bits}");
+                    }
+                }
+                // 1e-8 to 1e4 in ratios of 1.0001, and what is not a radiance.
+                let mut x = 1e-8f32;
+                while x < 1e4 {
+                    check(x);
+                    x *= 1.0001;
+                }
+                for x in [0.0, -0.0, -1.0, f32::NAN, f32::INFINITY, f32::MAX, 1e-40] {
+                    check(x);
+                }
+                // The argument for two steps: one start a bucket at most.
+                let buckets: Vec<u32> = levels.starts[1..]
+                    .iter()
+                    .filter(|&&s| s < u32::MAX)
+                    .map(|s| s >> Levels::SHIFT)
+                    .collect();
+                assert!(
+                    buckets.windows(2).all(|b| b[0] < b[1]),
+                    "{tone:?} {exposure}"
+                );
+            }
+        }
+        // Every level is reached: the table is not all one value.
+        let levels = Levels::new(Display {
+            exposure: 1.0,
+            tone: ToneMap::Clamp,
+        });
+        assert_eq!(levels.level(1.0), 255);
+        assert_eq!(levels.level(0.5), 188);
+        assert_eq!(levels.level(0.0), 0);
+    }
+
+    #[test]
+    fn texels_hold_the_levels_in_the_order_asked() {
+        let mut frame = Frame::new(3, 2);
+        frame.pixels[4] = Vec3::new(1.0, 0.5, 0.0);
+        let levels = Levels::new(Display {
+            exposure: 1.0,
+            tone: ToneMap::Clamp,
+        });
+        let mut texels = Vec::new();
+        frame.to_texels(&levels, TexelOrder::Rgba, &mut texels);
+        assert_eq!(texels.len(), 24);
+        assert_eq!(&texels[16..20], &[255, 188, 0, 255]);
+        assert_eq!(&texels[0..4], &[0, 0, 0, 255]);
+        frame.to_texels(&levels, TexelOrder::Bgra, &mut texels);
+        assert_eq!(&texels[16..20], &[0, 188, 255, 255]);
     }
 
     #[test]

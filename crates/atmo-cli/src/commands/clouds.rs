@@ -937,7 +937,7 @@ impl CloudPictures for WindowClouds {
         &mut self,
         gpu: &Gpu,
         encoder: &mut atmo_gpu::wgpu::CommandEncoder,
-        picture: &Picture,
+        picture: &mut Picture,
         p: &CloudParams,
     ) -> Result<()> {
         let (camera, light, background) = self.prepare(Some(gpu), p, picture.size)?;
