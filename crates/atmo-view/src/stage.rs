@@ -325,10 +325,24 @@ impl StageMode {
             Slider::new(at("zoom_deg"), "zoom, deg", 1.0..=90.0),
             Slider::new(at("dimmer"), "dimmer", 0.0..=1.0).or(1.0),
         ];
-        if self.scene.show.fixtures[k].prism.is_some() {
+        let prism = self.scene.show.fixtures[k].prism.is_some();
+        if prism {
             list.push(Slider::new(at("prism_deg"), "prism turn, deg", -360.0..=360.0).or(0.0));
         }
         sliders(ui, &self.edited, list, edits);
+        if prism {
+            // In unless the start takes it out.
+            let was = self
+                .edited
+                .get(&at("prism_in"))
+                .and_then(|v| v.as_bool())
+                .unwrap_or(true);
+            let mut prism_in = was;
+            ui.checkbox(&mut prism_in, "prism in the beam");
+            if prism_in != was {
+                edits.push(Edit::set(&at("prism_in"), prism_in.to_string()));
+            }
+        }
     }
 }
 

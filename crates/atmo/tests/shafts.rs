@@ -731,6 +731,14 @@ fn bad_shows_are_refused_naming_the_field_and_its_range() {
             assert!(message.contains(w), "{cues}: {message:?} lacks {w:?}");
         }
     }
+    // Head b has no prism to take out.
+    let message = error_of(&show_scene(
+        "[[cue]]\ntime_s = 1.0\nset.b = { prism_in = false }\n",
+    ));
+    assert!(
+        message.contains("cue[0].set.b.prism_in") && message.contains("no prism"),
+        "{message:?}"
+    );
     let twice = show_scene("").replace("name = \"b\"", "name = \"a\"");
     assert!(error_of(&twice).contains("fixture[1].name = \"a\" is used twice"));
     let start = show_scene("").replace("gobo = 2", "gobo = 5");
@@ -792,6 +800,42 @@ fn a_prism_makes_a_light_a_facet_and_they_move_together() {
     let across = (facet - beam * facet.dot(beam)).normalize();
     let turned = across.dot(right).atan2(across.dot(up)).to_degrees();
     assert!((turned - 30.0).abs() < 1e-3, "{turned}");
+}
+
+/// A cue takes the prism out (a snap, whatever the cue's fade: the beam is one again,
+/// with all the light, while the pan fades) and the next puts it back; the head after
+/// it keeps its shadow map though its place among the lights moves.
+#[test]
+fn a_prism_goes_in_and_out_by_cue() {
+    let cues =
+        "[[cue]]\ntime_s = 1.0\nfade_s = 1.0\nset.a = { prism_in = false, pan_deg = 40.0 }\n\
+                [[cue]]\ntime_s = 3.0\nset.a = { prism_in = true }\n";
+    let text = prismed(&show_scene(cues), "{ facets = 3, angle_deg = 8.0 }");
+    let mut scene = parse(&text).unwrap();
+    let facets: Vec3 = scene.lights[1..4].iter().map(|l| l.intensity).sum();
+    let mut maps = atmo::shafts::planes::ShadowMaps::default();
+    maps.update(&scene);
+    assert_eq!(maps.rebuilt, 5);
+    // Out, half way through the pan's fade: one beam along the head's axis, all the
+    // light; b's map found where it was built though b is now the third light.
+    scene.at_time(1.5);
+    assert_eq!(scene.lights.len(), 3);
+    let (beam, _) = scene.show.fixtures[0].aim(20.0, 10.0);
+    assert!((scene.lights[1].light_from_world.row(2) - beam).length() < 1e-5);
+    assert!((scene.lights[1].intensity - facets).abs().max_element() < 1e-2);
+    maps.update(&scene);
+    assert_eq!(maps.rebuilt, 1, "head a's one beam; b kept");
+    assert_physical(&SamplePlanes::new(&scene).render());
+    // In again at 3 s: three facets around the panned beam.
+    scene.at_time(3.0);
+    assert_eq!(scene.lights.len(), 5);
+    let (beam, _) = scene.show.fixtures[0].aim(40.0, 10.0);
+    for facet in &scene.lights[1..4] {
+        let off = facet.light_from_world.row(2).dot(beam).acos().to_degrees();
+        assert!((off - 8.0).abs() < 1e-3, "{off}");
+    }
+    maps.update(&scene);
+    assert_eq!(maps.rebuilt, 3);
 }
 
 /// `integral I dOmega` of `light`'s luminance, lm (cd sr): its luminous flux.

@@ -251,7 +251,9 @@ fn animate(
     let pipelines = gpu
         .map(|gpu| ShaftsPipelines::new(gpu).map_err(gpu_error))
         .transpose()?;
-    let (mut rebuilt, start) = (0, Instant::now());
+    // Shadow maps rebuilt and lights drawn over the frames (a prism in or out changes
+    // the count).
+    let (mut rebuilt, mut lights, start) = (0, 0, Instant::now());
     let apng = crate::output::write_animation(
         &args.output,
         frames,
@@ -260,6 +262,7 @@ fn animate(
         display,
         |k, frame| {
             scene.at_time(k as f32 / args.fps as f32);
+            lights += scene.lights.len();
             *frame = match gpu.zip(pipelines.as_ref()) {
                 Some((gpu, pipelines)) => {
                     let shafts = GpuShafts::with_pipelines(gpu, &scene, pipelines.clone())
@@ -279,16 +282,16 @@ fn animate(
         },
     )?;
     eprintln!(
-        "{}: {frames} frames of {} x {} at {} frames/s ({duration:.2} s of show), {} light(s){}: {:.0} ms a frame",
+        "{}: {frames} frames of {} x {} at {} frames/s ({duration:.2} s of show), {:.1} light(s) a frame{}: {:.0} ms a frame",
         apng.display(),
         size.0,
         size.1,
         args.fps,
-        scene.lights.len(),
+        lights as f64 / frames as f64,
         if gpu.is_some() {
             " on the GPU".to_string()
         } else {
-            format!(", {rebuilt} of {} shadow maps rebuilt", frames * scene.lights.len())
+            format!(", {rebuilt} of {lights} shadow maps rebuilt")
         },
         start.elapsed().as_secs_f64() * 1e3 / frames as f64
     );

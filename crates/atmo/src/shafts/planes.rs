@@ -610,41 +610,53 @@ const STRETCH_MARGIN: f32 = 1e-5;
 
 /// Shadow maps kept from frame to frame of an animation: a light's map is rebuilt only
 /// when the light moved, turned or changed its field (a gobo, a colour or a dimmer
-/// leaves it as it is). The objects are taken not to move.
+/// leaves it as it is). A map is found by what it was built for, not by the light's
+/// place in the list: a prism put in or taken out changes how many lights come before
+/// the others. The objects are taken not to move.
 #[derive(Debug, Default)]
 pub struct ShadowMaps {
     maps: Vec<ShadowMap>,
     /// What each map was built for: position, frame, field, texels.
-    keys: Vec<(Vec3, glam::Mat3, f32, usize)>,
+    keys: Vec<MapKey>,
     /// How many maps the last [`ShadowMaps::update`] rebuilt.
     pub rebuilt: usize,
 }
 
+/// What a shadow map depends on: the light's position, frame and field, its size.
+type MapKey = (Vec3, glam::Mat3, f32, usize);
+
 impl ShadowMaps {
-    /// The maps for `scene`'s lights, rebuilding those whose light changed since the
-    /// last call.
+    /// The maps for `scene`'s lights, in their order, rebuilding those of lights that
+    /// changed since the last call.
     pub fn update(&mut self, scene: &Scene) -> &[ShadowMap] {
         let size = scene.planes.shadow_map as usize;
-        let keys: Vec<_> = scene
-            .lights
-            .iter()
-            .map(|l| (l.position, l.light_from_world, l.field_half, size))
+        let mut kept: Vec<Option<(MapKey, ShadowMap)>> = self
+            .keys
+            .drain(..)
+            .zip(self.maps.drain(..))
+            .map(Some)
             .collect();
-        self.maps.truncate(keys.len());
-        self.keys.truncate(keys.len());
         self.rebuilt = 0;
-        for (k, (light, key)) in scene.lights.iter().zip(&keys).enumerate() {
-            if self.keys.get(k) == Some(key) {
-                continue;
-            }
-            let map = ShadowMap::new(light, &scene.objects, size);
-            if k < self.maps.len() {
-                (self.maps[k], self.keys[k]) = (map, *key);
-            } else {
-                self.maps.push(map);
-                self.keys.push(*key);
-            }
-            self.rebuilt += 1;
+        for light in &scene.lights {
+            let key = (
+                light.position,
+                light.light_from_world,
+                light.field_half,
+                size,
+            );
+            let found = kept
+                .iter_mut()
+                .find(|slot| slot.as_ref().is_some_and(|(k, _)| *k == key))
+                .and_then(Option::take);
+            let map = found.map_or_else(
+                || {
+                    self.rebuilt += 1;
+                    ShadowMap::new(light, &scene.objects, size)
+                },
+                |(_, map)| map,
+            );
+            self.maps.push(map);
+            self.keys.push(key);
         }
         &self.maps
     }

@@ -44,8 +44,10 @@ pub struct Scene {
     /// were read, so that a command does not write over one of them.
     pub files: Vec<PathBuf>,
     /// The moving heads and their cues; the heads are the last lights of
-    /// [`Scene::lights`], posed at the time of [`Scene::at_time`] (0 as loaded).
+    /// [`Scene::lights`], posed at [`Scene::time_s`].
     pub show: Show,
+    /// The show's time the heads are posed at, s ([`Scene::at_time`]; 0 as loaded).
+    pub time_s: f32,
 }
 
 /// What a light's `intensity` means; pixels are radiance in the same unit per m^2.
@@ -150,6 +152,8 @@ struct Limits {
     tilt: [f32; 2],
     zoom: [f32; 2],
     slots: usize,
+    /// Whether the head has a prism to put in and take out.
+    prism: bool,
 }
 
 /// A fixture's light as its keys or its GDTF file give it.
@@ -189,6 +193,7 @@ struct AttributesSpec {
     gobo: Option<usize>,
     gobo_speed_dps: Option<f32>,
     prism_deg: Option<f32>,
+    prism_in: Option<bool>,
 }
 
 /// A cue: at `time_s`, the attributes it sets per fixture fade over `fade_s`.
@@ -557,6 +562,7 @@ impl Scene {
                 .map(|f| folder.join(f))
                 .collect(),
             show,
+            time_s: 0.0,
         };
         scene.validate_planes()?;
         Ok(scene)
@@ -565,9 +571,10 @@ impl Scene {
     /// The scene at `time_s` seconds into its show: its moving heads posed as its cues
     /// have them then (the other lights do not change).
     pub fn at_time(&mut self, time_s: f32) {
-        let first = self.lights.len() - self.show.light_count();
+        let first = self.lights.len() - self.show.light_count(self.time_s);
         self.lights.truncate(first);
         self.lights.extend(self.show.pose(time_s));
+        self.time_s = time_s;
     }
 
     /// Checks the plane settings, and that the shadow maps they make for these lights
@@ -575,14 +582,12 @@ impl Scene {
     /// them.
     pub fn validate_planes(&self) -> Result<()> {
         self.planes.validate()?;
-        // Each light's shadow map, 4 bytes a texel, on the CPU or on the GPU.
-        let texels = self.lights.len() as u64 * (self.planes.shadow_map as u64).pow(2);
+        // Each light's shadow map, 4 bytes a texel, on the CPU or on the GPU, at the
+        // time of the show with the most (every prism in).
+        let most = self.lights.len() - self.show.light_count(self.time_s) + self.show.most_lights();
+        let texels = most as u64 * (self.planes.shadow_map as u64).pow(2);
         crate::budget::check(
-            &format!(
-                "{} shadow maps of {}^2",
-                self.lights.len(),
-                self.planes.shadow_map
-            ),
+            &format!("{most} shadow maps of {}^2", self.planes.shadow_map),
             4 * texels,
             "render.shadow_map (--shadow-map) or the number of spotlights",
         )
@@ -922,10 +927,11 @@ impl FixtureSpec {
             360.0,
         )?;
         let sampling = self.gobo_sampling.into();
-        let light = match &self.gdtf {
+        let mut light = match &self.gdtf {
             None => self.keyed(at, folder, sampling)?,
             Some(file) => self.gdtf_light(at, unit, &folder.join(file), sampling)?,
         };
+        light.limits.prism = self.prism.is_some();
         let limits = &light.limits;
         for (name, [lo, hi], limit) in [
             ("pan_range_deg", limits.pan, 720.0),
@@ -966,11 +972,13 @@ impl FixtureSpec {
                 0.0,
             ],
             gobo: 0,
+            prism_in: true,
         };
         let change = self.start.validate(&format!("{at}.start"), limits)?;
         let start = State {
             channels: std::array::from_fn(|c| change.channels[c].unwrap_or(rest.channels[c])),
             gobo: change.gobo.unwrap_or(0),
+            prism_in: change.prism_in.unwrap_or(true),
         };
         let fixture = Fixture {
             name: self.name.clone(),
@@ -1022,6 +1030,7 @@ impl FixtureSpec {
                 tilt: self.tilt_range_deg.unwrap_or(DEFAULT_TILT),
                 zoom: self.zoom_range_deg.unwrap_or(DEFAULT_ZOOM),
                 slots: wheel.len(),
+                prism: false,
             },
             wheel,
             kelvin: None,
@@ -1087,6 +1096,7 @@ impl FixtureSpec {
                 tilt: file.tilt_range_deg.unwrap_or([0.0, 0.0]),
                 zoom,
                 slots: file.wheel.len(),
+                prism: false,
             },
             wheel: file.wheel,
             kelvin: Some(file.kelvin),
@@ -1158,6 +1168,15 @@ impl AttributesSpec {
                 ));
             }
             change.gobo = Some(slot);
+        }
+        if let Some(prism_in) = self.prism_in {
+            if !limits.prism {
+                return Err(Error::Invalid(format!(
+                    "{at}.prism_in: the fixture has no prism to put in or take out (give it \
+                     `prism = {{ facets = 3, angle_deg = 9.0 }}`)"
+                )));
+            }
+            change.prism_in = Some(prism_in);
         }
         Ok(change)
     }

@@ -6,7 +6,8 @@
 //! prism that splits the beam into copies around it ([`Prism`]). Its
 //! attributes change by [`Cue`]s: at a cue's time each attribute it sets starts a
 //! linear fade, over the cue's fade time, from the value it has at that moment (even in
-//! the middle of an earlier fade) to the cue's; a gobo change snaps at the cue's start.
+//! the middle of an earlier fade) to the cue's; a gobo change and the prism going in or
+//! out snap at the cue's start.
 //! [`Show::pose`] turns the fixtures' state at a time into the [`Spotlight`]s the
 //! renderers draw, so every method (planes, reference, GPU) plays a show unchanged.
 //!
@@ -53,6 +54,8 @@ pub struct State {
     pub channels: [f32; 10],
     /// The gobo wheel's slot: 0 open, `k` the wheel's `k`-th gobo.
     pub gobo: usize,
+    /// Whether the head's prism (if it has one) is in the beam.
+    pub prism_in: bool,
 }
 
 impl State {
@@ -69,6 +72,8 @@ pub struct Change {
     pub channels: [Option<f32>; 10],
     /// A new gobo slot.
     pub gobo: Option<usize>,
+    /// The prism put in (`true`) or taken out of the beam.
+    pub prism_in: Option<bool>,
 }
 
 /// A cue: at `time_s` the changes start, fading over `fade_s`.
@@ -207,14 +212,18 @@ impl Show {
 
     /// Fixture `f`'s attributes at time `t`, s.
     pub fn state(&self, f: usize, t: f32) -> State {
-        let gobo = self
-            .changes(f, t)
-            .filter_map(|(_, change)| change.gobo)
-            .last()
-            .unwrap_or(self.fixtures[f].start.gobo);
+        let start = &self.fixtures[f].start;
+        let changes = || self.changes(f, t).map(|(_, change)| change);
         State {
             channels: std::array::from_fn(|c| self.fade(f, c, t).at(t)),
-            gobo,
+            gobo: changes()
+                .filter_map(|c| c.gobo)
+                .last()
+                .unwrap_or(start.gobo),
+            prism_in: changes()
+                .filter_map(|c| c.prism_in)
+                .last()
+                .unwrap_or(start.prism_in),
         }
     }
 
@@ -248,8 +257,19 @@ impl Show {
             .collect()
     }
 
-    /// How many spotlights [`Show::pose`] gives.
-    pub fn light_count(&self) -> usize {
+    /// How many spotlights [`Show::pose`] gives at time `t`, s.
+    pub fn light_count(&self, t: f32) -> usize {
+        (0..self.fixtures.len())
+            .map(|f| {
+                self.fixtures[f]
+                    .prism_at(&self.state(f, t))
+                    .map_or(1, |p| p.facets as usize)
+            })
+            .sum()
+    }
+
+    /// The most spotlights [`Show::pose`] gives at any time: every prism in.
+    pub fn most_lights(&self) -> usize {
         self.fixtures
             .iter()
             .map(|f| f.prism.map_or(1, |p| p.facets as usize))
@@ -302,7 +322,7 @@ impl Fixture {
     pub fn lights(&self, state: &State, gobo_deg: f32) -> Vec<Spotlight> {
         let c = &state.channels;
         let (beam, up) = self.aim(c[PAN], c[TILT]);
-        let Some(prism) = self.prism else {
+        let Some(prism) = self.prism_at(state) else {
             return vec![self.light_along(state, gobo_deg, beam, up, 1.0)];
         };
         let right = beam.cross(up);
@@ -316,6 +336,11 @@ impl Fixture {
                 self.light_along(state, gobo_deg, turn * beam, turn * up, share)
             })
             .collect()
+    }
+
+    /// The prism in the beam in `state`, if the head has one and it is in.
+    fn prism_at(&self, state: &State) -> Option<Prism> {
+        self.prism.filter(|_| state.prism_in)
     }
 
     /// The spotlight of this fixture in `state` along `beam` with the gobo's `up`
@@ -405,6 +430,7 @@ mod tests {
             start: State {
                 channels: [0.0, 0.0, 40.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0],
                 gobo: 0,
+                prism_in: true,
             },
             prism: None,
         }
@@ -428,7 +454,7 @@ mod tests {
             fixtures: vec![head(), f.clone()],
             cues: Vec::new(),
         };
-        assert_eq!((show.light_count(), show.pose(0.0).len()), (4, 4));
+        assert_eq!((show.light_count(0.0), show.pose(0.0).len()), (4, 4));
         let total: Vec3 = facets.iter().map(|l| l.intensity).sum();
         assert!(
             (total - whole.intensity).abs().max_element() < 1e-3,
