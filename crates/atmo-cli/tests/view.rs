@@ -219,6 +219,7 @@ fn bad_input_before_the_window_exits_2_with_a_message() {
             vec!["sky", "--frames", "0", "--screenshot", "x.png"],
             "frames",
         ),
+        (vec!["sky", "--preview", "17"], "preview = 17"),
         // The clouds.
         (
             vec![CLOUD, CUMULUS, SMALL, "--sun-elevation", "0"],

@@ -102,6 +102,8 @@ struct Running {
     message: Option<String>,
     /// The last screenshot's still command.
     still: Option<String>,
+    /// A screenshot asked for, taken after this frame's draw.
+    shot: Option<PathBuf>,
     last_frame: Option<Instant>,
     frame_ms: f64,
     /// The method's time on the last frame it drew, and whether this frame drew.
@@ -350,6 +352,7 @@ fn open(
         show_panel: true,
         message: None,
         still: None,
+        shot: None,
         last_frame: None,
         frame_ms: 0.0,
         method_ms: 0.0,
@@ -396,6 +399,10 @@ impl Running {
                 label: Some("a frame"),
             });
         let start = Instant::now();
+        // Previews while the picture changes, but never the last frame of a run nor
+        // one a screenshot is taken of.
+        let whole = options.frames == Some(self.frame + 1) || self.shot.is_some();
+        self.picture.preview = Some(options.preview).filter(|&k| k > 1 && !whole);
         let drawn = self.mode.draw(&self.gpu, &mut encoder, &mut self.picture);
         self.drew = matches!(drawn, Ok(true));
         if self.drew {
@@ -403,6 +410,11 @@ impl Running {
         }
         if let Err(e) = drawn {
             self.refuse(e);
+        }
+        if let Some(path) = self.shot.take() {
+            if let Err(e) = self.screenshot(&path) {
+                self.refuse(e);
+            }
         }
         self.show(encoder)?;
         let now = Instant::now();
@@ -431,10 +443,8 @@ impl Running {
                 } else {
                     "exr"
                 };
-                let path = PathBuf::from(format!("atmo-view-{:04}.{kind}", self.frame));
-                if let Err(e) = self.screenshot(&path) {
-                    self.refuse(e);
-                }
+                // Taken once this frame's picture is drawn, whole.
+                self.shot = Some(PathBuf::from(format!("atmo-view-{:04}.{kind}", self.frame)));
             }
             input => {
                 if let Err(e) = self.mode.apply(input) {

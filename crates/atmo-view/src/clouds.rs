@@ -136,6 +136,8 @@ pub struct CloudsMode {
     on_gpu: bool,
     /// What the picture shows now: its parameters, size and backend.
     drawn: Option<(CloudParams, (u32, u32), bool)>,
+    /// The picture is a preview ([`Picture::preview`]), to be drawn whole.
+    coarse: bool,
 }
 
 impl CloudsMode {
@@ -151,6 +153,7 @@ impl CloudsMode {
             step_deg: 5.0,
             on_gpu: false,
             drawn: None,
+            coarse: false,
         }
     }
 }
@@ -219,14 +222,17 @@ impl Mode for CloudsMode {
         picture: &mut Picture,
     ) -> Result<bool> {
         let now = (self.params.clone(), picture.size, self.on_gpu);
-        if self.drawn.as_ref() == Some(&now) {
+        let changed = self.drawn.as_ref() != Some(&now);
+        if !changed && !self.coarse {
             return Ok(false);
         }
         let drawn = if self.on_gpu {
             self.pictures.draw_on(gpu, encoder, picture, &self.params)
         } else {
-            let frame = self.pictures.draw(&self.params, picture.size);
-            frame.map(|frame| *picture.frame() = frame)
+            let (pictures, params) = (&mut self.pictures, &self.params);
+            picture
+                .draw_cpu(changed, |size| pictures.draw(params, size))
+                .map(|coarse| self.coarse = coarse)
         };
         match drawn {
             Ok(()) => {

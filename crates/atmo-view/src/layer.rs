@@ -148,12 +148,8 @@ mod tests {
 
     #[test]
     fn the_layer_is_put_over_the_frame_within_the_panel_and_redrawn_when_due() {
-        let gpu = match Gpu::new(None) {
-            Ok(gpu) => gpu,
-            Err(GpuError::NoAdapter { .. }) if std::env::var("CI").as_deref() != Ok("true") => {
-                return;
-            }
-            Err(e) => panic!("GPU setup failed: {e}"),
+        let Some(gpu) = crate::test_gpu() else {
+            return;
         };
         let (w, h) = (32, 24);
         let format = wgpu::TextureFormat::Rgba32Float;

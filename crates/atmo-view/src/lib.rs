@@ -128,6 +128,11 @@ pub struct Options {
     pub backend: Backend,
     /// The adapter, by part of its name or a backend (see `atmo_gpu::Gpu::new`).
     pub adapter: Option<String>,
+    /// While a picture drawn on the CPU keeps changing (a drag, a slider, a show
+    /// playing) it may be drawn at 1/`preview` of the window's size in each direction
+    /// and stretched, and whole once it stops (the first frame without a change);
+    /// 1: always whole. The last frame of [`Options::frames`] is always whole.
+    pub preview: u32,
 }
 
 /// The picture a mode draws each frame, the window's size: on the GPU, linear radiance
@@ -137,6 +142,10 @@ pub struct Picture {
     pub view: wgpu::TextureView,
     /// Width and height, pixels.
     pub size: (u32, u32),
+    /// A mode whose picture changed since it last drew may draw it this frame at
+    /// 1/`k` of the size in each direction (`Some(k)`, the CPU's methods; see
+    /// [`Options::preview`]), then must draw it whole at the next frame without one.
+    pub preview: Option<u32>,
     /// The frame drawn on the CPU, while the picture is one.
     cpu: Option<CpuFrame>,
 }
@@ -162,8 +171,31 @@ impl Picture {
             texture,
             view,
             size,
+            preview: None,
             cpu: None,
         })
+    }
+
+    /// Draws the picture on the CPU: whole (`draw` at the picture's size), or where
+    /// [`Picture::preview`] allows and `changed`, at a fraction of it and stretched.
+    /// `true` when what was drawn is a preview, to be drawn whole later.
+    pub fn draw_cpu(
+        &mut self,
+        changed: bool,
+        draw: impl FnOnce((u32, u32)) -> Result<Frame>,
+    ) -> Result<bool> {
+        let (width, height) = self.size;
+        match self.preview.filter(|&k| changed && k > 1) {
+            Some(k) => {
+                let small = draw((width.div_ceil(k), height.div_ceil(k)))?;
+                *self.frame() = small.upscaled(width, height);
+                Ok(true)
+            }
+            None => {
+                *self.frame() = draw(self.size)?;
+                Ok(false)
+            }
+        }
     }
 
     /// The frame a CPU method draws the picture into (the picture's size; what was
@@ -291,23 +323,58 @@ impl Picture {
     }
 }
 
+/// The adapter the tests draw on; `None` (the test passes untried) only off CI on a
+/// machine without one.
+#[cfg(test)]
+pub(crate) fn test_gpu() -> Option<Gpu> {
+    match Gpu::new(None) {
+        Ok(gpu) => Some(gpu),
+        Err(GpuError::NoAdapter { .. }) if std::env::var("CI").as_deref() != Ok("true") => None,
+        Err(e) => panic!("GPU setup failed: {e}"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use atmo::image::ToneMap;
+
+    /// A picture that changed is drawn small and stretched where previews are allowed,
+    /// whole where not or once it stops changing.
+    #[test]
+    fn previews_are_drawn_small_while_the_picture_changes() {
+        let Some(gpu) = test_gpu() else { return };
+        let mut picture = Picture::new(&gpu, (10, 6)).unwrap();
+        let mut asked = Vec::new();
+        let mut draw = |picture: &mut Picture, changed| {
+            picture
+                .draw_cpu(changed, |size| {
+                    asked.push(size);
+                    let mut frame = Frame::new(size.0, size.1);
+                    frame.pixels.fill(glam::Vec3::splat(size.0 as f32));
+                    Ok(frame)
+                })
+                .unwrap()
+        };
+        picture.preview = Some(4);
+        assert!(draw(&mut picture, true), "a preview");
+        assert!(!draw(&mut picture, false), "whole once it stops changing");
+        picture.preview = None;
+        assert!(
+            !draw(&mut picture, true),
+            "whole where previews are not allowed"
+        );
+        assert_eq!(asked, [(3, 2), (10, 6), (10, 6)]);
+        let frame = &picture.cpu.as_ref().unwrap().frame;
+        assert_eq!((frame.width, frame.height), (10, 6));
+    }
 
     /// A frame drawn on the CPU reaches an 8-bit target as the still's PNG levels,
     /// copied or through the display pass, and is encoded again when it or the display
     /// changes.
     #[test]
     fn a_cpu_frame_reaches_the_target_as_the_stills_levels() {
-        let gpu = match Gpu::new(None) {
-            Ok(gpu) => gpu,
-            Err(GpuError::NoAdapter { .. }) if std::env::var("CI").as_deref() != Ok("true") => {
-                return;
-            }
-            Err(e) => panic!("GPU setup failed: {e}"),
-        };
+        let Some(gpu) = test_gpu() else { return };
         let (w, h) = (7, 3);
         let format = wgpu::TextureFormat::Bgra8Unorm;
         let target = gpu.device.create_texture(&wgpu::TextureDescriptor {

@@ -65,6 +65,8 @@ pub struct StageMode {
     on_gpu: bool,
     /// The scene changed since the picture was last drawn.
     dirty: bool,
+    /// The picture is a preview ([`Picture::preview`]), to be drawn whole.
+    coarse: bool,
     /// The last thing done to the file ("saved", "read again"), for the panel.
     status: Option<String>,
 }
@@ -94,6 +96,7 @@ impl StageMode {
             passes: None,
             on_gpu: false,
             dirty: true,
+            coarse: false,
             status: None,
         })
     }
@@ -501,7 +504,7 @@ impl Mode for StageMode {
         picture: &mut Picture,
     ) -> Result<bool> {
         self.resize(picture.size)?;
-        if !self.dirty {
+        if !self.dirty && !self.coarse {
             return Ok(false);
         }
         if self.on_gpu {
@@ -516,7 +519,16 @@ impl Mode for StageMode {
             shafts.prepare(gpu, encoder, pass, ShaftsMethod::Planes)?;
             picture.draw(encoder, |render| pass.draw(render));
         } else {
-            *picture.frame() = self.maps.render(&self.scene);
+            // A preview is the same scene through a camera of fewer pixels (the lens
+            // keeps its angles); the shadow maps do not depend on the camera.
+            let (scene, maps) = (&mut self.scene, &mut self.maps);
+            self.coarse = picture.draw_cpu(self.dirty, |(width, height)| {
+                let whole = (scene.camera.width, scene.camera.height);
+                (scene.camera.width, scene.camera.height) = (width, height);
+                let frame = maps.render(scene);
+                (scene.camera.width, scene.camera.height) = whole;
+                Ok(frame)
+            })?;
         }
         self.dirty = false;
         Ok(true)

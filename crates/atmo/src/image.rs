@@ -310,6 +310,39 @@ impl Frame {
             });
     }
 
+    /// The frame stretched to `width` x `height` by bilinear interpolation, pixel
+    /// centres on pixel centres (edges clamped), rows in parallel: a preview drawn at
+    /// a fraction of a window's size, shown at the window's.
+    pub fn upscaled(&self, width: u32, height: u32) -> Frame {
+        let (w, h) = (self.width as usize, self.height as usize);
+        // A coordinate of the target's pixel centre in the source's pixels: the two
+        // neighbours and the weight of the second.
+        let axis = |to: u32, from: usize| -> Vec<(usize, usize, f32)> {
+            (0..to)
+                .map(|i| {
+                    let x = ((i as f32 + 0.5) * from as f32 / to as f32 - 0.5)
+                        .clamp(0.0, (from - 1) as f32);
+                    let i0 = (x as usize).min(from - 1);
+                    (i0, (i0 + 1).min(from - 1), x - i0 as f32)
+                })
+                .collect()
+        };
+        let (xs, ys) = (axis(width, w), axis(height, h));
+        let mut out = Frame::new(width, height);
+        out.pixels
+            .par_chunks_mut(width as usize)
+            .zip(&ys)
+            .for_each(|(row, &(y0, y1, fy))| {
+                let (r0, r1) = (&self.pixels[y0 * w..][..w], &self.pixels[y1 * w..][..w]);
+                for (p, &(x0, x1, fx)) in row.iter_mut().zip(&xs) {
+                    let top = r0[x0].lerp(r0[x1], fx);
+                    let bottom = r1[x0].lerp(r1[x1], fx);
+                    *p = top.lerp(bottom, fy);
+                }
+            });
+        out
+    }
+
     /// Writes the frame to `path` (.png or .exr), atomically. A frame with a NaN or
     /// infinite value is refused, never written: no picture atmo writes holds one.
     pub fn write(&self, path: &Path, exposure: f32, tone: ToneMap) -> Result<()> {
@@ -546,6 +579,33 @@ mod tests {
         assert_eq!(&texels[0..4], &[0, 0, 0, 255]);
         frame.to_texels(&levels, TexelOrder::Bgra, &mut texels);
         assert_eq!(&texels[16..20], &[0, 188, 255, 255]);
+    }
+
+    #[test]
+    fn an_upscaled_frame_keeps_a_linear_ramp_and_the_values_at_the_centres() {
+        // A ramp in x and y: bilinear interpolation reproduces it exactly between the
+        // outermost centres, and clamps beyond them.
+        let mut small = Frame::new(4, 3);
+        for (k, p) in small.pixels.iter_mut().enumerate() {
+            let (x, y) = ((k % 4) as f32, (k / 4) as f32);
+            *p = Vec3::new(x, y, x + 10.0 * y);
+        }
+        let big = small.upscaled(16, 12);
+        assert_eq!((big.width, big.height), (16, 12));
+        for y in 0..12 {
+            for x in 0..16 {
+                // The big pixel's centre in the small frame's pixels.
+                let sx = ((x as f32 + 0.5) / 4.0 - 0.5).clamp(0.0, 3.0);
+                let sy = ((y as f32 + 0.5) / 4.0 - 0.5).clamp(0.0, 2.0);
+                let p = big.pixels[y * 16 + x];
+                assert!(
+                    (p - Vec3::new(sx, sy, sx + 10.0 * sy)).abs().max_element() < 1e-5,
+                    "{x} {y}: {p}"
+                );
+            }
+        }
+        // The same size: the frame itself.
+        assert_eq!(small.upscaled(4, 3), small);
     }
 
     #[test]

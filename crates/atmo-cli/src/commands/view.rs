@@ -128,6 +128,11 @@ struct WindowArgs {
     /// atmo sky, without --; stage: a key of the scene file as --set takes it, or time).
     #[arg(long, value_name = "FILE")]
     script: Option<PathBuf>,
+    /// While a picture drawn on the CPU keeps changing (a drag, a slider, a show
+    /// playing), draw it at 1/K of the window's size in each direction, and whole as
+    /// soon as it stops; 1 draws every frame whole (1-16).
+    #[arg(long, value_name = "K", default_value_t = 4)]
+    preview: u32,
 }
 
 pub fn run(args: ViewArgs) -> Result<()> {
@@ -163,6 +168,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             (Box::new(mode), size, args.window, args.device)
         }
     };
+    atmo::error::check_range("preview", window.preview as f64, 1.0, 16.0)?;
     if window.frames == Some(0) {
         return Err(Error::out_of_range("frames", 0.0, "[1, inf)").into());
     }
@@ -181,6 +187,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             Backend::Cpu => atmo_view::Backend::Cpu,
         },
         adapter: device.adapter,
+        preview: window.preview,
     };
     let timings = atmo_view::run(options, mode)?;
     if window.timings {
