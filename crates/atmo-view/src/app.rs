@@ -411,12 +411,13 @@ impl Running {
         if let Err(e) = drawn {
             self.refuse(e);
         }
+        self.show(encoder)?;
+        // After the frame's commands are submitted: a GPU picture is read back whole.
         if let Some(path) = self.shot.take() {
             if let Err(e) = self.screenshot(&path) {
                 self.refuse(e);
             }
         }
-        self.show(encoder)?;
         let now = Instant::now();
         if let Some(last) = self.last_frame.replace(now) {
             self.frame_ms = (now - last).as_secs_f64() * 1e3;
@@ -474,7 +475,8 @@ impl Running {
         Ok(())
     }
 
-    /// The picture on the surface through the display pass, the panel over it.
+    /// The picture on the surface (a CPU frame's levels copied, or the texture through
+    /// the display pass), the panel over it; the frame's commands submitted.
     fn show(&mut self, mut encoder: wgpu::CommandEncoder) -> Result<()> {
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
