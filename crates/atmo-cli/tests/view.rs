@@ -151,7 +151,9 @@ fn scripted_windows_give_the_pictures_of_their_still_commands() {
     for backend in backends {
         // From the table: the sun moved by a panel edit and a key, the camera dragged.
         let name = format!("table-{backend}");
-        let script = "1 set sun-elevation 6\n1 drag 30 -10\n2 key right\n";
+        // E at frame 2 saves that frame's picture, the sun's move in it (drawn and,
+        // on the GPU, submitted before it is read back): the last frame's.
+        let script = "1 set sun-elevation 6\n1 drag 30 -10\n2 key right\n2 key e\n";
         let args = [
             "--table",
             table,
@@ -171,6 +173,12 @@ fn scripted_windows_give_the_pictures_of_their_still_commands() {
         ] {
             assert!(still.contains(flag), "{name}: {flag} missing from {still}");
         }
+        let key_shot = Frame::read_exr(&dir.join("atmo-view-0002.exr")).unwrap();
+        let last = Frame::read_exr(&dir.join(format!("{name}.exr"))).unwrap();
+        assert!(
+            key_shot.pixels == last.pixels,
+            "{name}: the E key's picture is not the last frame's"
+        );
         // By the shell method: a climb rebuilds the model at the new altitude.
         let name = format!("shells-{backend}");
         let coarse = COARSE_SHELLS;
@@ -350,8 +358,8 @@ fn a_refused_stage_edit_keeps_the_last_good_scene_and_save_writes_the_file() {
     let scene = dir.join("lamp.toml");
     let text = std::fs::read_to_string(scenes().join("spotlight-sphere.toml")).unwrap();
     std::fs::write(&scene, &text).unwrap();
-    let script = "1 set spotlight[0].intensity -5\n2 set spotlight[0].intensity 900\n3 key s\n\
-                  4 key e\n";
+    let script = "1 set spotlight[0].intensity -5\n2 set spotlight[0].intensity 900\n2 key s\n\
+                  3 drag 6 0\n3 key e\n";
     let Some(o) = stage_run(&dir, "save", &scene, &["--backend", "cpu"], script) else {
         return;
     };
@@ -363,15 +371,19 @@ fn a_refused_stage_edit_keeps_the_last_good_scene_and_save_writes_the_file() {
     let comments = |t: &str| t.lines().filter(|l| l.contains('#')).count();
     assert_eq!(comments(&saved), comments(&text));
     assert!(saved.contains("shadow_map = 128"), "{saved}");
-    // The still command is the saved file at the window's size, nothing more.
+    // The still command is the saved file at the window's size with the camera's move
+    // after it: the intensity is the file's.
     let display = atmo::shafts::Scene::from_file(&scene).unwrap().display;
     let still = matches_its_still(&dir, "save", &o, "shafts", display);
-    // E saved the picture of frame 4 as linear radiance: the last frame's (nothing
-    // changed after it).
-    let key_shot = Frame::read_exr(&dir.join("atmo-view-0004.exr")).unwrap();
+    // E saved the picture of frame 3 as linear radiance, whole though the camera moved
+    // in that frame (a preview otherwise): the last frame's (nothing changed after it).
+    let key_shot = Frame::read_exr(&dir.join("atmo-view-0003.exr")).unwrap();
     let last = Frame::read_exr(&dir.join("save.exr")).unwrap();
     assert_eq!(key_shot.pixels, last.pixels);
-    assert!(!still.contains("intensity"), "{still}");
+    assert!(
+        !still.contains("intensity") && still.contains("camera.position"),
+        "{still}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
