@@ -555,19 +555,15 @@ pub(crate) fn target_texture(
         height: h,
         depth_or_array_layers: 1,
     };
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("target"),
-        size,
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba32Float,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+    let texture = gpu.texture_2d(
+        "target",
+        (w, h),
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC
             | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    );
     let pixels: Vec<[f32; 4]> = match background {
         Some(b) => b.pixels.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect(),
         None => vec![[0.0; 4]; (w * h) as usize],

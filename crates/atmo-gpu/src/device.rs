@@ -160,6 +160,31 @@ impl Gpu {
             }))
     }
 
+    /// A 2-D texture of `width` x `height` in `format` for `usage` (one mip level, one
+    /// sample): the pictures, targets, tables and layers atmo's passes make.
+    pub fn texture_2d(
+        &self,
+        label: &str,
+        (width, height): (u32, u32),
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+    ) -> wgpu::Texture {
+        self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    }
+
     /// An R32 float texture of `width` x `rows` holding `values` row after row, for
     /// shaders to sample (`label` names it in the device's messages).
     pub fn float_texture(
@@ -174,16 +199,12 @@ impl Gpu {
             height: rows,
             depth_or_array_layers: 1,
         };
-        let texture = self.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R32Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
+        let texture = self.texture_2d(
+            label,
+            (width, rows),
+            wgpu::TextureFormat::R32Float,
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        );
         self.queue.write_texture(
             texture.as_image_copy(),
             bytemuck::cast_slice(values),

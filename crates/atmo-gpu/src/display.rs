@@ -209,23 +209,15 @@ pub fn picture_texture(gpu: &Gpu, width: u32, height: u32) -> Result<wgpu::Textu
     for side in [width, height] {
         gpu.check_texture_side("the picture", side, "the picture's size")?;
     }
-    Ok(gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("the picture"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba32Float,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+    Ok(gpu.texture_2d(
+        "the picture",
+        (width, height),
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC
             | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    }))
+    ))
 }
 
 /// Writes a CPU `frame` into a [`picture_texture`] of its size (alpha 1): how a

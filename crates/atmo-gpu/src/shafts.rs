@@ -243,20 +243,12 @@ impl GpuShafts {
             "the number of lights",
         )?;
         let n = AttenuationTable::SIZE as u32;
-        let attenuation_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("the attenuation table"),
-            size: wgpu::Extent3d {
-                width: n,
-                height: n,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R32Float,
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let attenuation_texture = gpu.texture_2d(
+            "the attenuation table",
+            (n, n),
+            wgpu::TextureFormat::R32Float,
+            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let attenuation_view = attenuation_texture.create_view(&Default::default());
         let pixels = w as u64 * h as u64;
         let ends = gpu.output(
@@ -326,20 +318,12 @@ impl GpuShafts {
         )?;
         let map_texture =
             gpu.float_texture("the light maps", &maps, LightMap::SIZE as u32, map_rows);
-        let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("the planes"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let target = gpu.texture_2d(
+            "the planes",
+            (w, h),
+            wgpu::TextureFormat::Rgba32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let phase_view = phase_texture.create_view(&Default::default());
         let map_view = map_texture.create_view(&Default::default());
         let [group, render_group] =

@@ -1000,20 +1000,12 @@ fn picture(
     for side in [width, height] {
         gpu.check_texture_side("the sky frame", side, "the image size")?;
     }
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("the sky frame"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: SkyTarget::HEADLESS.format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let texture = gpu.texture_2d(
+        "the sky frame",
+        (width, height),
+        SkyTarget::HEADLESS.format,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
     let target = texture.create_view(&Default::default());
     let mut prepared = Ok(());
     let gpu_ms = gpu.run("the sky frame", |encoder| {

@@ -117,22 +117,7 @@ fn draw_embedded(
     pass.exposure = 0.5;
     pass.corner = [8, 4];
     let (w, h) = (view.camera.width + 16, view.camera.height + 8);
-    let texture = |format, usage| {
-        gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
+    let texture = |format, usage| gpu.texture_2d("the target", (w, h), format, usage);
     let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
     let colour = texture(target.format, attachment | wgpu::TextureUsages::COPY_SRC);
     let depth_texture = texture(wgpu::TextureFormat::Depth32Float, attachment);

@@ -49,20 +49,12 @@ impl PanelLayer {
             })],
             None,
         )?;
-        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("the panel layer"),
-            size: wgpu::Extent3d {
-                width: size.0,
-                height: size.1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
+        let texture = gpu.texture_2d(
+            "the panel layer",
+            (size.0, size.1),
             format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let view = texture.create_view(&Default::default());
         let group = gpu.bind_group(
             &pipeline.get_bind_group_layout(0),

@@ -155,7 +155,7 @@ pub struct Picture {
 /// changed: an idle frame re-sends them), or the f32 texture.
 struct CpuFrame {
     frame: Frame,
-    /// The texels of `frame` under `levels`, unless `drawn` since.
+    /// The texels of `frame` under `levels`, unless `texels_stale`.
     texels: Vec<u8>,
     levels: Option<Levels>,
     /// The frame was drawn since its texels were made / since it was uploaded.
@@ -377,22 +377,14 @@ mod tests {
         let Some(gpu) = test_gpu() else { return };
         let (w, h) = (7, 3);
         let format = wgpu::TextureFormat::Bgra8Unorm;
-        let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("a window's surface, as a test makes one"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
+        let target = gpu.texture_2d(
+            "a window's surface, as a test makes one",
+            (w, h),
             format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_DST
                 | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        );
         let mut display = DisplayPass::new(&gpu, format).unwrap();
         let mut picture = Picture::new(&gpu, (w, h)).unwrap();
         let fill = |picture: &mut Picture, scale: f32| {
