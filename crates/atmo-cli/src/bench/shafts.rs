@@ -139,13 +139,74 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
         ),
     );
 
-    let (stage_ms, _) = time_planes(&stage, runs);
+    // The same with the scattered light computed only where the picture needs it.
+    let adaptive_fig6 = adaptive(&fig6);
+    let (adaptive_ms, adaptive_frame) = time_planes(&adaptive_fig6, runs);
+    let (_, counts) = SamplePlanes::new(&adaptive_fig6).render_counted();
+    let adaptive_error = adaptive_frame.level_errors(&reference, fig6.display)?;
+    let [adaptive_surface, adaptive_haze] = [&surface, &haze].map(|pixels| {
+        adaptive_frame.level_errors_over(&reference, fig6.display, pixels.iter().copied())
+    });
+    let against_planes = adaptive_frame.level_errors(&frame, fig6.display)?;
+    let computed = counts.computed as f64 / (counts.computed + counts.interpolated) as f64;
+    emit(
+        json,
+        json!({"bench": "shafts.fig6-adaptive", "params": {"adaptive": true, "planes": params(&fig6)},
+               "median_ms": adaptive_ms, "baseline": "shafts.ray-march", "baseline_median_ms": baseline_ms,
+               "ratio": baseline_ms / adaptive_ms, "planes_ratio": ms / adaptive_ms,
+               "computed_share": computed,
+               "error": {"rms_levels": adaptive_error.rms, "max_levels": adaptive_error.max,
+                         "surface": kind(&surface, &adaptive_surface), "haze": kind(&haze, &adaptive_haze)},
+               "error_vs_every_pixel": {"rms_levels": against_planes.rms, "max_levels": against_planes.max}}),
+        format!(
+            "shafts.fig6-adaptive {adaptive_ms:>8.2} ms   ratio {:>6.1} (every pixel's time / this: {:.2})   \
+             scattered light computed at {:.1} % of the pixels\n\
+             error rms {:.3} max {:.2} levels (surfaces rms {:.3} max {:.2}, haze rms {:.3} max {:.2}); \
+             against every pixel computed: rms {:.3} max {:.2}",
+            baseline_ms / adaptive_ms,
+            ms / adaptive_ms,
+            100.0 * computed,
+            adaptive_error.rms,
+            adaptive_error.max,
+            adaptive_surface.rms,
+            adaptive_surface.max,
+            adaptive_haze.rms,
+            adaptive_haze.max,
+            against_planes.rms,
+            against_planes.max,
+        ),
+    );
+
+    let (stage_ms, stage_frame) = time_planes(&stage, runs);
     emit(
         json,
         json!({"bench": "shafts.stage", "params": params(&stage), "median_ms": stage_ms}),
         format!(
             "shafts.stage  {stage_ms:>8.2} ms   ({} lights)",
             stage.lights.len()
+        ),
+    );
+
+    let adaptive_stage = adaptive(&stage);
+    let (stage_adaptive_ms, stage_adaptive_frame) = time_planes(&adaptive_stage, runs);
+    let stage_against = stage_adaptive_frame.level_errors(&stage_frame, stage.display)?;
+    let (_, stage_counts) = SamplePlanes::new(&adaptive_stage).render_counted();
+    let stage_computed =
+        stage_counts.computed as f64 / (stage_counts.computed + stage_counts.interpolated) as f64;
+    emit(
+        json,
+        json!({"bench": "shafts.stage-adaptive", "params": {"adaptive": true, "planes": params(&stage)},
+               "median_ms": stage_adaptive_ms, "baseline": "shafts.stage", "baseline_median_ms": stage_ms,
+               "ratio": stage_ms / stage_adaptive_ms, "computed_share": stage_computed,
+               "error_vs_every_pixel": {"rms_levels": stage_against.rms, "max_levels": stage_against.max}}),
+        format!(
+            "shafts.stage-adaptive {stage_adaptive_ms:>8.2} ms   ratio to every pixel {:.2}   \
+             scattered light computed at {:.1} % of the pixels; \
+             against every pixel computed: rms {:.3} max {:.2} levels",
+            stage_ms / stage_adaptive_ms,
+            100.0 * stage_computed,
+            stage_against.rms,
+            stage_against.max,
         ),
     );
 
@@ -193,6 +254,13 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
     );
 
     sweep_planes(&fig6, &reference, quick, json, sweep)
+}
+
+/// `scene` with the scattered light computed only where the picture needs it.
+fn adaptive(scene: &Scene) -> Scene {
+    let mut scene = scene.clone();
+    scene.planes.adaptive = true;
+    scene
 }
 
 /// The most samples a ray [`equal_error`] tries (about 30 times the baseline's time).

@@ -60,6 +60,10 @@ pub struct ShaftsArgs {
     /// Shadow map texels along a side (overrides render.shadow_map).
     #[arg(long)]
     shadow_map: Option<u32>,
+    /// Compute the scattered light only where the picture needs it and interpolate
+    /// between (sets render.adaptive; the CPU method: the GPU draws every pixel).
+    #[arg(long)]
+    adaptive: bool,
     /// Rays per pixel along each axis (overrides camera.supersampling).
     #[arg(long)]
     supersampling: Option<u32>,
@@ -138,6 +142,7 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         )
         .collect();
     atmo::files::check_distinct(&args.output, &inputs)?;
+    scene.planes.adaptive |= args.adaptive;
     if let Some(k) = args.supersampling {
         atmo::error::check_range("--supersampling", k as f64, 1.0, 16.0)?;
         scene.camera.supersampling = k;
@@ -161,6 +166,9 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
     } else {
         args.device.open()?
     };
+    if gpu.is_some() && scene.planes.adaptive {
+        eprintln!("atmo: the GPU draws the scattered light at every pixel; render.adaptive applies to the CPU method");
+    }
     if args.animate {
         return animate(&args, scene, display, gpu.as_ref());
     }
@@ -203,10 +211,19 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
     } else {
         let planes = SamplePlanes::new(&scene);
         let prepared_ms = start.elapsed().as_secs_f64() * 1e3;
-        (
-            planes.render(),
+        let (frame, counts) = planes.render_counted();
+        let adaptive = if scene.planes.adaptive {
             format!(
-                "{} planes x {} sub-planes, {}^2 shadow maps (built in {prepared_ms:.1} ms)",
+                ", scattered light computed at {:.1} % of the pixels",
+                100.0 * counts.computed as f64 / (counts.computed + counts.interpolated) as f64
+            )
+        } else {
+            String::new()
+        };
+        (
+            frame,
+            format!(
+                "{} planes x {} sub-planes, {}^2 shadow maps (built in {prepared_ms:.1} ms){adaptive}",
                 scene.planes.planes, scene.planes.sub_planes, scene.planes.shadow_map
             ),
         )

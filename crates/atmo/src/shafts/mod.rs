@@ -28,6 +28,7 @@
 //! - [`surface`]: the first term of shafts (1), shared by the fast method and the
 //!   reference ([`crate::reference::shafts`]).
 
+pub mod adaptive;
 pub mod edits;
 pub mod gdtf;
 pub mod haze;
@@ -62,6 +63,9 @@ pub struct PlaneSettings {
     pub sub_planes: u32,
     /// Texels along each side of a light's shadow map.
     pub shadow_map: u32,
+    /// Whether the CPU computes the scattered light only where the picture needs it
+    /// and interpolates between ([`adaptive`]); the paper's method computes every pixel.
+    pub adaptive: bool,
 }
 
 impl Default for PlaneSettings {
@@ -71,6 +75,7 @@ impl Default for PlaneSettings {
             planes: 30,
             sub_planes: 6,
             shadow_map: 512,
+            adaptive: false,
         }
     }
 }

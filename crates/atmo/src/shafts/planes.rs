@@ -11,7 +11,9 @@
 //! whose answer is known beforehand: a min-max chain over each shadow map tells a plane's
 //! slice of sixteen rays wholly lit or wholly dark, and the beam's core has profile 1
 //! (see `SamplePlanes::scattered`). The result is the same sum, to the bit; the work
-//! follows the lit part of each ray.
+//! follows the lit part of each ray. With [`PlaneSettings::adaptive`] the CPU goes
+//! further than the paper: the scattered light is computed where the picture changes
+//! and interpolated between ([`super::adaptive`]).
 //!
 //! For light `l`, with planes at camera depths `z_i = z_near + (i + 1/2) dz`
 //! (`i < n`) and sub-planes at `z_ij = z_near + (i + (j + 1/2)/m) dz` (`j < m`), a
@@ -33,7 +35,7 @@ use super::shadow_map::{ShadowMap, Stretch};
 use super::spotlight::{Gobo, Spotlight};
 use super::surface::{first_hit, shadow_ray, surface_radiance, SurfacePoint};
 use super::tables::{AttenuationTable, PhaseTable};
-use super::Scene;
+use super::{adaptive, PlaneSettings, Scene};
 use crate::fast::interleaved_offset;
 use crate::geometry::Aabb;
 use crate::image::Frame;
@@ -59,6 +61,62 @@ pub struct LightPlanes<'a> {
     lamp_in_haze: bool,
     /// The eye in the light's space: where every camera ray starts.
     eye: Vec3,
+}
+
+impl LightPlanes<'_> {
+    /// Where a camera ray along the unit `dir` can be lit by `light` before `end`, m
+    /// from the eye: inside the field cone, the lit volume's box and the haze.
+    fn lit_stretch(
+        &self,
+        scene: &Scene,
+        light: &Spotlight,
+        dir: Vec3,
+        end: f32,
+    ) -> Option<(f32, f32)> {
+        let eye = scene.camera.position;
+        self.bounds
+            .clip(eye, dir.recip(), 0.0, end)
+            .and_then(|(a, b)| light.cone_interval(eye, dir, a, b))
+            .and_then(|(a, b)| scene.haze.clip(eye, dir, a, b))
+    }
+
+    /// The spacing of the light's sub-sample planes, m of camera depth.
+    fn sub_spacing(&self, settings: &PlaneSettings) -> f32 {
+        (self.z_far - self.z_near) / (settings.planes * settings.sub_planes) as f32
+    }
+}
+
+/// The tolerance of [`PlaneSettings::adaptive`] for a picture shown at `exposure`:
+/// corners' contrast 0.25, 1 % at the centre, of values plus a radiance of 0.01 after
+/// the exposure (level 25 of 255 in sRGB). Chosen with `atmo bench shafts` on the
+/// Fig. 6 scene and the stage (docs/shafts.md): halving the 1 % changed the error
+/// against the converged reference by 0.01 levels RMS at most and cost some 15 %
+/// more time (single runs on a shared host).
+fn adaptive_tolerance(exposure: f32) -> adaptive::Tolerance {
+    adaptive::Tolerance {
+        contrast: 0.25,
+        relative: 0.01,
+        floor: 0.01 / exposure,
+    }
+}
+
+/// How near a lamp's image (pixels, in x and in y) [`PlaneSettings::adaptive`]
+/// computes every pixel.
+const LAMP_REACH: f32 = 2.5;
+
+/// Where `point` shows in `camera`'s picture, pixels from the top-left corner; `None`
+/// behind the camera or through a fisheye (the plane method draws through a pinhole).
+fn camera_pixel(camera: &crate::view::Camera, point: Vec3) -> Option<(f32, f32)> {
+    let (tw, th) = camera.pinhole("").ok()?;
+    let d = point - camera.position;
+    let z = d.dot(camera.forward);
+    (z > 0.0).then(|| {
+        let (sx, sy) = (d.dot(camera.right) / (z * tw), d.dot(camera.up) / (z * th));
+        (
+            (sx + 1.0) * 0.5 * camera.width as f32,
+            (1.0 - sy) * 0.5 * camera.height as f32,
+        )
+    })
 }
 
 /// Everything the plane method prepares once a frame: shadow maps, the lit volumes'
@@ -178,77 +236,192 @@ impl<'a> SamplePlanes<'a> {
         }
     }
 
-    /// The picture: surfaces lit through shadow maps plus the scattered light. Rows in
-    /// parallel; within a row, [`LANES`] neighbouring pixels go through the sub-samples
-    /// together (see `SamplePlanes::scattered`).
+    /// The picture: surfaces lit through shadow maps plus the scattered light. Surfaces
+    /// pixel by pixel; the scattered light at every pixel or, with
+    /// [`PlaneSettings::adaptive`], where [`adaptive::refine`]
+    /// asks for it, [`LANES`] pixels at a time (see `SamplePlanes::scattered`); both
+    /// over both cores.
     pub fn render(&self) -> Frame {
+        self.render_counted().0
+    }
+
+    /// [`SamplePlanes::render`], and how many pixels' scattered light was computed and
+    /// how many interpolated (summed over the rays of a pixel).
+    pub fn render_counted(&self) -> (Frame, adaptive::Counts) {
         let camera = &self.scene.camera;
-        let width = camera.width as usize;
-        let mut frame = Frame::new(camera.width, camera.height);
+        let (width, height) = (camera.width, camera.height);
+        let n = (width * height) as usize;
+        let mut frame = Frame::new(width, height);
         let subpixels = camera.subpixel_offsets();
         let weight = 1.0 / subpixels.len() as f32;
-        frame
-            .pixels
-            .par_chunks_mut(width)
+        let mut counts = adaptive::Counts::default();
+        for &(dx, dy) in &subpixels {
+            let ray = |p: u32| camera.ray((p % width) as f32 + dx, (p / width) as f32 + dy);
+            let pass = if self.scene.planes.adaptive {
+                self.add_adaptive(&ray, &mut frame.pixels)
+            } else {
+                // Rows in parallel, each LANES pixels at a time.
+                frame
+                    .pixels
+                    .par_chunks_mut(width as usize)
+                    .enumerate()
+                    .for_each(|(y, row)| {
+                        let first = y as u32 * width;
+                        for (k, out) in row.chunks_mut(LANES).enumerate() {
+                            let start = first + (k * LANES) as u32;
+                            let (rays, offsets) =
+                                lanes_of(start..start + out.len() as u32, ray, width);
+                            let mut ends = [0.0f32; LANES];
+                            for l in 0..out.len() {
+                                let (surface, end) = self.surface(rays[l]);
+                                (out[l], ends[l]) = (out[l] + surface, end);
+                            }
+                            let count = out.len();
+                            self.scattered_rays(&rays[..count], &offsets[..count], &ends, out);
+                        }
+                    });
+                adaptive::Counts {
+                    computed: n,
+                    interpolated: 0,
+                }
+            };
+            counts.computed += pass.computed;
+            counts.interpolated += pass.interpolated;
+        }
+        for pixel in frame.pixels.iter_mut() {
+            *pixel *= weight;
+        }
+        (frame, counts)
+    }
+
+    /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`, the
+    /// surfaces computed at every pixel, the scattered light by [`adaptive::refine`].
+    fn add_adaptive(
+        &self,
+        ray: &(impl Fn(u32) -> Vec3 + Sync),
+        pixels: &mut [Vec3],
+    ) -> adaptive::Counts {
+        let width = self.scene.camera.width;
+        let mut surfaces = vec![(Vec3::ZERO, 0.0f32); pixels.len()];
+        surfaces
+            .par_iter_mut()
             .enumerate()
-            .for_each(|(y, row)| {
-                let shifts: Vec<f32> = (0..width)
-                    .map(|x| interleaved_offset(x as u32, y as u32))
-                    .collect();
-                let mut rays = vec![Vec3::ZERO; width];
-                let mut radiance = vec![Vec3::ZERO; width];
-                for (dx, dy) in &subpixels {
-                    for (x, ray) in rays.iter_mut().enumerate() {
-                        *ray = camera.ray(x as f32 + dx, y as f32 + dy);
+            .for_each(|(p, s)| *s = self.surface(ray(p as u32)));
+        let compute = |list: &[u32], out: &mut [Vec3]| {
+            list.par_chunks(LANES)
+                .zip(out.par_chunks_mut(LANES))
+                .with_min_len(16)
+                .for_each(|(list, out)| {
+                    let (rays, offsets) = lanes_of(list.iter().copied(), ray, width);
+                    let mut ends = [0.0f32; LANES];
+                    for (end, &p) in ends.iter_mut().zip(list) {
+                        *end = surfaces[p as usize].1;
                     }
-                    self.radiance_row(&rays, &shifts, &mut radiance);
-                    for (pixel, r) in row.iter_mut().zip(&radiance) {
-                        *pixel += *r;
-                    }
-                }
-                for pixel in row.iter_mut() {
-                    *pixel *= weight;
-                }
-            });
-        frame
+                    let count = list.len();
+                    out.fill(Vec3::ZERO);
+                    self.scattered_rays(&rays[..count], &offsets[..count], &ends, out);
+                });
+        };
+        let (scattered, counts) = self.scattered_adaptive(&surfaces, compute);
+        for ((pixel, (surface, _)), s) in pixels.iter_mut().zip(&surfaces).zip(scattered) {
+            *pixel += *surface + s;
+        }
+        counts
+    }
+
+    /// The scattered light of every pixel by [`adaptive::refine`] (and its counts),
+    /// computing with `compute`. The guard lets a pixel take its corners'
+    /// interpolation only where its ray ends (on a surface or at the far plane,
+    /// `surfaces`) where interpolating the corners' ends puts it, within the tolerance
+    /// or one sub-sample spacing (an object's silhouette cuts the haze in front of it
+    /// short, and a thin one, a truss or a stand, passes between corners), and not
+    /// near a lamp's image: within [`LAMP_REACH`] pixels, where `1/s^2` peaks inside
+    /// one pixel, and as far again as the beam is narrower than a cell (a beam seen
+    /// across opens by `tan(field / 2)` a pixel of distance from its apex).
+    fn scattered_adaptive(
+        &self,
+        surfaces: &[(Vec3, f32)],
+        compute: impl Fn(&[u32], &mut [Vec3]),
+    ) -> (Vec<Vec3>, adaptive::Counts) {
+        let scene = self.scene;
+        let spacing = self
+            .lights
+            .iter()
+            .map(|planes| planes.sub_spacing(&scene.planes))
+            .fold(f32::INFINITY, f32::min);
+        let tolerance = adaptive_tolerance(scene.display.exposure);
+        let camera = &scene.camera;
+        let lamps: Vec<(f32, f32, f32)> = scene
+            .lights
+            .iter()
+            .filter_map(|light| {
+                let (x, y) = camera_pixel(camera, light.position)?;
+                Some((
+                    x,
+                    y,
+                    LAMP_REACH + adaptive::COARSEST as f32 / light.tan_field(),
+                ))
+            })
+            .collect();
+        let width = camera.width;
+        let guard = |p: u32, corners: [u32; 4], weights: [f32; 4]| {
+            let (x, y) = ((p % width) as f32 + 0.5, (p / width) as f32 + 0.5);
+            if lamps
+                .iter()
+                .any(|(lx, ly, reach)| (x - lx).abs().max((y - ly).abs()) <= *reach)
+            {
+                return false;
+            }
+            let end = surfaces[p as usize].1;
+            let estimate: f32 = corners
+                .iter()
+                .zip(weights)
+                .map(|(&c, w)| w * surfaces[c as usize].1)
+                .sum();
+            (end - estimate).abs() <= tolerance.relative * end + spacing
+        };
+        adaptive::refine((camera.width, camera.height), tolerance, compute, guard)
     }
 
     /// The radiance along one camera ray (unit length along the view axis), its
     /// sub-sample planes shifted by `offset` in [0, 1) of their spacing (1/2: the
     /// paper's, centred in their slices).
     pub fn radiance(&self, ray: Vec3, offset: f32) -> Vec3 {
+        let (surface, end) = self.surface(ray);
         let mut out = [Vec3::ZERO];
-        self.radiance_row(&[ray], &[offset], &mut out);
-        out[0]
+        self.scattered_rays(&[ray], &[offset], &[end; LANES], &mut out);
+        surface + out[0]
     }
 
-    /// [`SamplePlanes::radiance`] of each ray of `rays` with its `offsets`, into `out`.
-    fn radiance_row(&self, rays: &[Vec3], offsets: &[f32], out: &mut [Vec3]) {
+    /// The light a camera ray (unit length along the view axis) gets from the surface it
+    /// meets, and how far it goes before it meets it (the far plane if none), m.
+    fn surface(&self, ray: Vec3) -> (Vec3, f32) {
         let scene = self.scene;
-        for ((rays, offsets), out) in rays
-            .chunks(LANES)
-            .zip(offsets.chunks(LANES))
-            .zip(out.chunks_mut(LANES))
-        {
-            // Surfaces, and where each ray ends.
-            let mut ends = [0.0f32; LANES];
-            for ((ray, out), end) in rays.iter().zip(out.iter_mut()).zip(&mut ends) {
-                let length = ray.length();
-                let hit = first_hit(scene, *ray / length, scene.camera.far * length);
-                *out = match &hit {
-                    Some(point) => {
-                        surface_radiance(scene, point, |k, light| self.visibility(k, light, point))
-                    }
-                    None => Vec3::ZERO,
-                };
-                *end = hit.map_or(scene.camera.far * length, |p| p.distance);
-            }
-            for (light, planes) in scene.lights.iter().zip(&self.lights) {
-                let lanes = Lanes::new(self, light, planes, rays, offsets, &ends);
-                let scattered = self.scattered(light, planes, &lanes);
-                for (out, s) in out.iter_mut().zip(scattered) {
-                    *out += s;
-                }
+        let length = ray.length();
+        let far = scene.camera.far * length;
+        match first_hit(scene, ray / length, far) {
+            Some(point) => (
+                surface_radiance(scene, &point, |k, light| self.visibility(k, light, &point)),
+                point.distance,
+            ),
+            None => (Vec3::ZERO, far),
+        }
+    }
+
+    /// Adds the light scattered toward the eye along `rays` (at most [`LANES`]; with
+    /// their sub-sample `offsets` and `ends`, m) to `out`, light by light.
+    fn scattered_rays(
+        &self,
+        rays: &[Vec3],
+        offsets: &[f32],
+        ends: &[f32; LANES],
+        out: &mut [Vec3],
+    ) {
+        for (light, planes) in self.scene.lights.iter().zip(&self.lights) {
+            let lanes = Lanes::new(self, light, planes, rays, offsets, ends);
+            let scattered = self.scattered(light, planes, &lanes);
+            for (out, s) in out.iter_mut().zip(scattered) {
+                *out += s;
             }
         }
     }
@@ -397,6 +570,21 @@ impl<'a> SamplePlanes<'a> {
     }
 }
 
+/// The rays `ray(p)` of up to [`LANES`] pixels `p` of a picture `width` wide, and their
+/// sub-sample offsets ([`interleaved_offset`]).
+fn lanes_of(
+    pixels: impl Iterator<Item = u32>,
+    ray: impl Fn(u32) -> Vec3,
+    width: u32,
+) -> ([Vec3; LANES], [f32; LANES]) {
+    let (mut rays, mut offsets) = ([Vec3::ZERO; LANES], [0.0f32; LANES]);
+    for (l, p) in pixels.enumerate() {
+        rays[l] = ray(p);
+        offsets[l] = interleaved_offset(p % width, p / width);
+    }
+    (rays, offsets)
+}
+
 /// Pixels that go through the sub-samples together: the width of the vector loops.
 pub const LANES: usize = 16;
 
@@ -474,12 +662,7 @@ impl Lanes {
                 lanes.offset[l],
             ) = (*ray, length, 1.0 / length, *offset);
             (lanes.step[0][l], lanes.step[1][l], lanes.step[2][l]) = (step.x, step.y, step.z);
-            let Some((ta, tb)) = planes
-                .bounds
-                .clip(eye, dir.recip(), 0.0, ends[l])
-                .and_then(|(a, b)| light.cone_interval(eye, dir, a, b))
-                .and_then(|(a, b)| haze.clip(eye, dir, a, b))
-            else {
+            let Some((ta, tb)) = planes.lit_stretch(scene, light, dir, ends[l]) else {
                 continue;
             };
             // A point in the (convex) haze at distance t has t - entry of its path to

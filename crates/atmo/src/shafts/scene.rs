@@ -297,6 +297,8 @@ struct RenderSpec {
     sub_planes: u32,
     #[serde(default = "default_shadow_map")]
     shadow_map: u32,
+    #[serde(default)]
+    adaptive: bool,
 }
 
 fn default_planes() -> u32 {
@@ -315,6 +317,7 @@ impl Default for RenderSpec {
             planes: default_planes(),
             sub_planes: default_sub_planes(),
             shadow_map: default_shadow_map(),
+            adaptive: false,
         }
     }
 }
@@ -504,6 +507,7 @@ impl Scene {
             planes: spec.render.planes,
             sub_planes: spec.render.sub_planes,
             shadow_map: spec.render.shadow_map,
+            adaptive: spec.render.adaptive,
         };
         check_positive("display.exposure", spec.display.exposure as f64, 1e12)?;
         let display = Display {
