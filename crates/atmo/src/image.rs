@@ -97,11 +97,12 @@ impl Display {
 pub struct Levels {
     display: Display,
     /// The bits of the least value shown at level `k` (for `k` in 1..=255), 0 for
-    /// level 0, and `u32::MAX` past 255.
-    starts: [u32; 257],
+    /// level 0, and `u32::MAX` past 255 (twice: the two steps of a lookup then need
+    /// no bounds check, nor does the bucket's index into an array of its size).
+    starts: [u32; 258],
     /// The level of each bucket's least value: bucket `b` holds the values whose bits
     /// shifted by [`Levels::SHIFT`] are `b`.
-    buckets: Vec<u8>,
+    buckets: Box<[u8; Levels::BUCKETS]>,
 }
 
 impl Levels {
@@ -109,11 +110,13 @@ impl Levels {
     const SHIFT: u32 = 15;
     /// The bits of +infinity: every non-negative value's bits are at most these.
     const INFINITY: u32 = 0x7f80_0000;
+    /// Buckets up to infinity's.
+    const BUCKETS: usize = (Self::INFINITY >> Self::SHIFT) as usize + 1;
 
     /// The table of `display` (a fraction of a millisecond to make).
     pub fn new(display: Display) -> Self {
         let level = |bits: u32| Self::exact(display, f32::from_bits(bits));
-        let mut starts = [u32::MAX; 257];
+        let mut starts = [u32::MAX; 258];
         starts[0] = 0;
         for k in 1..=255u32 {
             // The least bits shown at `k` or above, by bisection between the last start
@@ -132,7 +135,7 @@ impl Levels {
             }
             starts[k as usize] = low;
         }
-        let mut buckets = vec![0u8; (Self::INFINITY >> Self::SHIFT) as usize + 1];
+        let mut buckets = Box::new([0u8; Self::BUCKETS]);
         let mut k = 0;
         for (b, bucket) in buckets.iter_mut().enumerate() {
             let first = (b as u32) << Self::SHIFT;

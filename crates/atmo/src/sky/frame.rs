@@ -96,8 +96,9 @@ impl RgbGrid {
     }
 
     /// Bilinear interpolation at (azimuth from the sun in [0, pi], elevation), rad,
-    /// clamped to the grid.
-    #[inline]
+    /// clamped to the grid. (Inlined always: left to itself the compiler calls it
+    /// once a pixel from the shading loop.)
+    #[inline(always)]
     fn sample(&self, azimuth: f32, elevation: f32) -> Vec3A {
         let g = &self.lookup;
         let x = (azimuth * g.x_scale).clamp(0.0, g.x_last);
