@@ -5,17 +5,18 @@
 //! interpolated.
 //!
 //! The picture is covered by cells whose corners are computed, first [`COARSEST`]
-//! pixels apart. Each cell's centre is computed too and compared with the bilinear
-//! interpolation of the corners: where they agree within the tolerance ([`Tolerance`]),
-//! the cell's other pixels are interpolated, each only if the caller's guard allows it
-//! (for the shafts: every light's lit stretch of the pixel's ray is what interpolating
-//! the corners' gives, so a beam or an object's silhouette that passes between the
-//! samples is caught); where they do not, the midpoints of the cell's sides are
-//! computed and the cell is split in four, down to single pixels. Every computed value
-//! is exact; the error is that of bilinear interpolation where the centre showed it
-//! small, and what the samples and the guard cannot see: a detail narrower than the
-//! cells of the level it falls in that misses their centres (the shadow sheet of a thin
-//! rod, a gobo's fine lines).
+//! pixels apart. Each cell's centre is computed too: where the corners' contrast is low
+//! and their bilinear interpolation gives the centre within the tolerance
+//! ([`Tolerance`]), the cell's other pixels are interpolated, each only if the caller's
+//! guard allows it (for the shafts: the pixel's ray ends where interpolating the
+//! corners' ends puts it, so an object's silhouette or a thin post between the samples
+//! is caught, and the pixel is not near a lamp's image); where they do not, the
+//! midpoints of the cell's sides are computed and the cell is split in four, down to
+//! single pixels. Every computed value is exact; the error is that of bilinear
+//! interpolation where the centre showed it small, and what the samples and the guard
+//! cannot see: a detail narrower than the cells of the level it falls in that misses
+//! their samples (a far beam seen end-on, the shadow sheet of a thin rod, a gobo's
+//! fine lines).
 //!
 //! The error this adds to the shafts' pictures is measured against the exact picture by
 //! `atmo bench shafts` (`shafts.fig6-adaptive`).
