@@ -125,13 +125,14 @@ impl StageMode {
 
     /// Makes the scene from `text` with `edits`: on success the mode's, and the
     /// picture to be drawn again; on failure the error, and nothing changed. Shadow
-    /// maps are dropped where the objects or the maps' settings may have changed.
+    /// maps are dropped where the objects may have changed (a map is kept by its
+    /// light's pose and its size, [`ShadowMaps::update`], so other edits need not).
     fn rebuild(&mut self, text: String, edits: Vec<Edit>) -> Result<()> {
         let origin = self.path.display().to_string();
         let edits = merged(&edits);
         let edited = Document::edited(&text, &origin, &edits)?;
         let scene = load(&self.path, &edited, &self.size_edits(), self.time_s)?;
-        let solid = |e: &&Edit| e.key.starts_with("object") || e.key.starts_with("render");
+        let solid = |e: &&Edit| e.key.starts_with("object");
         let before: Vec<&Edit> = self.edits.iter().filter(solid).collect();
         let after: Vec<&Edit> = edits.iter().filter(solid).collect();
         if text != self.text || before != after {
@@ -592,6 +593,14 @@ impl Mode for StageMode {
         if tone != self.scene.display.tone {
             let name = tone_name(tone);
             edits.push(Edit::set("display.tone_map", format!("\"{name}\"")));
+        }
+        let mut adaptive = self.scene.planes.adaptive;
+        ui.checkbox(&mut adaptive, "adaptive sampling (the CPU)")
+            .on_hover_text(
+                "the scattered light computed where the picture changes, interpolated between",
+            );
+        if adaptive != self.scene.planes.adaptive {
+            edits.push(Edit::set("render.adaptive", adaptive.to_string()));
         }
         ui.separator();
         let names = self.light_names();
