@@ -21,13 +21,20 @@ use crate::backend::gpu_error;
 /// Median time of `runs` renders by the plane method after one warm-up, and the last
 /// frame.
 fn time_planes(scene: &Scene, runs: usize) -> (f64, Frame) {
-    let mut frame = SamplePlanes::new(scene).render();
+    let (ms, frame, _) = time_planes_counted(scene, runs);
+    (ms, frame)
+}
+
+/// [`time_planes`], and what became of the last frame's pixels (the share of them
+/// whose scattered light was computed).
+fn time_planes_counted(scene: &Scene, runs: usize) -> (f64, Frame, f64) {
+    let mut last = SamplePlanes::new(scene).render_counted();
     let ms = median(
         (0..runs)
-            .map(|_| time_ms(|| frame = SamplePlanes::new(scene).render()))
+            .map(|_| time_ms(|| last = SamplePlanes::new(scene).render_counted()))
             .collect(),
     );
-    (ms, frame)
+    (ms, last.0, last.1.computed_share())
 }
 
 pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Result<()> {
@@ -141,14 +148,12 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
 
     // The same with the scattered light computed only where the picture needs it.
     let adaptive_fig6 = adaptive(&fig6);
-    let (adaptive_ms, adaptive_frame) = time_planes(&adaptive_fig6, runs);
-    let (_, counts) = SamplePlanes::new(&adaptive_fig6).render_counted();
+    let (adaptive_ms, adaptive_frame, computed) = time_planes_counted(&adaptive_fig6, runs);
     let adaptive_error = adaptive_frame.level_errors(&reference, fig6.display)?;
     let [adaptive_surface, adaptive_haze] = [&surface, &haze].map(|pixels| {
         adaptive_frame.level_errors_over(&reference, fig6.display, pixels.iter().copied())
     });
     let against_planes = adaptive_frame.level_errors(&frame, fig6.display)?;
-    let computed = counts.computed as f64 / (counts.computed + counts.interpolated) as f64;
     emit(
         json,
         json!({"bench": "shafts.fig6-adaptive", "params": {"adaptive": true, "planes": params(&fig6)},
@@ -188,11 +193,9 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
     );
 
     let adaptive_stage = adaptive(&stage);
-    let (stage_adaptive_ms, stage_adaptive_frame) = time_planes(&adaptive_stage, runs);
+    let (stage_adaptive_ms, stage_adaptive_frame, stage_computed) =
+        time_planes_counted(&adaptive_stage, runs);
     let stage_against = stage_adaptive_frame.level_errors(&stage_frame, stage.display)?;
-    let (_, stage_counts) = SamplePlanes::new(&adaptive_stage).render_counted();
-    let stage_computed =
-        stage_counts.computed as f64 / (stage_counts.computed + stage_counts.interpolated) as f64;
     emit(
         json,
         json!({"bench": "shafts.stage-adaptive", "params": {"adaptive": true, "planes": params(&stage)},

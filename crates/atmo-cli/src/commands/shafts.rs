@@ -215,7 +215,7 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         let adaptive = if scene.planes.adaptive {
             format!(
                 ", scattered light computed at {:.1} % of the pixels",
-                100.0 * counts.computed as f64 / (counts.computed + counts.interpolated) as f64
+                100.0 * counts.computed_share()
             )
         } else {
             String::new()

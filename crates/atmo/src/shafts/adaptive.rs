@@ -70,6 +70,13 @@ pub struct Counts {
     pub interpolated: usize,
 }
 
+impl Counts {
+    /// The share of the pixels computed, in [0, 1].
+    pub fn computed_share(&self) -> f64 {
+        self.computed as f64 / (self.computed + self.interpolated) as f64
+    }
+}
+
 /// A cell of the refinement: pixel columns `x0..=x1`, rows `y0..=y1`, corners computed.
 #[derive(Debug, Clone, Copy)]
 struct Cell {

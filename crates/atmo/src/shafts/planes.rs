@@ -64,22 +64,6 @@ pub struct LightPlanes<'a> {
 }
 
 impl LightPlanes<'_> {
-    /// Where a camera ray along the unit `dir` can be lit by `light` before `end`, m
-    /// from the eye: inside the field cone, the lit volume's box and the haze.
-    fn lit_stretch(
-        &self,
-        scene: &Scene,
-        light: &Spotlight,
-        dir: Vec3,
-        end: f32,
-    ) -> Option<(f32, f32)> {
-        let eye = scene.camera.position;
-        self.bounds
-            .clip(eye, dir.recip(), 0.0, end)
-            .and_then(|(a, b)| light.cone_interval(eye, dir, a, b))
-            .and_then(|(a, b)| scene.haze.clip(eye, dir, a, b))
-    }
-
     /// The spacing of the light's sub-sample planes, m of camera depth.
     fn sub_spacing(&self, settings: &PlaneSettings) -> f32 {
         (self.z_far - self.z_near) / (settings.planes * settings.sub_planes) as f32
@@ -103,21 +87,6 @@ fn adaptive_tolerance(exposure: f32) -> adaptive::Tolerance {
 /// How near a lamp's image (pixels, in x and in y) [`PlaneSettings::adaptive`]
 /// computes every pixel.
 const LAMP_REACH: f32 = 2.5;
-
-/// Where `point` shows in `camera`'s picture, pixels from the top-left corner; `None`
-/// behind the camera or through a fisheye (the plane method draws through a pinhole).
-fn camera_pixel(camera: &crate::view::Camera, point: Vec3) -> Option<(f32, f32)> {
-    let (tw, th) = camera.pinhole("").ok()?;
-    let d = point - camera.position;
-    let z = d.dot(camera.forward);
-    (z > 0.0).then(|| {
-        let (sx, sy) = (d.dot(camera.right) / (z * tw), d.dot(camera.up) / (z * th));
-        (
-            (sx + 1.0) * 0.5 * camera.width as f32,
-            (1.0 - sy) * 0.5 * camera.height as f32,
-        )
-    })
-}
 
 /// Everything the plane method prepares once a frame: shadow maps, the lit volumes'
 /// depth ranges, and the `F` and `h` tables.
@@ -260,26 +229,7 @@ impl<'a> SamplePlanes<'a> {
             let pass = if self.scene.planes.adaptive {
                 self.add_adaptive(&ray, &mut frame.pixels)
             } else {
-                // Rows in parallel, each LANES pixels at a time.
-                frame
-                    .pixels
-                    .par_chunks_mut(width as usize)
-                    .enumerate()
-                    .for_each(|(y, row)| {
-                        let first = y as u32 * width;
-                        for (k, out) in row.chunks_mut(LANES).enumerate() {
-                            let start = first + (k * LANES) as u32;
-                            let (rays, offsets) =
-                                lanes_of(start..start + out.len() as u32, ray, width);
-                            let mut ends = [0.0f32; LANES];
-                            for l in 0..out.len() {
-                                let (surface, end) = self.surface(rays[l]);
-                                (out[l], ends[l]) = (out[l] + surface, end);
-                            }
-                            let count = out.len();
-                            self.scattered_rays(&rays[..count], &offsets[..count], &ends, out);
-                        }
-                    });
+                self.add_every_pixel(&ray, &mut frame.pixels);
                 adaptive::Counts {
                     computed: n,
                     interpolated: 0,
@@ -292,6 +242,29 @@ impl<'a> SamplePlanes<'a> {
             *pixel *= weight;
         }
         (frame, counts)
+    }
+
+    /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`, all of
+    /// it computed: rows in parallel, each [`LANES`] pixels at a time.
+    fn add_every_pixel(&self, ray: &(impl Fn(u32) -> Vec3 + Sync), pixels: &mut [Vec3]) {
+        let width = self.scene.camera.width;
+        pixels
+            .par_chunks_mut(width as usize)
+            .enumerate()
+            .for_each(|(y, row)| {
+                let first = y as u32 * width;
+                for (k, out) in row.chunks_mut(LANES).enumerate() {
+                    let start = first + (k * LANES) as u32;
+                    let (rays, offsets) = lanes_of(start..start + out.len() as u32, ray, width);
+                    let mut ends = [0.0f32; LANES];
+                    for l in 0..out.len() {
+                        let (surface, end) = self.surface(rays[l]);
+                        (out[l], ends[l]) = (out[l] + surface, end);
+                    }
+                    let count = out.len();
+                    self.scattered_rays(&rays[..count], &offsets[..count], &ends, out);
+                }
+            });
     }
 
     /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`, the
@@ -355,7 +328,7 @@ impl<'a> SamplePlanes<'a> {
             .lights
             .iter()
             .filter_map(|light| {
-                let (x, y) = camera_pixel(camera, light.position)?;
+                let (x, y) = camera.pixel_of(light.position)?;
                 Some((
                     x,
                     y,
@@ -662,7 +635,12 @@ impl Lanes {
                 lanes.offset[l],
             ) = (*ray, length, 1.0 / length, *offset);
             (lanes.step[0][l], lanes.step[1][l], lanes.step[2][l]) = (step.x, step.y, step.z);
-            let Some((ta, tb)) = planes.lit_stretch(scene, light, dir, ends[l]) else {
+            let Some((ta, tb)) = planes
+                .bounds
+                .clip(eye, dir.recip(), 0.0, ends[l])
+                .and_then(|(a, b)| light.cone_interval(eye, dir, a, b))
+                .and_then(|(a, b)| haze.clip(eye, dir, a, b))
+            else {
                 continue;
             };
             // A point in the (convex) haze at distance t has t - entry of its path to

@@ -209,6 +209,29 @@ impl Camera {
         }
     }
 
+    /// Where the world point `p` shows in a pinhole's picture: the image point `(x, y)`
+    /// whose [`Camera::ray`] passes through it, pixels from the top-left corner; `None`
+    /// behind the camera (or on its plane) and through a fisheye.
+    pub fn pixel_of(&self, p: Vec3) -> Option<(f32, f32)> {
+        let Lens::Pinhole {
+            tan_half_width,
+            tan_half_height,
+        } = self.lens
+        else {
+            return None;
+        };
+        let d = p - self.position;
+        let z = d.dot(self.forward);
+        (z > 0.0).then(|| {
+            let sx = d.dot(self.right) / (z * tan_half_width);
+            let sy = d.dot(self.up) / (z * tan_half_height);
+            (
+                (sx + 1.0) * 0.5 * self.width as f32,
+                (1.0 - sy) * 0.5 * self.height as f32,
+            )
+        })
+    }
+
     /// Offsets in pixels of the rays of one pixel, from its top-left corner.
     pub fn subpixel_offsets(&self) -> Vec<(f32, f32)> {
         let k = self.supersampling;
@@ -399,6 +422,29 @@ mod tests {
         }
         // No roll: screen right is horizontal.
         assert!(cam.right.y.abs() < 1e-7 && cam.up.y > 0.0);
+    }
+
+    #[test]
+    fn a_point_shows_where_the_pinholes_ray_through_it_comes_from() {
+        let cam = Camera::yaw_pitch(
+            Vec3::new(1.0, 2.0, 3.0),
+            35.0,
+            12.0,
+            Fov::Vertical(60.0),
+            (64, 48),
+        )
+        .unwrap();
+        for (x, y) in [(0.0, 0.0), (63.5, 47.5), (20.25, 31.75), (-10.0, 60.0)] {
+            let p = cam.position + 7.0 * cam.ray(x, y);
+            let (px, py) = cam.pixel_of(p).unwrap();
+            assert!(
+                (px - x).abs() < 1e-3 && (py - y).abs() < 1e-3,
+                "{x} {y}: {px} {py}"
+            );
+        }
+        assert!(cam.pixel_of(cam.position - cam.forward).is_none());
+        let dome = Camera::dome(Vec3::ZERO, (101, 101)).unwrap();
+        assert!(dome.pixel_of(Vec3::Y).is_none());
     }
 
     #[test]
