@@ -196,7 +196,7 @@ GDTF_DESCRIPTION = """<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
       Manufacturer="atmo" Description="Made up for atmo's example scenes"
       FixtureTypeID="6C1A4A5E-5B1F-4C3E-9E2B-1D4E2F0A7B31" Thumbnail="" RefFT="">
     <AttributeDefinitions>
-      <ActivationGroups><ActivationGroup Name="PanTilt"/><ActivationGroup Name="Gobo1"/></ActivationGroups>
+      <ActivationGroups><ActivationGroup Name="PanTilt"/><ActivationGroup Name="Gobo1"/><ActivationGroup Name="Prism"/></ActivationGroups>
       <FeatureGroups>
         <FeatureGroup Name="Position" Pretty="Position"><Feature Name="PanTilt"/></FeatureGroup>
         <FeatureGroup Name="Gobo" Pretty="Gobo"><Feature Name="Gobo"/></FeatureGroup>
@@ -207,6 +207,7 @@ GDTF_DESCRIPTION = """<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
         <Attribute Name="Pan" Pretty="P" ActivationGroup="PanTilt" Feature="Position.PanTilt" PhysicalUnit="Angle"/>
         <Attribute Name="Tilt" Pretty="T" ActivationGroup="PanTilt" Feature="Position.PanTilt" PhysicalUnit="Angle"/>
         <Attribute Name="Gobo1" Pretty="G1" ActivationGroup="Gobo1" Feature="Gobo.Gobo" PhysicalUnit="None"/>
+        <Attribute Name="Prism1" Pretty="Prism1" ActivationGroup="Prism" Feature="Beam.Beam" PhysicalUnit="None"/>
         <Attribute Name="Zoom" Pretty="Zoom" Feature="Beam.Beam" PhysicalUnit="Angle"/>
         <Attribute Name="Dimmer" Pretty="Dim" Feature="Dimmer.Dimmer" PhysicalUnit="LuminousIntensity"/>
       </Attributes>
@@ -216,6 +217,11 @@ GDTF_DESCRIPTION = """<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
         <Slot Name="Open" Color="0.312700,0.329000,100.000000"/>
         <Slot Name="Spokes" Color="0.312700,0.329000,100.000000" MediaFileName="spokes"/>
         <Slot Name="Dots" Color="0.312700,0.329000,100.000000" MediaFileName="dots"/>
+      </Wheel>
+      <Wheel Name="Prism1">
+        <Slot Name="Open" Color="0.312700,0.329000,100.000000"/>
+        <Slot Name="3-Facet" Color="0.312700,0.329000,100.000000">
+PRISM_FACETS        </Slot>
       </Wheel>
     </Wheels>
     <PhysicalDescriptions/>
@@ -258,6 +264,11 @@ GDTF_DESCRIPTION = """<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
               <ChannelFunction Name="Gobo 1" Attribute="Gobo1" DMXFrom="0/1" Default="0/1" Wheel="Gobo1" PhysicalFrom="0" PhysicalTo="1"/>
             </LogicalChannel>
           </DMXChannel>
+          <DMXChannel DMXBreak="1" Offset="8" InitialFunction="Head_Prism1.Prism1.Prism 1" Highlight="None" Geometry="Head">
+            <LogicalChannel Attribute="Prism1" Snap="Yes" Master="None" MibFade="0" DMXChangeTimeLimit="0">
+              <ChannelFunction Name="Prism 1" Attribute="Prism1" DMXFrom="0/1" Default="0/1" Wheel="Prism1" PhysicalFrom="0" PhysicalTo="1"/>
+            </LogicalChannel>
+          </DMXChannel>
           <DMXChannel DMXBreak="1" Offset="7" InitialFunction="Beam_Dimmer.Dimmer.Dimmer 1" Highlight="255/1" Geometry="Beam">
             <LogicalChannel Attribute="Dimmer" Snap="No" Master="Grand" MibFade="0" DMXChangeTimeLimit="0">
               <ChannelFunction Name="Dimmer 1" Attribute="Dimmer" DMXFrom="0/1" Default="0/1" PhysicalFrom="0" PhysicalTo="1"/>
@@ -285,11 +296,32 @@ GDTF_DESCRIPTION = """<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
 """
 
 
+def prism_facet(off_deg, around_deg):
+    """A GDTF PrismFacet turning the beam (along -z) off_deg off its axis toward
+    around_deg (from +x toward +y): Rodrigues' rotation about the axis
+    -z x d (d the facet's beam), its rows written {a,b,c}{d,e,f}{g,h,i} with six decimals."""
+    t, p = math.radians(off_deg), math.radians(around_deg)
+    # The axis: perpendicular to -z and to the facet's beam, in the xy plane.
+    k = (math.sin(p), -math.cos(p), 0.0)
+    c, s = math.cos(t), math.sin(t)
+    # The cross-product matrix of k, added by hand: [k]x = [[0,-kz,ky],[kz,0,-kx],[-ky,kx,0]].
+    cross = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]]
+    m = [[(c if i == j else 0.0) + (1 - c) * k[i] * k[j] + s * cross[i][j] for j in range(3)]
+         for i in range(3)]
+    rows = "".join("{%s}" % ",".join("%.6f" % (round(v, 6) + 0.0) for v in row) for row in m)
+    return '          <PrismFacet Color="0.312700,0.329000,100.000000" Rotation="%s"/>\n' % rows
+
+
+# The example fixture's prism: three facets 8 degrees off the beam, 120 degrees apart.
+GDTF_DESCRIPTION = GDTF_DESCRIPTION.replace(
+    "PRISM_FACETS", "".join(prism_facet(8.0, a) for a in (90.0, 210.0, 330.0)))
+
+
 def gdtf_spot(path):
     """A GDTF fixture of a moving spot: description.xml (a beam of 12,000 lm at 6500 K,
     18 degrees to half and 24 to a tenth, a zoom of 8-36 degrees, pan -270-270, tilt
-    -135-135, a gobo wheel with the spokes and the dots; a second, basic mode) and the
-    wheel's images. Fixed timestamps, so the file is the same byte for byte."""
+    -135-135, a gobo wheel with the spokes and the dots, a prism wheel with a
+    three-facet prism; a second, basic mode) and the wheel's images. Fixed timestamps, so the file is the same byte for byte."""
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
         def put(name, data):
             info = zipfile.ZipInfo(name, date_time=(2026, 12, 2, 0, 0, 0))

@@ -1,7 +1,7 @@
 //! GDTF fixture files (a zip of description.xml and wheel images): no panic, no
 //! allocation past the budget (entries are checked against it before they are read);
-//! an accepted fixture has finite angles, flux and colour temperature and ordered
-//! ranges.
+//! an accepted fixture has finite angles, flux and colour temperature, ordered
+//! ranges, and a prism of unit beams that is atmo's circular prism or refused.
 #![no_main]
 use atmo::shafts::spotlight::Sampling;
 use libfuzzer_sys::fuzz_target;
@@ -21,6 +21,13 @@ fuzz_target!(|data: &[u8]| {
         }
         for g in &f.wheel {
             assert_eq!(g.srgb.len(), g.width * g.height);
+        }
+        if let Some(prism) = &f.prism {
+            // Facets are unit beams; a circular prism's numbers are in atmo's ranges.
+            assert!(prism.facets.iter().all(|d| (d.length() - 1.0).abs() < 1e-4));
+            if let Ok(p) = prism.circular() {
+                assert!((2..=16).contains(&p.facets) && (0.0..=60.0).contains(&p.angle_deg));
+            }
         }
     }
 });

@@ -930,7 +930,32 @@ fn a_gdtf_fixture_sends_its_flux_and_keeps_its_modes_ranges() {
         "the basic mode has no gobo"
     );
     assert_eq!(scene.show.fixtures[0].wheel.len(), 2);
+    // The file's prism: three facets 8 deg off the beam, out of it at the start (a
+    // desk's default) and put in by the cue at 4 s; the basic mode has none.
+    let prism = scene.show.fixtures[1]
+        .prism
+        .expect("the Standard mode's prism");
+    assert_eq!(prism.facets, 3);
+    assert!((prism.angle_deg - 8.0).abs() < 1e-3, "{}", prism.angle_deg);
+    assert!(scene.show.fixtures[2].prism.is_none());
+    assert_eq!(scene.show.light_count(0.0), 3);
+    assert_eq!(scene.show.light_count(4.5), 5);
+    // A prism the scene gives wins over the file's, and is in at the start.
+    let own = parse(&text.replacen(
+        "mode = \"Standard\"",
+        "mode = \"Standard\"\nprism = { facets = 5, angle_deg = 4.0 }",
+        1,
+    ))
+    .unwrap();
+    assert_eq!(own.show.fixtures[0].prism.map(|p| p.facets), Some(5));
+    assert_eq!(own.show.light_count(0.0), 7);
     let cases: &[(&str, &str, &[&str])] = &[
+        // The basic mode has no prism to put in.
+        (
+            "cmy = [0.0, 0.4, 0.9] }",
+            "prism_in = true }",
+            &["fixture[2] (right).start.prism_in", "no prism"],
+        ),
         // The basic mode pans -180 to 180.
         (
             "set.right = { pan_deg = -20.0",

@@ -3,14 +3,19 @@
 //! exchange fixtures. atmo reads what a moving head's light needs from one DMX mode:
 //! the beam (its `Beam` geometry's beam and field angles, luminous flux and colour
 //! temperature), the pan, tilt and zoom ranges (the physical ranges of the mode's
-//! `Pan`, `Tilt` and `Zoom` channel functions) and the gobo wheel (the wheel a `Gobo`
-//! channel function of the mode names, its slots' images from `wheels/` in the zip).
+//! `Pan`, `Tilt` and `Zoom` channel functions), the gobo wheel (the wheel a `Gobo`
+//! channel function of the mode names, its slots' images from `wheels/` in the zip) and
+//! the prism (the first slot with facets of the wheel a `Prism` channel function names,
+//! each facet's `Rotation` turning the beam).
 //!
 //! GDTF's beam angle is where the intensity is half the peak, its field angle where it
 //! is a tenth; atmo's beam is full intensity and its field zero, with a smoothstep
 //! between ([`super::spotlight::Falloff::Smooth`]). [`to_smooth_edge`] places atmo's
 //! edges so that the half and tenth points fall at GDTF's angles.
 
+use glam::Vec3;
+
+use super::show::Prism;
 use super::spotlight::Gobo;
 #[cfg(feature = "gdtf")]
 use super::spotlight::Sampling;
@@ -39,6 +44,104 @@ pub struct GdtfFixture {
     /// The gobos of the mode's gobo wheel, in slot order (slots without an image, such
     /// as "Open", left out).
     pub wheel: Vec<Gobo>,
+    /// The prism of the mode's prism wheel, if it has one.
+    pub prism: Option<GdtfPrism>,
+}
+
+/// A prism as a GDTF wheel's slot gives it: one beam direction a facet.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GdtfPrism {
+    /// The wheel and the slot, to name in messages.
+    pub wheel: String,
+    pub slot: String,
+    /// Each facet's beam, a unit vector in the beam geometry's frame, where the beam
+    /// without the prism leaves along -z: the facet's `Rotation` applied to -z.
+    pub facets: Vec<Vec3>,
+}
+
+impl GdtfPrism {
+    /// How far a facet's beam may be off the circle atmo's prisms have, degrees: in its
+    /// angle off the axis and in its direction around it.
+    pub const TOLERANCE_DEG: f32 = 1.0;
+
+    /// The facets' angles off the beam's axis and their directions around it (from +x
+    /// toward +y), degrees.
+    pub fn angles_deg(&self) -> Vec<[f32; 2]> {
+        self.facets
+            .iter()
+            .map(|d| {
+                let off = (-d.z).clamp(-1.0, 1.0).acos().to_degrees();
+                [off, d.y.atan2(d.x).to_degrees()]
+            })
+            .collect()
+    }
+
+    /// The slot as atmo's circular prism ([`Prism`]): its facet count and their mean
+    /// angle off the axis, if the facets are 2 to 16 copies of the beam turned the
+    /// same angle off it (0 to 60 degrees), evenly around it, within
+    /// [`GdtfPrism::TOLERANCE_DEG`]; otherwise an error naming the slot and saying what
+    /// differs. Where the facets' circle starts is not kept: the head's `prism_deg`
+    /// attribute turns it.
+    pub fn circular(&self) -> std::result::Result<Prism, String> {
+        let at = format!("prism wheel {:?} slot {:?}", self.wheel, self.slot);
+        let n = self.facets.len();
+        if !(2..=16).contains(&n) {
+            return Err(format!(
+                "{at} has {n} facets; atmo's prisms have 2 to 16 (give the fixture \
+                 `prism = {{ facets = ..., angle_deg = ... }}` in the scene instead)"
+            ));
+        }
+        let angles = self.angles_deg();
+        let mean = angles.iter().map(|[off, _]| off).sum::<f32>() / n as f32;
+        let refuse = |what: String| {
+            Err(format!(
+                "{at}: {what}; atmo's prisms are circular, every facet turned the same \
+                 angle off the beam, evenly around it (within {} deg): give the fixture \
+                 `prism = {{ facets = ..., angle_deg = ... }}` in the scene instead",
+                Self::TOLERANCE_DEG
+            ))
+        };
+        let listed = |k: usize| {
+            angles
+                .iter()
+                .map(|a| format!("{:.1}", a[k]))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        if !(0.0..=60.0).contains(&mean)
+            || angles
+                .iter()
+                .any(|[off, _]| (off - mean).abs() > Self::TOLERANCE_DEG)
+        {
+            return refuse(format!(
+                "its facets are turned {} deg off the beam (atmo: one angle, 0 to 60)",
+                listed(0)
+            ));
+        }
+        // Evenly around: each facet's direction, taken in turn around the circle, a
+        // whole number of steps of 360 / n from the first (facets along the axis have
+        // no direction, and only a circle of angle 0 has them all there).
+        let step = 360.0 / n as f32;
+        let mut around: Vec<f32> = angles.iter().map(|a| a[1].rem_euclid(360.0)).collect();
+        around.sort_by(f32::total_cmp);
+        let even = mean <= Self::TOLERANCE_DEG
+            || around.iter().enumerate().all(|(k, a)| {
+                // A facet `off` degrees around from its place is sin(mean) off degrees
+                // away from it on the sphere of directions.
+                let off = (a - around[0] - k as f32 * step).abs();
+                off * mean.to_radians().sin() <= Self::TOLERANCE_DEG
+            });
+        if !even {
+            return refuse(format!(
+                "its facets point {} deg around the beam, not {step:.1} deg apart",
+                listed(1)
+            ));
+        }
+        Ok(Prism {
+            facets: n as u32,
+            angle_deg: mean,
+        })
+    }
 }
 
 /// The largest `description.xml` read, bytes.
@@ -125,22 +228,10 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
     };
     let (pan_range_deg, tilt_range_deg, zoom_range_deg) =
         (range("Pan")?, range("Tilt")?, range("Zoom")?);
-    // The wheel a gobo channel of this mode turns.
-    let wheel_name = functions.iter().find_map(|f| {
-        f.attribute("Attribute")
-            .filter(|a| a.starts_with("Gobo"))
-            .and(f.attribute("Wheel"))
-    });
     let mut wheel = Vec::new();
-    if let Some(name) = wheel_name {
-        let node = fixture
-            .descendants()
-            .find(|n| n.has_tag_name("Wheel") && n.attribute("Name") == Some(name))
-            .ok_or_else(|| {
-                fail(format!(
-                    "the gobo channel names wheel {name:?}, which the file lacks"
-                ))
-            })?;
+    let gobo = wheel_turned_by(fixture, &functions, "gobo", |a| a.starts_with("Gobo"));
+    if let Some(node) = gobo.map_err(&fail)? {
+        let name = node.attribute("Name").unwrap_or("");
         for slot in node.children().filter(|n| n.has_tag_name("Slot")) {
             let Some(media) = slot.attribute("MediaFileName").filter(|m| !m.is_empty()) else {
                 continue;
@@ -162,6 +253,40 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
             );
         }
     }
+    // The prism: the first slot with facets of the wheel a "Prism1" channel turns (not
+    // "Prism1Pos" and the like, which move a prism already in).
+    let mut prism = None;
+    let prism_wheel = wheel_turned_by(fixture, &functions, "prism", |a| {
+        a.strip_prefix("Prism")
+            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+    });
+    if let Some(node) = prism_wheel.map_err(&fail)? {
+        let name = node.attribute("Name").unwrap_or("");
+        let slot = node.children().find(|slot| {
+            slot.has_tag_name("Slot") && slot.children().any(|f| f.has_tag_name("PrismFacet"))
+        });
+        if let Some(slot) = slot {
+            let slot_name = slot.attribute("Name").unwrap_or("").to_string();
+            let facets =
+                slot.children()
+                    .filter(|f| f.has_tag_name("PrismFacet"))
+                    .map(|f| {
+                        facet_beam(f.attribute("Rotation").unwrap_or("{1,0,0}{0,1,0}{0,0,1}"))
+                            .map_err(|why| {
+                                fail(format!(
+                                    "prism wheel {name:?} slot {slot_name:?}: a facet's \
+                                 Rotation {why}"
+                                ))
+                            })
+                    })
+                    .collect::<Result<Vec<Vec3>>>()?;
+            prism = Some(GdtfPrism {
+                wheel: name.to_string(),
+                slot: slot_name,
+                facets,
+            });
+        }
+    }
     Ok(GdtfFixture {
         name: fixture.attribute("Name").unwrap_or("").to_string(),
         beam_deg,
@@ -172,7 +297,62 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
         tilt_range_deg,
         zoom_range_deg,
         wheel,
+        prism,
     })
+}
+
+/// The beam through a prism facet whose GDTF `Rotation` is `text`, a 3 x 3 matrix
+/// written `{a,b,c}{d,e,f}{g,h,i}`: the matrix applied to the beam's -z, a unit
+/// vector; an error saying what is wrong with the text (not nine numbers, not a
+/// rotation).
+#[cfg(feature = "gdtf")]
+fn facet_beam(text: &str) -> std::result::Result<Vec3, String> {
+    let bad =
+        || format!("{text:?} is not three rows of three numbers, {{a,b,c}}{{d,e,f}}{{g,h,i}}");
+    let (mut numbers, mut rows) = (Vec::with_capacity(9), 0);
+    for row in text.split('}').map(str::trim).filter(|r| !r.is_empty()) {
+        rows += 1;
+        for x in row.strip_prefix('{').ok_or_else(bad)?.split(',') {
+            let x = x.trim().parse::<f32>().ok().filter(|x| x.is_finite());
+            numbers.push(x.ok_or_else(bad)?);
+        }
+    }
+    if rows != 3 || numbers.len() != 9 {
+        return Err(bad());
+    }
+    // The third column, negated: the image of -z.
+    let beam = -Vec3::new(numbers[2], numbers[5], numbers[8]);
+    if (beam.length() - 1.0).abs() > 1e-3 {
+        return Err(format!(
+            "{text:?} is not a rotation (it takes the beam to a vector of length {})",
+            beam.length()
+        ));
+    }
+    Ok(beam.normalize())
+}
+
+/// The wheel that the first of the mode's channel `functions` whose attribute passes
+/// `is` names, if one does (`what` names the channel in the message if the fixture
+/// lacks that wheel).
+#[cfg(feature = "gdtf")]
+fn wheel_turned_by<'a, 'i>(
+    fixture: roxmltree::Node<'a, 'i>,
+    functions: &[roxmltree::Node<'a, 'i>],
+    what: &str,
+    is: impl Fn(&str) -> bool,
+) -> std::result::Result<Option<roxmltree::Node<'a, 'i>>, String> {
+    let Some(name) = functions.iter().find_map(|f| {
+        f.attribute("Attribute")
+            .filter(|a| is(a))
+            .and(f.attribute("Wheel"))
+    }) else {
+        return Ok(None);
+    };
+    fixture
+        .descendants()
+        .find(|n| n.has_tag_name("Wheel") && n.attribute("Name") == Some(name))
+        .map(Some)
+        .ok_or_else(|| format!("the {what} channel names wheel {name:?}, which the file lacks"))
 }
 
 /// The bytes of the zip's entry `name`, `None` if there is none; an entry claiming
@@ -318,14 +498,141 @@ mod reading {
         // The wheel's two images (the open slot has none), as the PNGs in the zip.
         assert_eq!(f.wheel.len(), 2);
         assert_eq!((f.wheel[0].width, f.wheel[0].height), (256, 256));
+        // The prism wheel's three facets, 8 deg off the beam toward 90, 210 and 330 deg.
+        let prism = f
+            .prism
+            .as_ref()
+            .expect("the Standard mode has a prism channel");
+        assert_eq!(
+            (prism.wheel.as_str(), prism.slot.as_str()),
+            ("Prism1", "3-Facet")
+        );
+        for ([off, around], want) in prism.angles_deg().into_iter().zip([90.0, -150.0, -30.0]) {
+            assert!(
+                (off - 8.0).abs() < 1e-3 && (around - want).abs() < 1e-3,
+                "{off} {around}"
+            );
+        }
+        let circle = prism.circular().unwrap();
+        assert_eq!(circle.facets, 3);
+        assert!((circle.angle_deg - 8.0).abs() < 1e-3);
         let basic = read(&bytes, "atmo-spot.gdtf", "Basic", Sampling::Bilinear).unwrap();
         assert_eq!(basic.pan_range_deg, Some([-180.0, 180.0]));
         assert_eq!((basic.zoom_range_deg, basic.wheel.len()), (None, 0));
+        assert!(basic.prism.is_none());
+    }
+
+    /// A prism of facets at `(angle off, direction around)` pairs, degrees.
+    fn prism_of(facets: &[(f32, f32)]) -> GdtfPrism {
+        GdtfPrism {
+            wheel: "P".into(),
+            slot: "S".into(),
+            facets: facets
+                .iter()
+                .map(|&(off, around)| {
+                    let (t, p) = (off.to_radians(), around.to_radians());
+                    Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), -t.cos())
+                })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn only_circular_prisms_become_atmo_prisms() {
+        // Four facets 10 deg off, a quarter turn apart in any order from any start.
+        let four = prism_of(&[(10.0, 30.0), (10.2, 300.0), (9.9, 120.0), (10.0, 210.5)]);
+        let p = four.circular().unwrap();
+        assert_eq!(p.facets, 4);
+        assert!((p.angle_deg - 10.025).abs() < 1e-3, "{}", p.angle_deg);
+        // Refused, and why: a linear prism (facets in a row), one facet's angle off,
+        // the facets bunched on one side, a facet on the axis amid a ring, too few.
+        for (prism, why) in [
+            (
+                prism_of(&[(6.0, 0.0), (2.0, 0.0), (2.0, 180.0), (6.0, 180.0)]),
+                "turned 6.0, 2.0, 2.0, 6.0 deg off the beam",
+            ),
+            (
+                prism_of(&[(8.0, 0.0), (8.0, 120.0), (10.0, 240.0)]),
+                "turned 8.0, 8.0, 10.0 deg",
+            ),
+            (
+                prism_of(&[(8.0, 0.0), (8.0, 100.0), (8.0, 240.0)]),
+                "point 0.0, 100.0, -120.0 deg around the beam, not 120.0 deg apart",
+            ),
+            (
+                prism_of(&[(0.0, 0.0), (8.0, 0.0), (8.0, 120.0), (8.0, 240.0)]),
+                "turned 0.0, 8.0, 8.0, 8.0",
+            ),
+            (
+                prism_of(&[(8.0, 0.0)]),
+                "has 1 facets; atmo's prisms have 2 to 16",
+            ),
+            (
+                prism_of(&[(70.0, 0.0), (70.0, 180.0)]),
+                "(atmo: one angle, 0 to 60)",
+            ),
+        ] {
+            let got = prism.circular().expect_err("not a circular prism");
+            assert!(got.contains(why), "want {why:?} in {got:?}");
+            assert!(got.starts_with("prism wheel \"P\" slot \"S\""), "{got}");
+            assert!(got.contains("prism = {"), "{got}");
+        }
+        // Facets all along the axis: a circle of angle 0 wherever they point.
+        assert_eq!(
+            prism_of(&[(0.0, 0.0), (0.0, 0.0)])
+                .circular()
+                .unwrap()
+                .facets,
+            2
+        );
+    }
+
+    #[test]
+    fn facet_rotations_are_read_as_gdtf_writes_them() {
+        let beam = facet_beam(" {1,0,0} {0,0.990268,-0.139173}{0,0.139173,0.990268} ").unwrap();
+        assert!(
+            (beam - Vec3::new(0.0, 0.139173, -0.990268)).length() < 1e-5,
+            "{beam}"
+        );
+        for (text, why) in [
+            ("{1,0,0}{0,1,0}", "not three rows of three numbers"),
+            ("{1,0,0}{0,1,0}{0,0}", "not three rows of three numbers"),
+            ("{1,0,0}{0,1,0}{0,0,x}", "not three rows of three numbers"),
+            ("{1,0,0}{0,1,0}{0,0,inf}", "not three rows of three numbers"),
+            ("1,0,0}{0,1,0}{0,0,1}", "not three rows of three numbers"),
+            (
+                "{1,0,0}{0,1,0}{0,0,1}{0,0,1}",
+                "not three rows of three numbers",
+            ),
+            (
+                "{1,0,0}{0,1,0}{0,0,2}",
+                "not a rotation (it takes the beam to a vector of length 2)",
+            ),
+        ] {
+            let got = facet_beam(text).expect_err(text);
+            assert!(got.contains(why), "{text}: want {why:?}, got {got:?}");
+        }
     }
 
     #[test]
     fn malformed_gdtf_files_are_errors_naming_what_is_wrong() {
         let good = description("", "");
+        let gobo = |name: &str| {
+            std::fs::read(format!(
+                "{}/../../scenes/gobos/{name}.png",
+                env!("CARGO_MANIFEST_DIR")
+            ))
+            .unwrap()
+        };
+        let (spokes, dots) = (gobo("spokes"), gobo("dots"));
+        // The description `from` -> `to` with the wheel's images: past the gobos.
+        let with_gobos = |from: &str, to: &str| {
+            zip_of(&[
+                ("description.xml", &description(from, to)),
+                ("wheels/spokes.png", &spokes),
+                ("wheels/dots.png", &dots),
+            ])
+        };
         let cases: Vec<(Vec<u8>, &str, &str)> = vec![
             (
                 b"not a zip at all".to_vec(),
@@ -385,6 +692,16 @@ mod reading {
                 )]),
                 "Standard",
                 "names wheel \"Gobo9\", which the file lacks",
+            ),
+            (
+                with_gobos("Wheel=\"Prism1\"", "Wheel=\"Prism9\""),
+                "Standard",
+                "the prism channel names wheel \"Prism9\", which the file lacks",
+            ),
+            (
+                with_gobos("Rotation=\"{1.000000,", "Rotation=\"{one,"),
+                "Standard",
+                "prism wheel \"Prism1\" slot \"3-Facet\": a facet's Rotation \"{one,",
             ),
         ];
         for (bytes, mode, want) in cases {

@@ -163,6 +163,8 @@ struct Light {
     field_ratio: f32,
     wheel: Vec<Gobo>,
     kelvin: Option<f32>,
+    /// The prism a GDTF file gives (keys give theirs with `prism`).
+    prism: Option<Prism>,
     limits: Limits,
 }
 
@@ -935,7 +937,13 @@ impl FixtureSpec {
             None => self.keyed(at, folder, sampling)?,
             Some(file) => self.gdtf_light(at, unit, &folder.join(file), sampling)?,
         };
-        light.limits.prism = self.prism.is_some();
+        // A prism the scene gives is in the beam at rest; a GDTF file's is out, as a
+        // desk's prism channel at its default (the wheel's open slot).
+        let (prism, prism_at_rest) = match self.prism {
+            Some(p) => (Some(p.validate(&field("prism"))?), true),
+            None => (light.prism, false),
+        };
+        light.limits.prism = prism.is_some();
         let limits = &light.limits;
         for (name, [lo, hi], limit) in [
             ("pan_range_deg", limits.pan, 720.0),
@@ -976,13 +984,13 @@ impl FixtureSpec {
                 0.0,
             ],
             gobo: 0,
-            prism_in: true,
+            prism_in: prism_at_rest,
         };
         let change = self.start.validate(&format!("{at}.start"), limits)?;
         let start = State {
             channels: std::array::from_fn(|c| change.channels[c].unwrap_or(rest.channels[c])),
             gobo: change.gobo.unwrap_or(0),
-            prism_in: change.prism_in.unwrap_or(true),
+            prism_in: change.prism_in.unwrap_or(rest.prism_in),
         };
         let fixture = Fixture {
             name: self.name.clone(),
@@ -999,10 +1007,7 @@ impl FixtureSpec {
             pan_range_deg: limits.pan,
             tilt_range_deg: limits.tilt,
             start,
-            prism: self
-                .prism
-                .map(|p| p.validate(&field("prism")))
-                .transpose()?,
+            prism,
         };
         Ok((fixture, light.limits))
     }
@@ -1038,6 +1043,7 @@ impl FixtureSpec {
             },
             wheel,
             kelvin: None,
+            prism: None,
         })
     }
 
@@ -1075,6 +1081,13 @@ impl FixtureSpec {
             ))
         })?;
         let file = read_gdtf(path, mode, sampling)?;
+        // The file's prism, unless the scene gives the fixture its own.
+        let prism = match (&file.prism, self.prism) {
+            (Some(p), None) => Some(p.circular().map_err(|why| {
+                Error::Invalid(format!("{at}.gdtf: GDTF file {}: {why}", path.display()))
+            })?),
+            _ => None,
+        };
         let (beam, field) = gdtf::to_smooth_edge(file.beam_deg, file.field_deg);
         // atmo's beam at least a third of its field (the field ratio's limit).
         let beam = beam.max(field / 3.0).max(0.5);
@@ -1104,6 +1117,7 @@ impl FixtureSpec {
             },
             wheel: file.wheel,
             kelvin: Some(file.kelvin),
+            prism,
         })
     }
 }
