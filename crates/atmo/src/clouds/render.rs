@@ -201,12 +201,11 @@ pub fn render(
                             ],
                         };
                         let phase = phases[band * BAND * w + i];
-                        let [single, more] = light.scattering.light(phase, &emission);
-                        let transmitted = (-tau).exp();
-                        let source = single * sun + (1.0 - transmitted) * ambient;
+                        let blob = light.scattering.light(phase, &emission);
+                        let source = blob.single * sun + (1.0 - blob.transmitted) * ambient;
                         pixels[i] += through[i] * source;
-                        higher[i] += through[i] * more * sun;
-                        through[i] *= transmitted;
+                        higher[i] += through[i] * blob.higher * sun;
+                        through[i] *= blob.transmitted;
                     }
                 }
             }
