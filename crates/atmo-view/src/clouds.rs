@@ -107,8 +107,9 @@ impl CloudParams {
 /// cloud cannot be drawn at (a sun below the horizon, a camera inside a particle) are
 /// refused, naming the flag.
 pub trait CloudPictures {
-    /// The picture at `params` and `size` on the CPU (linear radiance).
-    fn draw(&mut self, params: &CloudParams, size: (u32, u32)) -> Result<Frame>;
+    /// The picture at `params` and `size` on the CPU (linear radiance); a `preview`
+    /// ([`Picture::preview`]) may be drawn more coarsely than the still would be.
+    fn draw(&mut self, params: &CloudParams, size: (u32, u32), preview: bool) -> Result<Frame>;
     /// The picture at `params` drawn into `picture` on the GPU: what is behind the
     /// cloud uploaded, the billboards recorded into `encoder` and put over it, with no
     /// read-back.
@@ -229,9 +230,9 @@ impl Mode for CloudsMode {
         let drawn = if self.on_gpu {
             self.pictures.draw_on(gpu, encoder, picture, &self.params)
         } else {
-            let (pictures, params) = (&mut self.pictures, &self.params);
+            let (pictures, params, whole) = (&mut self.pictures, &self.params, picture.size);
             picture
-                .draw_cpu(changed, |size| pictures.draw(params, size))
+                .draw_cpu(changed, |size| pictures.draw(params, size, size != whole))
                 .map(|coarse| self.coarse = coarse)
         };
         match drawn {

@@ -240,6 +240,15 @@ pub fn scene_arguments(path: &std::path::Path, long_flags: &[&str]) -> atmo::Res
 /// Texels a side of the cloud's shadow on the ground (some 10 m each across a cumulus).
 const SHADOW_RESOLUTION: usize = 256;
 
+/// How much coarser the window's previews light the cloud than its whole pictures:
+/// the intensity buffer's and the shadow map's resolution divided by this (an eighth
+/// of the buffer's cells, a quarter of the map's texels), while the picture itself is
+/// drawn at a fraction of its size anyway.
+const PREVIEW_COARSENING: usize = 2;
+
+/// The coarsest intensity buffer a preview lights, voxels a side.
+const PREVIEW_MIN_RESOLUTION: usize = 32;
+
 /// The wind's time a frame of `--animate wind` (and of the window's wind), s.
 pub const WIND_STEP_S: f32 = 4.0;
 
@@ -548,9 +557,14 @@ impl Cloud {
 
     /// The cloud's shadow for `sun`, where the picture shows the ground (with --sky or
     /// --ground-albedo): made with each light pass.
-    fn shadow(&self, particles: &[Particle], sun: Sun) -> atmo::Result<Option<CloudShadow>> {
+    fn shadow(
+        &self,
+        particles: &[Particle],
+        sun: Sun,
+        resolution: usize,
+    ) -> atmo::Result<Option<CloudShadow>> {
         (self.sky || self.ground_albedo.is_some())
-            .then(|| CloudShadow::new(particles, sun.toward(), SHADOW_RESOLUTION))
+            .then(|| CloudShadow::new(particles, sun.toward(), resolution))
             .transpose()
     }
 
@@ -761,7 +775,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     let mut particles = cloud.particles.clone();
     let start = Instant::now();
     renderer.light(&particles, sun.toward(), forward, splat)?;
-    let mut shadow = cloud.shadow(&particles, sun)?;
+    let mut shadow = cloud.shadow(&particles, sun, SHADOW_RESOLUTION)?;
     let light_ms = start.elapsed().as_secs_f64() * 1e3;
     // Everything is validated now (the light pass checked the buffer's settings).
     if let Some(path) = &args.save_particles {
@@ -807,7 +821,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                         }
                     };
                     renderer.light(&particles, sun.toward(), forward, splat)?;
-                    shadow = cloud.shadow(&particles, sun)?;
+                    shadow = cloud.shadow(&particles, sun, SHADOW_RESOLUTION)?;
                     let (light, background) =
                         cloud.lighting(sky.as_ref(), shadow.as_ref(), sun, camera)?;
                     *frame = renderer.draw(&particles, camera, &light, background.as_ref())?;
@@ -833,11 +847,12 @@ pub struct WindowClouds {
     /// The particles where the window's wind has carried them, and its seconds.
     particles: Vec<Particle>,
     wind_s: f32,
-    /// The renderer, and whether it is the GPU's.
-    renderer: Option<(bool, Renderer)>,
-    /// The sun the intensity buffer was lit by, and the cloud's shadow then.
-    lit: Option<Sun>,
-    shadow: Option<CloudShadow>,
+    /// The renderer of whole pictures, and whether it is the GPU's.
+    whole: Option<(bool, Lit)>,
+    /// The CPU's renderer of previews: the light pass and the shadow map
+    /// [`PREVIEW_COARSENING`] times coarser, lit apart from the whole pictures' (a
+    /// preview does not spoil the buffer the next whole picture reuses).
+    preview: Option<Lit>,
     /// The sky around the cloud, and the camera height it was made for.
     sky: Option<(f32, Option<SkyAround>)>,
     /// On the GPU: the pass that puts the cloud over what is behind it.
@@ -850,9 +865,8 @@ impl WindowClouds {
             particles: cloud.particles.clone(),
             wind_s: cloud.wind_s,
             cloud,
-            renderer: None,
-            lit: None,
-            shadow: None,
+            whole: None,
+            preview: None,
             sky: None,
             pass: None,
         }
@@ -874,16 +888,28 @@ impl WindowClouds {
     }
 }
 
+/// A renderer, the sun its intensity buffer was last lit by (none before its first
+/// light pass, or after the wind moved the particles) and the cloud's shadow then.
+struct Lit {
+    renderer: Renderer,
+    sun: Option<Sun>,
+    shadow: Option<CloudShadow>,
+    /// Texels a side of the shadow map.
+    shadow_resolution: usize,
+}
+
 impl WindowClouds {
-    /// What a frame at `p` and `size` needs, on `gpu` where given, else on the CPU:
-    /// the parameters checked, the particles where the wind took them, the light pass
-    /// where the sun or the wind changed, the sky around the cloud where the camera's
-    /// height changed; the camera, the light at the cloud and what is behind it.
+    /// What a frame at `p` and `size` needs, on `gpu` where given, else on the CPU (a
+    /// `preview` more coarsely lit): the parameters checked, the
+    /// particles where the wind took them, the light pass where the sun or the wind
+    /// changed, the sky around the cloud where the camera's height changed; the camera,
+    /// the light at the cloud and what is behind it.
     fn prepare(
         &mut self,
         gpu: Option<&Gpu>,
         p: &CloudParams,
         size: (u32, u32),
+        preview: bool,
     ) -> Result<(Camera, Lighting, Option<Frame>)> {
         check_sun(p.sun_elevation_deg, p.sun_azimuth_deg)?;
         atmo::error::check_positive("--exposure", p.exposure as f64, 1e12)?;
@@ -891,7 +917,13 @@ impl WindowClouds {
         if p.wind_s != self.wind_s {
             check_range("--wind-s", p.wind_s as f64, 0.0, 1e5)?;
             self.particles = blown(&cloud.calm, p.wind_s);
-            (self.wind_s, self.lit) = (p.wind_s, None);
+            self.wind_s = p.wind_s;
+            let lit = self
+                .whole
+                .iter_mut()
+                .map(|(_, lit)| lit)
+                .chain(&mut self.preview);
+            lit.for_each(|lit| lit.sun = None);
             if let Some((_, Some(sky))) = &mut self.sky {
                 sky.centre = SkyAround::centre_of(&self.particles);
             }
@@ -900,17 +932,34 @@ impl WindowClouds {
         let (axis, position, target) = (cloud.fov_axis, p.camera, p.look_at);
         let camera = camera_at(particles, axis, position, target, p.fov_deg, size)?;
         let sun = Sun::from_degrees(p.sun_elevation_deg as f64, p.sun_azimuth_deg as f64)?;
-        let renderer = match &mut self.renderer {
-            Some((on_gpu, renderer)) if *on_gpu == gpu.is_some() => renderer,
-            slot => {
-                self.lit = None;
-                &mut slot.insert((gpu.is_some(), Renderer::new(gpu, cloud)?)).1
-            }
+        let unlit = |renderer, shadow_resolution| Lit {
+            renderer,
+            sun: None,
+            shadow: None,
+            shadow_resolution,
         };
-        if self.lit != Some(sun) {
+        let coarse = preview && gpu.is_none();
+        if coarse && self.preview.is_none() {
+            let resolution = (cloud.resolution / PREVIEW_COARSENING).max(PREVIEW_MIN_RESOLUTION);
+            let renderer = Renderer::Cpu(None, resolution.min(cloud.resolution));
+            self.preview = Some(unlit(renderer, SHADOW_RESOLUTION / PREVIEW_COARSENING));
+        }
+        let on_gpu = gpu.is_some();
+        if !coarse && !matches!(self.whole, Some((on, _)) if on == on_gpu) {
+            let renderer = Renderer::new(gpu, cloud)?;
+            self.whole = Some((on_gpu, unlit(renderer, SHADOW_RESOLUTION)));
+        }
+        let lit = if coarse {
+            self.preview.as_mut()
+        } else {
+            self.whole.as_mut().map(|(_, lit)| lit)
+        }
+        .expect("made above");
+        if lit.sun != Some(sun) {
+            let renderer = &mut lit.renderer;
             renderer.light(particles, sun.toward(), cloud.forward, cloud.splat)?;
-            self.shadow = cloud.shadow(particles, sun)?;
-            self.lit = Some(sun);
+            lit.shadow = cloud.shadow(particles, sun, lit.shadow_resolution)?;
+            lit.sun = Some(sun);
         }
         let height = camera.position.y;
         let sky = match &mut self.sky {
@@ -921,15 +970,20 @@ impl WindowClouds {
             }
         };
         let (light, background) =
-            cloud.lighting(sky.as_ref(), self.shadow.as_ref(), sun, &camera)?;
+            cloud.lighting(sky.as_ref(), lit.shadow.as_ref(), sun, &camera)?;
         Ok((camera, light, background))
     }
 }
 
 impl CloudPictures for WindowClouds {
-    fn draw(&mut self, p: &CloudParams, size: (u32, u32)) -> Result<Frame> {
-        let (camera, light, background) = self.prepare(None, p, size)?;
-        let (_, renderer) = self.renderer.as_ref().expect("made by prepare");
+    fn draw(&mut self, p: &CloudParams, size: (u32, u32), preview: bool) -> Result<Frame> {
+        let (camera, light, background) = self.prepare(None, p, size, preview)?;
+        let lit = if preview {
+            self.preview.as_ref()
+        } else {
+            self.whole.as_ref().map(|(_, lit)| lit)
+        };
+        let renderer = &lit.expect("made by prepare").renderer;
         renderer.draw(&self.particles, &camera, &light, background.as_ref())
     }
 
@@ -940,8 +994,15 @@ impl CloudPictures for WindowClouds {
         picture: &mut Picture,
         p: &CloudParams,
     ) -> Result<()> {
-        let (camera, light, background) = self.prepare(Some(gpu), p, picture.size)?;
-        let Some((_, Renderer::Gpu(on))) = &self.renderer else {
+        let (camera, light, background) = self.prepare(Some(gpu), p, picture.size, false)?;
+        let Some((
+            _,
+            Lit {
+                renderer: Renderer::Gpu(on),
+                ..
+            },
+        )) = &self.whole
+        else {
             unreachable!("prepare made the GPU's renderer")
         };
         let clouds = &on.1;
@@ -1038,5 +1099,67 @@ impl SkyAround {
             self.haze(sun, camera)?,
             background,
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Flags {
+        #[command(flatten)]
+        still: CloudStill,
+    }
+
+    /// A small cloud over a painted ground (so that it has a shadow map).
+    fn small_cloud() -> Cloud {
+        let args = "clouds --generate cumulus --particles 300 --resolution 64 --ground-albedo 0.3 \
+                    --width 64 --height 36";
+        let flags = Flags::try_parse_from(args.split_whitespace()).unwrap();
+        Cloud::new(&flags.still).unwrap()
+    }
+
+    /// The buffer's resolution and the shadow map's of a renderer that was lit.
+    fn resolutions(lit: &Lit) -> (usize, usize) {
+        let Renderer::Cpu(Some(buffer), _) = &lit.renderer else {
+            panic!("a CPU renderer, lit");
+        };
+        let shadow = lit.shadow.as_ref().expect("a ground, so a shadow map");
+        (buffer.resolution, shadow.resolution)
+    }
+
+    #[test]
+    fn previews_are_lit_coarsely_apart_from_the_whole_pictures() {
+        let whole_size = (64, 36);
+        let mut window = WindowClouds::new(small_cloud());
+        let mut p = window.params();
+        window.draw(&p, whole_size, false).unwrap();
+        // The sun and then the wind move while previews are drawn; each whole picture
+        // after them is the one a fresh window draws, bit for bit (its own light pass
+        // redone for the new sun and particles, not the preview's reused).
+        for change in [0, 1] {
+            if change == 0 {
+                p.sun_azimuth_deg += 10.0;
+            } else {
+                p.wind_s = 120.0;
+            }
+            let preview = window.draw(&p, (16, 9), true).unwrap();
+            assert_eq!((preview.width, preview.height), (16, 9));
+            let sun =
+                Sun::from_degrees(p.sun_elevation_deg as f64, p.sun_azimuth_deg as f64).unwrap();
+            let coarse = window.preview.as_ref().unwrap();
+            assert_eq!(coarse.sun, Some(sun));
+            // Half the whole pictures' resolution (at least 32 voxels), half the map's.
+            assert_eq!(resolutions(coarse), (32, SHADOW_RESOLUTION / 2));
+            let whole = window.draw(&p, whole_size, false).unwrap();
+            let (_, lit) = window.whole.as_ref().unwrap();
+            assert_eq!(resolutions(lit), (64, SHADOW_RESOLUTION));
+            let fresh = WindowClouds::new(small_cloud())
+                .draw(&p, whole_size, false)
+                .unwrap();
+            assert!(whole.pixels == fresh.pixels, "change {change}");
+        }
     }
 }
