@@ -91,7 +91,10 @@ impl Octaves {
     /// `x = a^i (end - start) - tau`. Where `1 / a` is a whole number `k` (the fitted
     /// octaves' 4) the octaves are taken from the highest down, each one's
     /// `e^(a^i start)` the `k`-th power of the one above's: two `exp`s a blob instead
-    /// of two an octave, within 3e-7 of them.
+    /// of two an octave. Each power multiplies the `exp`'s relative error (an ulp) by
+    /// `k`, so powers are taken only while `k^(octaves - 1) <= 64`; the light is then
+    /// within 4e-5 of the closed form in double precision (the fitted octaves, 16:
+    /// within 1e-5), far below a level of the picture.
     #[inline]
     pub fn light(&self, phase: f32, e: &Emission) -> BlobLight {
         const ISOTROPIC: f32 = 1.0 / (4.0 * std::f32::consts::PI);
@@ -108,7 +111,8 @@ impl Octaves {
             weighted[i] = weight * (shape * phase + (1.0 - shape) * ISOTROPIC);
         }
         let ratio = 1.0 / self.attenuation;
-        let whole = (ratio.fract() == 0.0 && ratio <= 16.0).then_some(ratio as i32);
+        let exact = ratio.fract() == 0.0 && ratio.powi(count as i32 - 1) <= 64.0;
+        let whole = exact.then_some(ratio as i32);
         let mut light = BlobLight {
             single: 0.0,
             higher: 0.0,
@@ -120,12 +124,15 @@ impl Octaves {
                 Some(k) if i + 1 < count => (near.powi(k), far.powi(k)),
                 _ => ((share[i] * start).exp(), (share[i] * end).exp()),
             };
-            // (e^x - 1) / x times e^(a^i start), by its series near 0 (within 5e-8;
-            // the difference would lose digits there).
+            // (e^x - 1) / x times e^(a^i start); near 0 by its series (within 5e-8 for
+            // |x| < 1/4), where the difference of the two ends' light would lose the
+            // digits that the powers' error leaves.
             let x = share[i] * (end - start) - e.tau;
             let integral = e.tau
-                * if x.abs() < 1e-2 {
-                    near * (1.0 + x * (0.5 + x * (1.0 / 6.0)))
+                * if x.abs() < 0.25 {
+                    let series = 1.0 / 120.0 + x * (1.0 / 720.0);
+                    let series = 1.0 / 6.0 + x * (1.0 / 24.0 + x * series);
+                    near * (1.0 + x * (0.5 + x * series))
                 } else {
                     (far * transmitted - near) / x
                 };
@@ -192,6 +199,58 @@ pub struct BlobLight {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The closed form in double precision, every octave by its own `exp`s: what the
+    /// powers of [`Octaves::light`] stand for.
+    fn light_f64(octaves: &Octaves, phase: f64, e: &Emission) -> [f64; 2] {
+        let [start, end] = e.log_ends().map(f64::from);
+        let tau = e.tau as f64;
+        let (mut weight, mut shape, mut share) = (1.0f64, 1.0f64, 1.0f64);
+        let mut out = [0.0; 2];
+        for i in 0..octaves.count {
+            let p = shape * phase + (1.0 - shape) / (4.0 * std::f64::consts::PI);
+            let x = share * (end - start) - tau;
+            let integral = tau * (share * start).exp() * (x.exp_m1() / x);
+            out[(i > 0) as usize] += weight * p * integral;
+            weight *= octaves.contribution as f64;
+            shape *= octaves.eccentricity as f64;
+            share *= octaves.attenuation as f64;
+        }
+        out
+    }
+
+    /// The powers that replace `exp`s where `1 / a` is whole, against the closed form
+    /// in double precision over blobs thin to thick and light from full to deep shade:
+    /// within 1e-5 of the light for the fitted octaves (powers to the 16th), 4e-5 for
+    /// four (to the 64th).
+    #[test]
+    fn octaves_by_powers_keep_the_closed_form() {
+        let four = Octaves {
+            count: 4,
+            ..Octaves::MULTIPLE
+        };
+        for (octaves, within) in [(Octaves::MULTIPLE, 1e-5), (four, 4e-5)] {
+            for k in 0..2000u32 {
+                // A fixed scatter of inputs (a Weyl sequence in three dimensions).
+                let f = |a: f64| (k as f64 * a).fract() as f32;
+                let tau = 1e-3 * (4.0e4f32).powf(f(0.618_034));
+                let log_gamma = [-60.0 * f(0.754_878) * f(0.569_840), -60.0 * f(0.569_840)];
+                let e = Emission {
+                    tau,
+                    u: [0.2 * tau, 0.85 * tau],
+                    log_gamma,
+                };
+                let got = octaves.light(0.3, &e);
+                let want = light_f64(&octaves, 0.3, &e);
+                for (g, w) in [got.single, got.higher].into_iter().zip(want) {
+                    assert!(
+                        (g as f64 - w).abs() <= within * w + 1e-30,
+                        "{octaves:?} {e:?}: {g} vs {w}"
+                    );
+                }
+            }
+        }
+    }
 
     /// Against a fine midpoint sum of the same integral, for `ln Gamma` linear in the
     /// depth (the sun behind, in front, across), thin and thick blobs, both kinds.
