@@ -3,6 +3,7 @@
 //! an accepted fixture has finite angles, flux and colour temperature, ordered
 //! ranges, and a prism of unit beams that is atmo's circular prism or refused.
 #![no_main]
+use atmo::shafts::show::Prism;
 use atmo::shafts::spotlight::Sampling;
 use libfuzzer_sys::fuzz_target;
 
@@ -26,7 +27,9 @@ fuzz_target!(|data: &[u8]| {
             // Facets are unit beams; a circular prism's numbers are in atmo's ranges.
             assert!(prism.facets.iter().all(|d| (d.length() - 1.0).abs() < 1e-4));
             if let Ok(p) = prism.circular() {
-                assert!((2..=16).contains(&p.facets) && (0.0..=60.0).contains(&p.angle_deg));
+                let [fewest, most] = Prism::FACETS;
+                assert!((fewest..=most).contains(&p.facets));
+                assert!((0.0..=Prism::MAX_ANGLE_DEG).contains(&p.angle_deg));
             }
         }
     }

@@ -898,6 +898,19 @@ struct Lit {
     shadow_resolution: usize,
 }
 
+/// Of a window's renderers, the previews' where `coarse`, else the whole pictures'.
+fn chosen<'a>(
+    whole: &'a mut Option<(bool, Lit)>,
+    preview: &'a mut Option<Lit>,
+    coarse: bool,
+) -> Option<&'a mut Lit> {
+    if coarse {
+        preview.as_mut()
+    } else {
+        whole.as_mut().map(|(_, lit)| lit)
+    }
+}
+
 impl WindowClouds {
     /// What a frame at `p` and `size` needs, on `gpu` where given, else on the CPU (a
     /// `preview` more coarsely lit): the parameters checked, the
@@ -949,12 +962,7 @@ impl WindowClouds {
             let renderer = Renderer::new(gpu, cloud)?;
             self.whole = Some((on_gpu, unlit(renderer, SHADOW_RESOLUTION)));
         }
-        let lit = if coarse {
-            self.preview.as_mut()
-        } else {
-            self.whole.as_mut().map(|(_, lit)| lit)
-        }
-        .expect("made above");
+        let lit = chosen(&mut self.whole, &mut self.preview, coarse).expect("made above");
         if lit.sun != Some(sun) {
             let renderer = &mut lit.renderer;
             renderer.light(particles, sun.toward(), cloud.forward, cloud.splat)?;
@@ -978,13 +986,9 @@ impl WindowClouds {
 impl CloudPictures for WindowClouds {
     fn draw(&mut self, p: &CloudParams, size: (u32, u32), preview: bool) -> Result<Frame> {
         let (camera, light, background) = self.prepare(None, p, size, preview)?;
-        let lit = if preview {
-            self.preview.as_ref()
-        } else {
-            self.whole.as_ref().map(|(_, lit)| lit)
-        };
-        let renderer = &lit.expect("made by prepare").renderer;
-        renderer.draw(&self.particles, &camera, &light, background.as_ref())
+        let lit = chosen(&mut self.whole, &mut self.preview, preview).expect("made by prepare");
+        lit.renderer
+            .draw(&self.particles, &camera, &light, background.as_ref())
     }
 
     fn draw_on(

@@ -77,18 +77,19 @@ impl GdtfPrism {
     }
 
     /// The slot as atmo's circular prism ([`Prism`]): its facet count and their mean
-    /// angle off the axis, if the facets are 2 to 16 copies of the beam turned the
-    /// same angle off it (0 to 60 degrees), evenly around it, within
+    /// angle off the axis, if the facets are [`Prism::FACETS`] copies of the beam
+    /// turned the same angle off it (up to [`Prism::MAX_ANGLE_DEG`]), evenly around it, within
     /// [`GdtfPrism::TOLERANCE_DEG`]; otherwise an error naming the slot and saying what
     /// differs. Where the facets' circle starts is not kept: the head's `prism_deg`
     /// attribute turns it.
     pub fn circular(&self) -> std::result::Result<Prism, String> {
         let at = format!("prism wheel {:?} slot {:?}", self.wheel, self.slot);
         let n = self.facets.len();
-        if !(2..=16).contains(&n) {
+        let [fewest, most] = Prism::FACETS;
+        if !(fewest as usize..=most as usize).contains(&n) {
             return Err(format!(
-                "{at} has {n} facets; atmo's prisms have 2 to 16 (give the fixture \
-                 `prism = {{ facets = ..., angle_deg = ... }}` in the scene instead)"
+                "{at} has {n} facets; atmo's prisms have {fewest} to {most} (give the \
+                 fixture `prism = {{ facets = ..., angle_deg = ... }}` in the scene instead)"
             ));
         }
         let angles = self.angles_deg();
@@ -108,14 +109,15 @@ impl GdtfPrism {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        if !(0.0..=60.0).contains(&mean)
+        if !(0.0..=Prism::MAX_ANGLE_DEG).contains(&mean)
             || angles
                 .iter()
                 .any(|[off, _]| (off - mean).abs() > Self::TOLERANCE_DEG)
         {
             return refuse(format!(
-                "its facets are turned {} deg off the beam (atmo: one angle, 0 to 60)",
-                listed(0)
+                "its facets are turned {} deg off the beam (atmo: one angle, 0 to {})",
+                listed(0),
+                Prism::MAX_ANGLE_DEG
             ));
         }
         // Evenly around: each facet's direction, taken in turn around the circle, a

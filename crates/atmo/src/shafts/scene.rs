@@ -133,11 +133,18 @@ struct PrismSpec {
 }
 
 impl PrismSpec {
-    /// The prism, every number in its range (2 to 16 facets, each beam at most 60 deg
-    /// off the head's).
+    /// The prism, every number in its range ([`Prism::FACETS`], each beam at most
+    /// [`Prism::MAX_ANGLE_DEG`] off the head's).
     fn validate(&self, at: &str) -> Result<Prism> {
-        check_range(&format!("{at}.facets"), self.facets as f64, 2.0, 16.0)?;
-        check_range(&format!("{at}.angle_deg"), self.angle_deg as f64, 0.0, 60.0)?;
+        let [fewest, most] = Prism::FACETS.map(f64::from);
+        check_range(&format!("{at}.facets"), self.facets as f64, fewest, most)?;
+        let most_deg = Prism::MAX_ANGLE_DEG as f64;
+        check_range(
+            &format!("{at}.angle_deg"),
+            self.angle_deg as f64,
+            0.0,
+            most_deg,
+        )?;
         Ok(Prism {
             facets: self.facets,
             angle_deg: self.angle_deg,

@@ -136,6 +136,13 @@ pub struct Prism {
     pub angle_deg: f32,
 }
 
+impl Prism {
+    /// The facets a prism may have, fewest and most.
+    pub const FACETS: [u32; 2] = [2, 16];
+    /// The most a facet's beam may be turned off the head's, degrees.
+    pub const MAX_ANGLE_DEG: f32 = 60.0;
+}
+
 /// Fixtures and their cues.
 #[derive(Debug, Clone, Default)]
 pub struct Show {
