@@ -323,6 +323,7 @@ fn open(
         PanelLayer::new(&gpu, config.format, (config.width, config.height)).map_err(opening)?;
     let picture = Picture::new(&gpu, (config.width, config.height)).map_err(opening)?;
     let context = egui::Context::default();
+    context.all_styles_mut(crate::layer::no_shadows);
     let egui = egui_winit::State::new(
         context,
         egui::ViewportId::ROOT,
