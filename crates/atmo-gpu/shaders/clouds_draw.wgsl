@@ -18,8 +18,9 @@ struct DrawParams {
     to_sun: vec4<f32>,
     // Sunlight at the cloud, RGB; w: the phase function's parameter.
     sun: vec4<f32>,
-    // Sky light scattered by the droplets, RGB radiance.
-    ambient: vec4<f32>,
+    // The sky's light the droplets scatter toward the eye: nine spherical harmonics,
+    // RGB (atmo::clouds::SkyLight, its order).
+    sky: array<vec4<f32>, 9>,
     // The air between the eye and the cloud: transmittance and in-scattered light, RGB.
     haze_transmittance: vec4<f32>,
     haze_inscatter: vec4<f32>,
@@ -43,9 +44,9 @@ struct Billboard {
     @builtin(position) clip: vec4<f32>,
     // Centre (m, world) and standard deviation (m).
     @location(0) @interpolate(flat) centre: vec4<f32>,
-    // Albedo times sunlight, and times the ambient light.
+    // Albedo times sunlight; the albedo.
     @location(1) @interpolate(flat) sun: vec3<f32>,
-    @location(2) @interpolate(flat) ambient: vec3<f32>,
+    @location(2) @interpolate(flat) albedo: f32,
     @location(3) @interpolate(flat) density: f32,
 }
 
@@ -57,6 +58,26 @@ struct Colours {
 
 fn phase(c: f32) -> f32 {
     return phase_function(u32(params.to_sun.w), params.sun.w, c);
+}
+
+// The sky's light scattered toward the eye along the unit ray d (SkyLight::along).
+fn sky_along(d: vec3<f32>) -> vec3<f32> {
+    let basis = array<f32, 9>(
+        0.2820948,
+        0.488603 * d.y,
+        0.488603 * d.z,
+        0.488603 * d.x,
+        1.092548 * d.x * d.y,
+        1.092548 * d.y * d.z,
+        0.315392 * (3.0 * d.z * d.z - 1.0),
+        1.092548 * d.x * d.z,
+        0.546274 * (d.x * d.x - d.y * d.y),
+    );
+    var sum = vec3<f32>(0.0);
+    for (var k = 0u; k < 9u; k++) {
+        sum += basis[k] * params.sky[k].xyz;
+    }
+    return sum;
 }
 
 @vertex
@@ -87,7 +108,7 @@ fn vertex(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> Bil
     out.clip = vec4<f32>(2.0 * px / w - 1.0, 1.0 - 2.0 * py / h, 0.5, 1.0);
     out.centre = vec4<f32>(centre, s);
     out.sun = p.albedo * params.sun.xyz;
-    out.ambient = p.albedo * params.ambient.xyz;
+    out.albedo = p.albedo;
     out.density = p.density;
     return out;
 }
@@ -239,7 +260,8 @@ fn fragment(b: Billboard) -> Colours {
     let alpha = 1.0 - exp(-tau);
     let haze = params.haze_transmittance.xyz;
     var out: Colours;
-    out.picture = vec4<f32>(haze * (single * b.sun + alpha * b.ambient)
+    let sky = b.albedo * sky_along(r * inv_length);
+    out.picture = vec4<f32>(haze * (single * b.sun + alpha * sky)
         + alpha * params.haze_inscatter.xyz, alpha);
     out.higher = vec4<f32>(haze * higher * b.sun, alpha);
     return out;

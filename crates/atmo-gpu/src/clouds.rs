@@ -62,7 +62,9 @@ gpu_struct! {
         up: [f32; 4],
         to_sun: [f32; 4],
         sun: [f32; 4],
-        ambient: [f32; 4],
+        /// The sky's light the droplets scatter toward the eye, as nine harmonics
+        /// (atmo::clouds::SkyLight::scattered), RGB.
+        sky: [[f32; 4]; 9],
         haze_transmittance: [f32; 4],
         haze_inscatter: [f32; 4],
         /// The octaves' attenuation, contribution, eccentricity and depth scale.
@@ -374,6 +376,7 @@ impl GpuClouds {
         octaves.validate()?;
         let focal = 0.5 * h as f32 / tan_half_height;
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
+        let sky = light.ambient.scattered(light.phase, &octaves);
         // The phase function's code and parameter (functions.wgsl's phase_function).
         let (kind, g) = light.phase.code();
         let params = DrawParams {
@@ -383,7 +386,7 @@ impl GpuClouds {
             up: v4(camera.up, 0.0),
             to_sun: v4(light.to_sun, kind as f32),
             sun: v4(light.sun, g as f32),
-            ambient: v4(light.ambient, 0.0),
+            sky: sky.harmonics.map(|h| v4(h, 0.0)),
             haze_transmittance: v4(light.haze.transmittance, 0.0),
             haze_inscatter: v4(light.haze.inscatter, 0.0),
             octaves: [

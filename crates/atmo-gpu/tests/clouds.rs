@@ -8,7 +8,7 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::{render, Haze, Lighting};
-use atmo::clouds::Octaves;
+use atmo::clouds::{Octaves, SkyLight};
 use atmo::image::Frame;
 use atmo::view::{Camera, Fov};
 use atmo_gpu::clouds::{CloudsPass, GpuClouds};
@@ -70,11 +70,19 @@ fn camera() -> Camera {
 }
 
 /// Sunlight, sky light and air in front of the cloud (the GPU hazes it as the CPU).
+/// The sky is brighter above, bluer toward +x and has some of every band, so that the
+/// GPU's harmonics are held to the CPU's in every term.
 fn lighting(phase: PhaseFunction, scattering: Octaves) -> Lighting {
+    let mut harmonics = [[0.0f64; 3]; 9];
+    for (k, h) in harmonics.iter_mut().enumerate() {
+        let scale = if k == 0 { 0.2 } else { 0.03 / k as f64 };
+        *h = [scale, 1.3 * scale, 2.0 * scale];
+    }
+    harmonics[3][2] = 0.08;
     Lighting {
         to_sun: to_sun(),
         sun: Vec3::ONE,
-        ambient: Vec3::new(0.03, 0.04, 0.06),
+        ambient: SkyLight::from_harmonics(&harmonics),
         phase,
         haze: Haze {
             transmittance: Vec3::new(0.8, 0.85, 0.9),
@@ -199,7 +207,7 @@ fn drawing_before_the_light_pass_and_oversized_buffers_are_refused() {
     let light = Lighting {
         to_sun: to_sun(),
         sun: Vec3::ONE,
-        ambient: Vec3::ZERO,
+        ambient: SkyLight::NONE,
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
         scattering: Octaves::SINGLE,

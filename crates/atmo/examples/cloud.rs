@@ -5,7 +5,7 @@
 //! `cargo run --release -p atmo --example cloud -- cloud.png`
 
 use atmo::atmosphere::PhaseFunction;
-use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, Splat};
+use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, SkyLight, Splat};
 use atmo::sky::{Daylight, SkySettings};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
@@ -33,7 +33,7 @@ fn main() -> atmo::Result<()> {
     let light = Lighting {
         to_sun: sun.toward(),
         sun: daylight.sunlight(sun),
-        ambient: daylight.skylight(sun),
+        ambient: SkyLight::from_harmonics(&daylight.skylight(sun)),
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
         // Every order of scattering (Octaves::SINGLE: the paper's single scattering).

@@ -10,7 +10,7 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::{Cumulus, SplitMix64};
 use atmo::clouds::harris::light_per_particle;
 use atmo::clouds::render::{render, Haze, Lighting};
-use atmo::clouds::{CloudShadow, Octaves};
+use atmo::clouds::{CloudShadow, Octaves, SkyLight};
 use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::clouds::{transmittance, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
@@ -230,7 +230,7 @@ fn lighting(to_sun: Vec3) -> Lighting {
     Lighting {
         to_sun,
         sun: Vec3::ONE,
-        ambient: Vec3::ZERO,
+        ambient: SkyLight::NONE,
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
         scattering: Octaves::MULTIPLE,

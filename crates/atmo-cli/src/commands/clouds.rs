@@ -12,7 +12,7 @@ use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::{render, Haze, Lighting};
 use atmo::clouds::shadow::{CloudShadow, Ground};
-use atmo::clouds::Octaves;
+use atmo::clouds::{Octaves, SkyLight};
 use atmo::error::check_range;
 use atmo::files::check_folder;
 use atmo::image::{Display, Frame, ImageKind};
@@ -123,8 +123,10 @@ pub struct CloudStill {
     /// scattering).
     #[arg(long, default_value_t = 0.0)]
     forward: f32,
-    /// Light from the sky scattered by the droplets: `none`, `sky` (the sky module's,
-    /// averaged over the sphere; needs --sky) or an RGB radiance `R,G,B`. Default:
+    /// Light from the sky scattered by the droplets: `none`, `sky` (the sky module's
+    /// radiance all around the cloud, the ground's below; the droplets scatter toward
+    /// the eye the part behind them most; needs --sky) or an RGB radiance `R,G,B` from
+    /// every direction alike. Default:
     /// `sky` with --sky, else `none` (a cloud on black has no other light than the
     /// sun's).
     #[arg(long, value_name = "none|sky|R,G,B")]
@@ -579,12 +581,12 @@ impl Cloud {
         camera: &Camera,
     ) -> atmo::Result<(Lighting, Option<Frame>)> {
         let (sunlight, ambient, haze, mut background) = match (sky, self.ambient) {
-            (None, Ambient::Rgb(rgb)) => (Vec3::ONE, rgb, Haze::CLEAR, None),
+            (None, Ambient::Rgb(rgb)) => (Vec3::ONE, SkyLight::uniform(rgb), Haze::CLEAR, None),
             (None, Ambient::Sky) => unreachable!("Ambient::parse needs --sky for it"),
             (Some(sky), ambient) => {
                 let (sunlight, skylight, haze, background) = sky.at(sun, camera)?;
                 let ambient = match ambient {
-                    Ambient::Rgb(rgb) => rgb,
+                    Ambient::Rgb(rgb) => SkyLight::uniform(rgb),
                     Ambient::Sky => skylight,
                 };
                 (sunlight, ambient, haze, Some(background))
@@ -596,7 +598,12 @@ impl Cloud {
                 let altitude = SkyAround::altitude(atmosphere, camera.position.y as f64);
                 Some(Ground::seen_through(atmosphere, altitude, sun))
             }
-            (None, Some(albedo)) => Some(Ground::painted(albedo, sunlight, sun.toward(), ambient)),
+            (None, Some(albedo)) => Some(Ground::painted(
+                albedo,
+                sunlight,
+                sun.toward(),
+                ambient.mean(),
+            )),
             (None, None) => None,
         };
         if let (Some(shadow), Some(ground)) = (shadow, ground) {
@@ -1089,9 +1096,9 @@ impl SkyAround {
     }
 
     /// For `sun`: the sun's irradiance at the cloud (RGB, through the atmosphere), the
-    /// sky's radiance averaged over the sphere there (its ambient light), the air in
-    /// front of the cloud, and the sky behind it as `camera` sees it.
-    fn at(&self, sun: Sun, camera: &Camera) -> atmo::Result<(Vec3, Vec3, Haze, Frame)> {
+    /// sky's radiance all around it (its ambient light), the air in front of the cloud,
+    /// and the sky behind it as `camera` sees it.
+    fn at(&self, sun: Sun, camera: &Camera) -> atmo::Result<(Vec3, SkyLight, Haze, Frame)> {
         let view = View {
             camera: camera.clone(),
             sun_disc: true,
@@ -1099,7 +1106,7 @@ impl SkyAround {
         let background = SkyPicture::new(&self.at_camera, sun).render(&view);
         Ok((
             self.at_cloud.sunlight(sun),
-            self.at_cloud.skylight(sun),
+            SkyLight::from_harmonics(&self.at_cloud.skylight(sun)),
             self.haze(sun, camera)?,
             background,
         ))

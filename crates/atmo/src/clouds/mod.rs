@@ -5,8 +5,9 @@
 //! filled in any particle order by the multiplicative form (7).
 //!
 //! [`harris`] is the baseline light pass the buffer is measured against; [`render`](mod@render)
-//! draws the billboards; [`shadow`] is the cloud's shadow on the ground; [`files`] reads
-//! and writes particles.
+//! draws the billboards, lit by the sun through the buffer, by every order of it
+//! ([`octaves`]) and by the sky ([`sky_light`]); [`shadow`] is the cloud's shadow on the
+//! ground; [`files`] reads and writes particles.
 
 pub mod buffer;
 pub mod files;
@@ -16,6 +17,7 @@ pub mod octaves;
 pub mod particles;
 pub mod render;
 pub mod shadow;
+pub mod sky_light;
 
 pub use buffer::{IntensityBuffer, Splat};
 pub use generator::Cumulus;
@@ -23,3 +25,4 @@ pub use octaves::Octaves;
 pub use particles::Particle;
 pub use render::{render, Haze, Lighting};
 pub use shadow::CloudShadow;
+pub use sky_light::SkyLight;

@@ -145,6 +145,22 @@ impl Octaves {
         light
     }
 
+    /// How much of the phase function's shape the octaves keep, weighted by their
+    /// light: `sum b^i c^i / sum b^i` (1 for single scattering). The sky's light
+    /// scattered by every order is tilted by this share of the droplets' phase
+    /// ([`crate::clouds::SkyLight::scattered`]).
+    pub fn phase_share(&self) -> f32 {
+        let (mut weight, mut shape) = (1.0f32, 1.0f32);
+        let (mut kept, mut total) = (0.0f32, 0.0f32);
+        for _ in 0..self.count.clamp(1, Self::MAX) {
+            kept += weight * shape;
+            total += weight;
+            weight *= self.contribution;
+            shape *= self.eccentricity;
+        }
+        kept / total
+    }
+
     /// Refuses numbers outside their ranges, naming the field.
     pub fn validate(&self) -> crate::error::Result<()> {
         use crate::error::check_range;

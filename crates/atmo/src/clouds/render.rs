@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use super::buffer::IntensityBuffer;
 use super::octaves::{Emission, Octaves};
 use super::particles::{tabulated_emission_nodes, Particle};
+use super::sky_light::SkyLight;
 use crate::atmosphere::phase::PhaseFunction;
 use crate::error::Result;
 use crate::image::Frame;
@@ -29,9 +30,10 @@ pub struct Lighting {
     /// Sunlight arriving at the cloud, RGB (irradiance in any units: pixels come out in
     /// the same per steradian).
     pub sun: Vec3,
-    /// Light from the sky scattered by the droplets, RGB radiance, the same everywhere
-    /// (it keeps the undersides from black; the paper has none).
-    pub ambient: Vec3,
+    /// The sky's radiance around the cloud (the paper has none), which the droplets
+    /// scatter toward the eye by their phase function and every order of
+    /// `scattering` ([`SkyLight::scattered`]); [`SkyLight::NONE`] for none.
+    pub ambient: SkyLight,
     /// The droplets' phase function (clouds (6)'s `p`), e.g.
     /// [`PhaseFunction::CloudMie`].
     pub phase: PhaseFunction,
@@ -108,12 +110,14 @@ pub fn render(
         buffer.grid_step(rx),
         buffer.grid_step(ry),
     );
-    // The phase function for each pixel's ray: the same for every blob it crosses.
-    let phases: Vec<f32> = (0..w * h)
+    // The phase function for each pixel's ray and the sky's light its droplets scatter
+    // along it: the same for every blob it crosses.
+    let sky = light.ambient.scattered(light.phase, &light.scattering);
+    let rays: Vec<(f32, Vec3)> = (0..w * h)
         .into_par_iter()
         .map(|k| {
-            let r = r0 + (k % w) as f32 * rx + (k / w) as f32 * ry;
-            light.phase.eval_f32(light.to_sun.dot(r.normalize()))
+            let r = (r0 + (k % w) as f32 * rx + (k / w) as f32 * ry).normalize();
+            (light.phase.eval_f32(light.to_sun.dot(r)), sky.along(r))
         })
         .collect();
     let mut frame = Frame::new(camera.width, camera.height);
@@ -125,8 +129,11 @@ pub fn render(
             let (y0, y1) = (band * BAND, (band * BAND + pixels.len() / w) as f32);
             // What still gets through each pixel of the band from behind.
             let mut through = vec![1.0f32; pixels.len()];
-            // The higher octaves' light, kept apart until the pixel's depth is known.
+            // The higher octaves' light, kept apart until the pixel's depth is known; the
+            // share of the sky's light the blobs scatter (albedo times what each takes
+            // out of the pixel's ray), to be times the ray's sky light.
             let mut higher = vec![Vec3::ZERO; pixels.len()];
+            let mut skylit = vec![0.0f32; pixels.len()];
             // Blocks of BLOCK columns across the band: whether one of their pixels still
             // lets light through, kept up to date lazily (`dirty` after a particle).
             let blocks = w.div_ceil(BLOCK);
@@ -162,7 +169,6 @@ pub fn render(
                 let d = p.position - camera.position;
                 let (d2, d0, dx, dy) = (d.length_squared(), d.dot(r0), d.dot(rx), d.dot(ry));
                 let sun = p.albedo * light.sun;
-                let ambient = p.albedo * light.ambient;
                 let rows = ((sy - sr).floor().max(y0 as f32) as usize)
                     ..((sy + sr).ceil().min(y1) as usize);
                 let cols = ((sx - sr).floor().max(0.0) as usize)
@@ -200,20 +206,27 @@ pub fn render(
                                 buffer.sample_log_grid(g + l1 * along),
                             ],
                         };
-                        let phase = phases[band * BAND * w + i];
+                        let phase = rays[band * BAND * w + i].0;
                         let blob = light.scattering.light(phase, &emission);
-                        let source = blob.single * sun + (1.0 - blob.transmitted) * ambient;
-                        pixels[i] += through[i] * source;
+                        pixels[i] += through[i] * blob.single * sun;
                         higher[i] += through[i] * blob.higher * sun;
+                        skylit[i] += through[i] * (1.0 - blob.transmitted) * p.albedo;
                         through[i] *= blob.transmitted;
                     }
                 }
             }
-            // The higher octaves by the cloud's depth on the ray, the haze in front of
-            // the cloud, then what shows through it.
+            // The higher octaves by the cloud's depth on the ray, the sky's light, the
+            // haze in front of the cloud, then what shows through it.
             let haze = light.haze;
-            for ((e, t), more) in pixels.iter_mut().zip(&through).zip(&higher) {
-                *e += light.scattering.higher_share(*t) * *more;
+            let band_rays = &rays[band * BAND * w..][..pixels.len()];
+            for ((((e, t), more), lit), ray) in pixels
+                .iter_mut()
+                .zip(&through)
+                .zip(&higher)
+                .zip(&skylit)
+                .zip(band_rays)
+            {
+                *e += light.scattering.higher_share(*t) * *more + *lit * ray.1;
                 *e = haze.transmittance * *e + (1.0 - *t) * haze.inscatter;
             }
             if let Some(background) = background {

@@ -1,20 +1,20 @@
 //! The sky's light on things in the air: the sun's irradiance after the atmosphere down
 //! to a point, and the sky's radiance there. This is how the sky lights the other
 //! methods (a cloud is lit by [`Daylight::sunlight`] and [`Daylight::skylight`]) without
-//! any of them knowing the sky: they take the two colours.
+//! any of them knowing the sky: they take the sun's colour and the sky's harmonics.
 
 use glam::Vec3;
 
-use super::lighting::mean_radiance;
+use super::lighting::project_equirect;
 use super::{SkyModel, SkyPicture, SkySettings};
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::Atmosphere;
 use crate::error::Result;
 use crate::view::Sun;
 
-/// Rows of the equirectangular map [`Daylight::skylight`] averages (5.6 deg a row):
-/// the sky's light varies smoothly, and the mean is within 0.5 % of a map four times
-/// finer (test below).
+/// Rows of the equirectangular map [`Daylight::skylight`] projects (5.6 deg a row):
+/// the sky's light varies smoothly, and its nine harmonics are within 0.5 % of the
+/// mean's of a map four times finer (test below).
 const SKYLIGHT_MAP_HEIGHT: u32 = 32;
 
 /// Sunlight and skylight at one altitude of an atmosphere.
@@ -45,14 +45,12 @@ impl Daylight {
         Vec3::from(self.colour.rgb(&spectrum))
     }
 
-    /// The sky's radiance averaged over the whole sphere, `(1 / 4 pi) integral L dw`
-    /// (the sky above, the lit ground below, no sun disc), linear sRGB: the light a
-    /// droplet scatters from the sky per unit scattering coefficient, its phase
-    /// function taken as isotropic for light from everywhere (a cloud's ambient term).
-    pub fn skylight(&self, sun: Sun) -> Vec3 {
-        let map = SkyPicture::new(&self.model, sun).equirect(SKYLIGHT_MAP_HEIGHT, false);
-        let mean = mean_radiance(&map);
-        Vec3::new(mean[0] as f32, mean[1] as f32, mean[2] as f32)
+    /// The sky's radiance all around (the sky above, the lit ground below, no sun
+    /// disc) as nine spherical harmonics per linear-sRGB channel ([`super::lighting`]'s
+    /// basis): the light a cloud's droplets scatter from the sky
+    /// ([`crate::clouds::SkyLight`]).
+    pub fn skylight(&self, sun: Sun) -> [[f64; 3]; 9] {
+        project_equirect(&SkyPicture::new(&self.model, sun).equirect(SKYLIGHT_MAP_HEIGHT, false))
     }
 
     /// The model behind the two.
@@ -84,16 +82,22 @@ mod tests {
             "redder at sunset: {low} {high}"
         );
         let sun = Sun::from_degrees(60.0, 0.0).unwrap();
-        let sky = light.skylight(sun);
+        let harmonics = light.skylight(sun);
+        let sky = crate::clouds::SkyLight::from_harmonics(&harmonics).mean();
         assert!(sky.z > sky.x && sky.x > 0.0, "blue: {sky}");
         // The sky's light is a small part of the sun's.
         assert!(sky.z < 0.1 * high.z, "{sky} {high}");
-        // The map is fine enough for the mean.
-        let fine = mean_radiance(
+        // Bluer above than the lit ground below (harmonic 1 is along up).
+        assert!(harmonics[1][2] > harmonics[1][0], "{harmonics:?}");
+        // The map is fine enough: every harmonic within 0.5 % of the mean's.
+        let fine = project_equirect(
             &SkyPicture::new(light.model(), sun).equirect(4 * SKYLIGHT_MAP_HEIGHT, false),
         );
-        for (c, f) in sky.to_array().iter().zip(fine) {
-            assert!((*c as f64 / f - 1.0).abs() < 5e-3, "{sky} vs {fine:?}");
+        for (k, (coarse, finer)) in harmonics.iter().zip(fine).enumerate() {
+            for c in 0..3 {
+                let off = (coarse[c] - finer[c]).abs() / fine[0][c];
+                assert!(off < 5e-3, "{k}, {c}: {} vs {}", coarse[c], finer[c]);
+            }
         }
     }
 }
