@@ -50,15 +50,26 @@ fn shafts_render_a_scene_and_compare_measures_two_renders() {
         .unwrap_or_else(|| panic!("{text}"));
     assert!(rms > 0.0 && rms < 10.0, "{text}");
     assert!(image::open(&diff).is_ok());
-    // A picture against itself: zero.
-    let o = atmo(&[
-        "compare",
-        fast.to_str().unwrap(),
-        fast.to_str().unwrap(),
-        "-o",
-        diff.to_str().unwrap(),
-    ]);
-    assert!(String::from_utf8_lossy(&o.stdout).contains("rms 0.000"));
+    // A picture against itself: zero; without -o, the figures and no image (run in
+    // the scratch folder, which holds nothing else to write over).
+    std::fs::remove_file(&diff).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_atmo"))
+        .args(["compare", fast.to_str().unwrap(), fast.to_str().unwrap()])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("rms 0.000") && !text.contains("difference image"),
+        "{text}"
+    );
+    let written: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(written.len(), 3, "only the three renders: {written:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

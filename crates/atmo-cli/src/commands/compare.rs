@@ -15,10 +15,10 @@ pub struct CompareArgs {
     a: PathBuf,
     /// Second picture (.exr), e.g. the reference.
     b: PathBuf,
-    /// Difference image: |A - B| in 8-bit levels after the display below, times 10
-    /// (white = 25.5 levels or more).
-    #[arg(short, long, value_name = "FILE.png", default_value = "difference.png")]
-    output: PathBuf,
+    /// Also write a difference image: |A - B| in 8-bit levels after the display below,
+    /// times 10 (white = 25.5 levels or more). Without it only the figures are printed.
+    #[arg(short, long, value_name = "FILE.png")]
+    output: Option<PathBuf>,
     /// Exposure the levels are measured after.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
@@ -29,12 +29,14 @@ pub struct CompareArgs {
 
 pub fn run(args: CompareArgs) -> Result<()> {
     atmo::error::check_positive("--exposure", args.exposure as f64, 1e12)?;
-    if ImageKind::of(&args.output)? != ImageKind::Png {
-        return Err(
-            atmo::Error::out_of_range("--output", args.output.display(), "a .png file").into(),
-        );
+    if let Some(output) = &args.output {
+        if ImageKind::of(output)? != ImageKind::Png {
+            return Err(
+                atmo::Error::out_of_range("--output", output.display(), "a .png file").into(),
+            );
+        }
+        check_folder(output)?;
     }
-    check_folder(&args.output)?;
     let (a, b) = (Frame::read_exr(&args.a)?, Frame::read_exr(&args.b)?);
     let display = Display {
         exposure: args.exposure,
@@ -52,12 +54,14 @@ pub fn run(args: CompareArgs) -> Result<()> {
             d[c] = 10.0 * (display.value(pa[c]) - display.value(pb[c])).abs();
         }
     }
-    // The difference is already in display units: written with exposure 1, clamped.
-    difference
-        .pixels
-        .iter_mut()
-        .for_each(|p| *p = p.map(atmo::image::srgb_decode));
-    difference.write(&args.output, 1.0, atmo::image::ToneMap::Clamp)?;
+    if let Some(output) = &args.output {
+        // Already in display units: written with exposure 1, clamped.
+        difference
+            .pixels
+            .iter_mut()
+            .for_each(|p| *p = p.map(atmo::image::srgb_decode));
+        difference.write(output, 1.0, atmo::image::ToneMap::Clamp)?;
+    }
     let n = 3.0 * a.pixels.len() as f64;
     println!(
         "levels (8-bit, after exposure {} and the {:?} tone map): rms {:.3} ({:.3} % of 255), max {:.2}",
@@ -73,6 +77,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
         100.0 * (sum / sum_b.max(1e-300)).sqrt(),
         max
     );
-    println!("difference image: {}", args.output.display());
+    if let Some(output) = &args.output {
+        println!("difference image: {}", output.display());
+    }
     Ok(())
 }
