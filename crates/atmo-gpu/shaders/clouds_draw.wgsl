@@ -63,7 +63,7 @@ fn phase(c: f32) -> f32 {
 // The sky's light scattered toward the eye along the unit ray d (SkyLight::along).
 fn sky_along(d: vec3<f32>) -> vec3<f32> {
     let basis = array<f32, 9>(
-        0.2820948,
+        0.282095,
         0.488603 * d.y,
         0.488603 * d.z,
         0.488603 * d.x,

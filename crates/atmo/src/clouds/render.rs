@@ -110,16 +110,15 @@ pub fn render(
         buffer.grid_step(rx),
         buffer.grid_step(ry),
     );
-    // The phase function for each pixel's ray and the sky's light its droplets scatter
-    // along it: the same for every blob it crosses.
-    let sky = light.ambient.scattered(light.phase, &light.scattering);
-    let rays: Vec<(f32, Vec3)> = (0..w * h)
+    // Pixel `k`'s unit ray; the phase function for it, the same for every blob it
+    // crosses.
+    let ray = |k: usize| (r0 + (k % w) as f32 * rx + (k / w) as f32 * ry).normalize();
+    let phases: Vec<f32> = (0..w * h)
         .into_par_iter()
-        .map(|k| {
-            let r = (r0 + (k % w) as f32 * rx + (k / w) as f32 * ry).normalize();
-            (light.phase.eval_f32(light.to_sun.dot(r)), sky.along(r))
-        })
+        .map(|k| light.phase.eval_f32(light.to_sun.dot(ray(k))))
         .collect();
+    // The sky's light the droplets scatter along a ray, taken where a blob was drawn.
+    let sky = light.ambient.scattered(light.phase, &light.scattering);
     let mut frame = Frame::new(camera.width, camera.height);
     frame
         .pixels
@@ -206,7 +205,7 @@ pub fn render(
                                 buffer.sample_log_grid(g + l1 * along),
                             ],
                         };
-                        let phase = rays[band * BAND * w + i].0;
+                        let phase = phases[band * BAND * w + i];
                         let blob = light.scattering.light(phase, &emission);
                         pixels[i] += through[i] * blob.single * sun;
                         higher[i] += through[i] * blob.higher * sun;
@@ -218,15 +217,11 @@ pub fn render(
             // The higher octaves by the cloud's depth on the ray, the sky's light, the
             // haze in front of the cloud, then what shows through it.
             let haze = light.haze;
-            let band_rays = &rays[band * BAND * w..][..pixels.len()];
-            for ((((e, t), more), lit), ray) in pixels
-                .iter_mut()
-                .zip(&through)
-                .zip(&higher)
-                .zip(&skylit)
-                .zip(band_rays)
-            {
-                *e += light.scattering.higher_share(*t) * *more + *lit * ray.1;
+            for (j, ((e, t), more)) in pixels.iter_mut().zip(&through).zip(&higher).enumerate() {
+                *e += light.scattering.higher_share(*t) * *more;
+                if skylit[j] > 0.0 {
+                    *e += skylit[j] * sky.along(ray(band * BAND * w + j));
+                }
                 *e = haze.transmittance * *e + (1.0 - *t) * haze.inscatter;
             }
             if let Some(background) = background {

@@ -27,11 +27,18 @@ pub const LUMENS_PER_WATT: f64 = 683.0;
 /// nine coefficients change by under 1e-4 of the first from 128 to 512 rows.
 pub const PROJECTION_ROWS: u32 = 128;
 
+/// The band `l` of each of the nine harmonics, in the module docs' order.
+pub const SH_BAND: [usize; 9] = [0, 1, 1, 1, 2, 2, 2, 2, 2];
+
+/// `Y_00 = 1 / sqrt(4 pi)`, the constant harmonic: a radiance `c` from everywhere has
+/// the coefficient `c / Y_00` and no other.
+pub const SH_Y00: f64 = 0.282_095;
+
 /// The nine real spherical harmonics at the unit direction `d` (module docs' order).
 pub fn sh_basis(d: Vec3) -> [f64; 9] {
     let (x, y, z) = (d.x as f64, d.y as f64, d.z as f64);
     [
-        0.282_095,
+        SH_Y00,
         0.488_603 * y,
         0.488_603 * z,
         0.488_603 * x,
@@ -73,12 +80,11 @@ pub fn irradiance(sh: &[[f64; 3]; 9], normal: Vec3) -> [f64; 3] {
         2.0 * std::f64::consts::PI / 3.0,
         std::f64::consts::PI / 4.0,
     ];
-    let band = [0, 1, 1, 1, 2, 2, 2, 2, 2];
     let basis = sh_basis(normal);
     let mut e = [0.0; 3];
     for k in 0..9 {
         for (c, e) in e.iter_mut().enumerate() {
-            *e += a[band[k]] * sh[k][c] * basis[k];
+            *e += a[SH_BAND[k]] * sh[k][c] * basis[k];
         }
     }
     e
