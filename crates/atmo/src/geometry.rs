@@ -45,6 +45,17 @@ impl Aabb {
         }
     }
 
+    /// The eight corners.
+    pub fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|k| {
+            Vec3::select(
+                glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+                self.max,
+                self.min,
+            )
+        })
+    }
+
     /// The parameter interval `[t0, t1]` (clipped to `[t_min, t_max]`) where the line
     /// `origin + t dir` is inside the box, by the slab method; `None` if it misses.
     /// `inv_dir` is `1 / dir` per component (infinite components are fine).

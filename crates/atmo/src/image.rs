@@ -179,6 +179,42 @@ impl Levels {
     }
 }
 
+/// `pixels`, a `from` (width, height) picture, stretched to `to` by bilinear
+/// interpolation with `lerp(a, b, weight of b)`, pixel centres on pixel centres (edges
+/// clamped), rows in parallel: one loop for a frame's radiances and for 8-bit texels.
+pub fn stretched<T: Copy + Default + Send + Sync>(
+    pixels: &[T],
+    from: (u32, u32),
+    to: (u32, u32),
+    lerp: impl Fn(T, T, f32) -> T + Sync,
+) -> Vec<T> {
+    let (w, h) = (from.0 as usize, from.1 as usize);
+    assert_eq!(pixels.len(), w * h, "a {w} x {h} picture");
+    // A coordinate of the target's pixel centre in the source's pixels: the two
+    // neighbours and the weight of the second.
+    let axis = |to: u32, from: usize| -> Vec<(usize, usize, f32)> {
+        (0..to)
+            .map(|i| {
+                let x = ((i as f32 + 0.5) * from as f32 / to as f32 - 0.5)
+                    .clamp(0.0, (from - 1) as f32);
+                let i0 = (x as usize).min(from - 1);
+                (i0, (i0 + 1).min(from - 1), x - i0 as f32)
+            })
+            .collect()
+    };
+    let (xs, ys) = (axis(to.0, w), axis(to.1, h));
+    let mut out = vec![T::default(); to.0 as usize * to.1 as usize];
+    out.par_chunks_mut(to.0 as usize)
+        .zip(&ys)
+        .for_each(|(row, &(y0, y1, fy))| {
+            let (r0, r1) = (&pixels[y0 * w..][..w], &pixels[y1 * w..][..w]);
+            for (p, &(x0, x1, fx)) in row.iter_mut().zip(&xs) {
+                *p = lerp(lerp(r0[x0], r0[x1], fx), lerp(r1[x0], r1[x1], fx), fy);
+            }
+        });
+    out
+}
+
 /// The inverse of [`srgb_encode`].
 #[inline]
 pub fn srgb_decode(v: f32) -> f32 {
@@ -293,9 +329,9 @@ impl Frame {
     /// The frame as 4-byte texels of `levels`, `order` their channels' order (alpha
     /// 255), into `texels` (resized): what an 8-bit texture of a display takes, rows
     /// in parallel.
-    pub fn to_texels(&self, levels: &Levels, order: TexelOrder, texels: &mut Vec<u8>) {
+    pub fn to_texels(&self, levels: &Levels, order: TexelOrder, texels: &mut Vec<[u8; 4]>) {
         let width = self.width as usize;
-        texels.resize(4 * self.pixels.len(), 0);
+        texels.resize(self.pixels.len(), [0; 4]);
         let texel = |p: &Vec3| {
             let [r, g, b] = [levels.level(p.x), levels.level(p.y), levels.level(p.z)];
             match order {
@@ -304,46 +340,29 @@ impl Frame {
             }
         };
         texels
-            .par_chunks_mut(4 * width)
+            .par_chunks_mut(width)
             .zip(self.pixels.par_chunks(width))
             .for_each(|(row, pixels)| {
-                for (t, p) in row.chunks_exact_mut(4).zip(pixels) {
-                    t.copy_from_slice(&texel(p));
+                for (t, p) in row.iter_mut().zip(pixels) {
+                    *t = texel(p);
                 }
             });
     }
 
-    /// The frame stretched to `width` x `height` by bilinear interpolation, pixel
-    /// centres on pixel centres (edges clamped), rows in parallel: a preview drawn at
-    /// a fraction of a window's size, shown at the window's.
+    /// The frame stretched to `width` x `height` by bilinear interpolation
+    /// ([`stretched`]): a preview drawn at a fraction of a window's size, shown at the
+    /// window's.
     pub fn upscaled(&self, width: u32, height: u32) -> Frame {
-        let (w, h) = (self.width as usize, self.height as usize);
-        // A coordinate of the target's pixel centre in the source's pixels: the two
-        // neighbours and the weight of the second.
-        let axis = |to: u32, from: usize| -> Vec<(usize, usize, f32)> {
-            (0..to)
-                .map(|i| {
-                    let x = ((i as f32 + 0.5) * from as f32 / to as f32 - 0.5)
-                        .clamp(0.0, (from - 1) as f32);
-                    let i0 = (x as usize).min(from - 1);
-                    (i0, (i0 + 1).min(from - 1), x - i0 as f32)
-                })
-                .collect()
-        };
-        let (xs, ys) = (axis(width, w), axis(height, h));
-        let mut out = Frame::new(width, height);
-        out.pixels
-            .par_chunks_mut(width as usize)
-            .zip(&ys)
-            .for_each(|(row, &(y0, y1, fy))| {
-                let (r0, r1) = (&self.pixels[y0 * w..][..w], &self.pixels[y1 * w..][..w]);
-                for (p, &(x0, x1, fx)) in row.iter_mut().zip(&xs) {
-                    let top = r0[x0].lerp(r0[x1], fx);
-                    let bottom = r1[x0].lerp(r1[x1], fx);
-                    *p = top.lerp(bottom, fy);
-                }
-            });
-        out
+        Frame {
+            width,
+            height,
+            pixels: stretched(
+                &self.pixels,
+                (self.width, self.height),
+                (width, height),
+                |a, b, t| a.lerp(b, t),
+            ),
+        }
     }
 
     /// Writes the frame to `path` (.png or .exr), atomically. A frame with a NaN or
@@ -577,11 +596,11 @@ mod tests {
         });
         let mut texels = Vec::new();
         frame.to_texels(&levels, TexelOrder::Rgba, &mut texels);
-        assert_eq!(texels.len(), 24);
-        assert_eq!(&texels[16..20], &[255, 188, 0, 255]);
-        assert_eq!(&texels[0..4], &[0, 0, 0, 255]);
+        assert_eq!(texels.len(), 6);
+        assert_eq!(texels[4], [255, 188, 0, 255]);
+        assert_eq!(texels[0], [0, 0, 0, 255]);
         frame.to_texels(&levels, TexelOrder::Bgra, &mut texels);
-        assert_eq!(&texels[16..20], &[0, 188, 255, 255]);
+        assert_eq!(texels[4], [0, 188, 255, 255]);
     }
 
     #[test]

@@ -39,6 +39,7 @@ use super::{adaptive, PlaneSettings, Scene};
 use crate::fast::interleaved_offset;
 use crate::geometry::Aabb;
 use crate::image::Frame;
+use crate::view::Camera;
 
 /// Nearest camera depth a plane is put at, m.
 const NEAR_PLANE: f32 = 1e-3;
@@ -67,6 +68,114 @@ impl LightPlanes<'_> {
     /// The spacing of the light's sub-sample planes, m of camera depth.
     fn sub_spacing(&self, settings: &PlaneSettings) -> f32 {
         (self.z_far - self.z_near) / (settings.planes * settings.sub_planes) as f32
+    }
+}
+
+/// Where a light's lit volume (the lamp and its shadow map's ray ends) lies for the
+/// camera: what places the light's planes and sizes the attenuation table.
+#[derive(Debug, Clone, Copy)]
+struct Extent {
+    /// Least and greatest camera depth, m.
+    near: f32,
+    far: f32,
+    /// Greatest distance from the lamp and from the eye, squared (no square root a
+    /// point), m^2.
+    from_lamp: f32,
+    from_eye: f32,
+    /// Around every point, m.
+    bounds: Aabb,
+}
+
+impl Extent {
+    /// The lit volume of `light` through `shadow`, its rays that meet nothing cut at
+    /// light-space depth `reach` m: the same numbers as a walk over every texel's ray
+    /// end, found by walking only the blocks of texels that may hold an extreme.
+    ///
+    /// Each block's box of ray ends ([`ShadowMap::end_boxes`], kept with the map) bounds
+    /// what its points can give (a linear depth and a convex distance are greatest at a
+    /// corner); for each measure the blocks are taken from the best bound down, walked
+    /// until a bound no longer beats what the walked points gave. A moving camera walks
+    /// a few dozen of the 1024 blocks of a 512-texel map instead of all of them.
+    fn of(shadow: &ShadowMap, light: &Spotlight, camera: &Camera, reach: f32) -> Extent {
+        let lamp = light.position;
+        let point = |e: Extent, p: Vec3| e.grow(p, camera, lamp);
+        let depth = camera.depth(lamp);
+        let mut extent = Extent {
+            near: depth,
+            far: depth,
+            from_lamp: 0.0,
+            from_eye: 0.0,
+            bounds: Aabb::EMPTY.grow(lamp),
+        };
+        let blocks: Vec<(usize, Option<Aabb>)> = shadow.end_boxes(light, reach).collect();
+        let mut walked = vec![false; blocks.len()];
+        // Per measure, per block, the greatest value its points may give.
+        let mut upper = [(); 4].map(|_| vec![f32::NEG_INFINITY; blocks.len()]);
+        for (i, &(block, ends)) in blocks.iter().enumerate() {
+            let Some(ends) = ends else {
+                extent = shadow.block_ends(light, reach, block).fold(extent, point);
+                walked[i] = true;
+                continue;
+            };
+            extent.bounds = extent.bounds.union(ends);
+            let none = Extent {
+                near: f32::INFINITY,
+                far: f32::NEG_INFINITY,
+                from_lamp: 0.0,
+                from_eye: 0.0,
+                bounds: Aabb::EMPTY,
+            };
+            // Widened past the float error of a point's measures against its corners'
+            // (a few units in the last place of the coordinates, and of their squares).
+            let size = 1.0
+                + (ends.min.abs().max(ends.max.abs()))
+                    .max(camera.position.abs())
+                    .max_element();
+            let slack = [
+                1e-5 * size,
+                1e-5 * size,
+                1e-5 * size * size,
+                1e-5 * size * size,
+            ];
+            let bounds = ends.corners().into_iter().fold(none, point).measures();
+            for ((upper, bound), slack) in upper.iter_mut().zip(bounds).zip(slack) {
+                upper[i] = bound + slack;
+            }
+        }
+        for (measure, upper) in upper.iter().enumerate() {
+            let mut order: Vec<usize> = (0..blocks.len()).filter(|&i| !walked[i]).collect();
+            order.sort_unstable_by(|&a, &b| upper[b].total_cmp(&upper[a]));
+            for i in order {
+                if upper[i] <= extent.measures()[measure] {
+                    break;
+                }
+                if !walked[i] {
+                    extent = shadow
+                        .block_ends(light, reach, blocks[i].0)
+                        .fold(extent, point);
+                    walked[i] = true;
+                }
+            }
+        }
+        extent
+    }
+
+    /// With the point `p` too.
+    #[inline]
+    fn grow(self, p: Vec3, camera: &Camera, lamp: Vec3) -> Extent {
+        let z = camera.depth(p);
+        Extent {
+            near: self.near.min(z),
+            far: self.far.max(z),
+            from_lamp: self.from_lamp.max((p - lamp).length_squared()),
+            from_eye: self.from_eye.max((p - camera.position).length_squared()),
+            bounds: self.bounds.grow(p),
+        }
+    }
+
+    /// The measures a block may beat, each as a greatest value.
+    fn measures(&self) -> [f32; 4] {
+        [-self.near, self.far, self.from_lamp, self.from_eye]
     }
 }
 
@@ -128,51 +237,15 @@ impl<'a> SamplePlanes<'a> {
             .map(|(light, shadow)| {
                 // Farther than this from the lamp is beyond the far plane anyway.
                 let reach = camera.far * 2.0 + (light.position - camera.position).length();
-                let lamp = camera.depth(light.position);
-                // Per row: camera depth range, farthest from the lamp, farthest from the eye.
-                let start = (lamp, lamp, 0.0f32, 0.0f32, Aabb::EMPTY.grow(light.position));
-                // (Distances squared until the end: no square root per texel.)
-                let extent = (0..shadow.size)
-                    .into_par_iter()
-                    .map(|row| {
-                        shadow
-                            .ray_ends(light, reach, row)
-                            .fold(start, |(lo, hi, s, t, b), end| {
-                                let z = camera.depth(end);
-                                (
-                                    lo.min(z),
-                                    hi.max(z),
-                                    s.max((end - light.position).length_squared()),
-                                    t.max((end - camera.position).length_squared()),
-                                    b.grow(end),
-                                )
-                            })
-                    })
-                    .reduce(
-                        || start,
-                        |a, b| {
-                            (
-                                a.0.min(b.0),
-                                a.1.max(b.1),
-                                a.2.max(b.2),
-                                a.3.max(b.3),
-                                a.4.union(b.4),
-                            )
-                        },
-                    );
-                let (mut lo, mut hi) = (extent.0, extent.1);
-                s_max = s_max.max(extent.2.sqrt());
-                t_max = t_max.max(extent.3.sqrt());
+                let extent = Extent::of(&shadow, light, camera, reach);
+                let (mut lo, mut hi) = (extent.near, extent.far);
+                s_max = s_max.max(extent.from_lamp.sqrt());
+                t_max = t_max.max(extent.from_eye.sqrt());
                 if let Some(b) = &scene.haze.bounds {
-                    let corners = (0..8).map(|k| {
-                        Vec3::select(
-                            glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
-                            b.max,
-                            b.min,
-                        )
-                    });
-                    let (bl, bh) = corners
+                    let (bl, bh) = b
+                        .corners()
                         .map(|c| camera.depth(c))
+                        .into_iter()
                         .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), z| {
                             (l.min(z), h.max(z))
                         });
@@ -183,7 +256,7 @@ impl<'a> SamplePlanes<'a> {
                     shadow,
                     z_near: lo.max(NEAR_PLANE),
                     z_far: hi.min(camera.far),
-                    bounds: extent.4,
+                    bounds: extent.bounds,
                     lamp_in_haze: scene.haze.bounds.is_none_or(|b| b.contains(light.position)),
                     eye: light.to_light(camera.position),
                 }
@@ -868,6 +941,75 @@ mod tests {
             .iter()
             .map(|f| Scene::from_file(&folder.join(f)).unwrap())
             .collect()
+    }
+
+    /// The lit volume's extent found from the blocks' boxes is the walk over every
+    /// texel's ray end, to the bit: from cameras all round the scenes, with reaches
+    /// that leave every surface and that cut some off (blocks walked whole).
+    #[test]
+    fn the_extent_from_block_boxes_is_the_walk_over_every_ray_end() {
+        let mut cut = 0;
+        for scene in scenes() {
+            for light in &scene.lights {
+                let size = 128;
+                let map = ShadowMap::new(light, &scene.objects, size);
+                let blocks: Vec<usize> = map.end_boxes(light, 1e3).map(|(b, _)| b).collect();
+                // Every texel in the field cone is in one block, its end where its ray
+                // through the texel centre ends.
+                let ends: usize = blocks
+                    .iter()
+                    .map(|&b| map.block_ends(light, 1e3, b).count())
+                    .sum();
+                let in_cone = (0..size * size)
+                    .filter(|k| {
+                        let u = 2.0 * (k % size) as f32 / size as f32 + 1.0 / size as f32;
+                        let v = 2.0 * (k / size) as f32 / size as f32 + 1.0 / size as f32;
+                        let (du, dv) = (
+                            ((u - 1.0).abs() - 1.0 / size as f32).max(0.0),
+                            ((v - 1.0).abs() - 1.0 / size as f32).max(0.0),
+                        );
+                        du * du + dv * dv <= 1.0
+                    })
+                    .count();
+                assert_eq!(ends, in_cone);
+                for k in 0..8 {
+                    let angle = k as f32 * std::f32::consts::FRAC_PI_4;
+                    let position = Vec3::new(9.0 * angle.cos(), 1.0 + k as f32, 9.0 * angle.sin());
+                    let camera = Camera::look_at(
+                        position,
+                        Vec3::new(0.0, 1.0, 0.0),
+                        Vec3::Y,
+                        crate::view::Fov::Vertical(50.0),
+                        (64, 48),
+                    )
+                    .unwrap();
+                    for reach in [1e3, 6.0, 2.5] {
+                        cut += map.end_boxes(light, reach).any(|(_, b)| b.is_none()) as usize;
+                        let depth = camera.depth(light.position);
+                        let walk = blocks.iter().fold(
+                            Extent {
+                                near: depth,
+                                far: depth,
+                                from_lamp: 0.0,
+                                from_eye: 0.0,
+                                bounds: Aabb::EMPTY.grow(light.position),
+                            },
+                            |e, &b| {
+                                map.block_ends(light, reach, b)
+                                    .fold(e, |e, p| e.grow(p, &camera, light.position))
+                            },
+                        );
+                        let found = Extent::of(&map, light, &camera, reach);
+                        assert_eq!(
+                            (found.measures(), found.bounds),
+                            (walk.measures(), walk.bounds),
+                            "camera at {position}, reach {reach}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(cut > 10, "{cut} cases cut a surface off");
     }
 
     #[test]

@@ -4,14 +4,16 @@
 //! shadows on surfaces. The map holds what one ray through each texel centre meets,
 //! which is what a rasteriser's depth buffer holds at that texel (meshes are drawn
 //! triangle by triangle over their footprints, the rest ray cast). A min-max chain over
-//! it answers for a whole box of points at once ([`ShadowMap::region`]).
+//! it answers for a whole box of points at once ([`ShadowMap::region`]), and boxes
+//! around where blocks of its rays end bound the lit volume for any camera
+//! ([`ShadowMap::end_boxes`]).
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::objects::{nearest_hit, Objects};
 use super::spotlight::Spotlight;
-use crate::geometry::{triangle_hit, Ray, Shape};
+use crate::geometry::{triangle_hit, Aabb, Ray, Shape};
 
 /// Depths of the nearest surfaces seen from a light.
 #[derive(Debug, Clone)]
@@ -27,6 +29,27 @@ pub struct ShadowMap {
     /// `L` first (a min-max mip chain): what [`ShadowMap::region`] reads to tell a lit
     /// stretch of a ray from a dark one without a lookup per point.
     ranges: Vec<Vec<[f32; 2]>>,
+    /// Where the rays of each block of [`END_BLOCK`] x [`END_BLOCK`] texels end, blocks
+    /// row-major: what [`ShadowMap::end_boxes`] reads.
+    ends: Vec<EndBlock>,
+}
+
+/// Texels along each side of a block of [`ShadowMap::end_boxes`]: at the default 512
+/// texels, 1024 blocks, few enough to bound each frame and small enough that a frame
+/// walks a few of them only.
+pub const END_BLOCK: usize = 16;
+
+/// Where the rays of a block of texels end, whatever depth rays that meet nothing are
+/// cut at.
+#[derive(Debug, Clone, Copy)]
+struct EndBlock {
+    /// Around the ends of the rays that meet a surface (world space, m).
+    met: Aabb,
+    /// The greatest light-space depth among those, m (0 for none).
+    deepest: f32,
+    /// Around the directions (world space, light-space `z` = 1) of the rays that meet
+    /// nothing.
+    open: Aabb,
 }
 
 /// What the shadow map says of every point of a region ([`ShadowMap::region`]).
@@ -103,11 +126,34 @@ impl ShadowMap {
                     }
                 }
             });
+        let blocks = size.div_ceil(END_BLOCK);
+        let ends = (0..blocks * blocks)
+            .into_par_iter()
+            .map(|block| {
+                let none = EndBlock {
+                    met: Aabb::EMPTY,
+                    deepest: 0.0,
+                    open: Aabb::EMPTY,
+                };
+                block_rays(light, size, block).fold(none, |e, (k, dir)| match depth[k] {
+                    d if d.is_finite() => EndBlock {
+                        met: e.met.grow(light.position + d * dir),
+                        deepest: e.deepest.max(d),
+                        ..e
+                    },
+                    _ => EndBlock {
+                        open: e.open.grow(dir),
+                        ..e
+                    },
+                })
+            })
+            .collect();
         ShadowMap {
             ranges: min_max_chain(&depth, size),
             size,
             depth,
             tan_field: light.tan_field(),
+            ends,
         }
     }
 
@@ -210,32 +256,69 @@ impl ShadowMap {
             + (lit(0, 1) * (1.0 - a) + lit(1, 1) * a) * b
     }
 
-    /// World positions where the rays of the texels of `row` end: at the surface they
-    /// meet, or at light-space depth `reach` m where they meet nothing. Texels outside
-    /// the field cone are left out. With the lamp, the ends of all rows bound the lit
-    /// volume.
-    pub fn ray_ends<'a>(
+    /// For each block of [`END_BLOCK`] x [`END_BLOCK`] texels with a texel in the field
+    /// cone, the block's index and the box around where its rays end (world space, m)
+    /// when those that meet nothing are cut at light-space depth `reach`: the smallest
+    /// box, to the bit, that holds the points [`ShadowMap::block_ends`] gives; `None`
+    /// where a surface lies beyond `reach` (walk those blocks). Made from boxes kept
+    /// since the map was built: the cut ends `lamp + reach dir` have the box `lamp +
+    /// reach` times the directions' box, coordinate by coordinate (rounding is monotonic).
+    pub fn end_boxes<'a>(
         &'a self,
         light: &'a Spotlight,
         reach: f32,
-        row: usize,
+    ) -> impl Iterator<Item = (usize, Option<Aabb>)> + 'a {
+        self.ends.iter().enumerate().filter_map(move |(block, e)| {
+            if e.met == Aabb::EMPTY && e.open == Aabb::EMPTY {
+                return None;
+            }
+            let open = Aabb {
+                min: light.position + reach * e.open.min,
+                max: light.position + reach * e.open.max,
+            };
+            Some((block, (e.deepest <= reach).then(|| e.met.union(open))))
+        })
+    }
+
+    /// World positions where the rays of the texels of block `block` (as
+    /// [`ShadowMap::end_boxes`] numbers them) end: at the surface they meet, or at
+    /// light-space depth `reach` m where they meet nothing. Texels outside the field
+    /// cone are left out. With the lamp, the ends of all blocks bound the lit volume.
+    pub fn block_ends<'a>(
+        &'a self,
+        light: &'a Spotlight,
+        reach: f32,
+        block: usize,
     ) -> impl Iterator<Item = Vec3> + 'a {
-        let n = self.size;
-        let v = -texel_centre(row, n);
+        block_rays(light, self.size, block)
+            .map(move |(k, dir)| light.position + self.depth[k].min(reach) * dir)
+    }
+}
+
+/// The texels of block `block` (row-major blocks of [`END_BLOCK`] texels on a side) of
+/// a `size`-texel map of `light` that touch the field cone: each one's index in the map
+/// and its ray's world direction (light-space `z` = 1).
+fn block_rays(
+    light: &Spotlight,
+    size: usize,
+    block: usize,
+) -> impl Iterator<Item = (usize, Vec3)> + '_ {
+    let blocks = size.div_ceil(END_BLOCK);
+    let (row0, col0) = ((block / blocks) * END_BLOCK, (block % blocks) * END_BLOCK);
+    let cols = col0..(col0 + END_BLOCK).min(size);
+    (row0..(row0 + END_BLOCK).min(size)).flat_map(move |row| {
+        let v = -texel_centre(row, size);
         // The texel directions along a row are affine in u.
         let (left, right) = (
             light.world_direction(-1.0, v),
             light.world_direction(1.0, v),
         );
-        (0..n).filter_map(move |col| {
-            let u = texel_centre(col, n);
-            if !touches_disc(u, v, n) {
-                return None;
-            }
-            let dir = left + (right - left) * (0.5 * (u + 1.0));
-            Some(light.position + self.depth[row * n + col].min(reach) * dir)
+        cols.clone().filter_map(move |col| {
+            let u = texel_centre(col, size);
+            touches_disc(u, v, size)
+                .then(|| (row * size + col, left + (right - left) * (0.5 * (u + 1.0))))
         })
-    }
+    })
 }
 
 /// How much nearer than the receiver's plane, as a fraction of its depth, a surface in
