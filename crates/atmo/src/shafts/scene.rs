@@ -503,6 +503,23 @@ impl Scene {
         Scene::from_toml_str(text, &path.display().to_string(), folder)
     }
 
+    /// The camera of scene TOML `text` alone, parsed and validated as
+    /// [`Scene::from_toml_str`] does (`origin` names the text in messages), the rest of
+    /// the text unread: what a viewer whose edit moved only the camera reads again,
+    /// without the objects' and the lights' files.
+    pub fn camera_from_toml_str(text: &str, origin: &str) -> Result<Camera> {
+        /// The camera table of a scene; the other tables are the whole scene's to check.
+        #[derive(Deserialize)]
+        struct CameraOnly {
+            camera: CameraSpec,
+        }
+        let spec: CameraOnly = toml::from_str(text).map_err(|e| Error::Parse {
+            path: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        spec.camera.validate()
+    }
+
     /// Parses and validates scene TOML; `origin` names it in messages, `folder` is where
     /// relative gobo and OBJ paths start.
     pub fn from_toml_str(text: &str, origin: &str, folder: &Path) -> Result<Scene> {
