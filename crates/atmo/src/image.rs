@@ -204,14 +204,20 @@ pub fn stretched<T: Copy + Default + Send + Sync>(
     };
     let (xs, ys) = (axis(to.0, w), axis(to.1, h));
     let mut out = vec![T::default(); to.0 as usize * to.1 as usize];
-    out.par_chunks_mut(to.0 as usize)
-        .zip(&ys)
-        .for_each(|(row, &(y0, y1, fy))| {
+    // Each target row: the two source rows mixed once per source pixel, then that row
+    // stretched (one `lerp` a target pixel where a previewed picture has many more
+    // target than source pixels).
+    out.par_chunks_mut(to.0 as usize).zip(&ys).for_each_init(
+        || Vec::with_capacity(w),
+        |mixed, (row, &(y0, y1, fy))| {
             let (r0, r1) = (&pixels[y0 * w..][..w], &pixels[y1 * w..][..w]);
+            mixed.clear();
+            mixed.extend(r0.iter().zip(r1).map(|(&a, &b)| lerp(a, b, fy)));
             for (p, &(x0, x1, fx)) in row.iter_mut().zip(&xs) {
-                *p = lerp(lerp(r0[x0], r0[x1], fx), lerp(r1[x0], r1[x1], fx), fy);
+                *p = lerp(mixed[x0], mixed[x1], fx);
             }
-        });
+        },
+    );
     out
 }
 
