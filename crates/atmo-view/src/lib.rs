@@ -228,16 +228,6 @@ impl Picture {
         &mut cpu.frame
     }
 
-    /// The CPU's frame at the picture's size: a preview stretched.
-    fn whole(&self, cpu: &CpuFrame) -> Frame {
-        let (width, height) = self.size;
-        if (cpu.frame.width, cpu.frame.height) == self.size {
-            cpu.frame.clone()
-        } else {
-            cpu.frame.upscaled(width, height)
-        }
-    }
-
     /// Records a render pass into the picture, cleared to black, in which `draw`
     /// records its draws: the picture is the texture from now on.
     pub fn draw(
@@ -336,20 +326,31 @@ impl Picture {
     /// Uploads the CPU's frame into the texture where it changed, for a surface that
     /// takes no copies (the display pass shows the texture).
     fn upload(&mut self, gpu: &Gpu) {
-        if let Some(cpu) = self.cpu.as_ref().filter(|cpu| cpu.upload_stale) {
-            write_frame(gpu, &self.texture, &self.whole(cpu));
-            self.cpu.as_mut().expect("there").upload_stale = false;
+        if let Some(cpu) = self.cpu.as_mut().filter(|cpu| cpu.upload_stale) {
+            write_frame(gpu, &self.texture, &cpu.whole(self.size));
+            cpu.upload_stale = false;
         }
     }
 
     /// The picture: the CPU's frame, or the texture read back.
     fn read(&self, gpu: &Gpu) -> Result<Frame, GpuError> {
         if let Some(cpu) = &self.cpu {
-            return Ok(self.whole(cpu));
+            return Ok(cpu.whole(self.size));
         }
         let (width, height) = self.size;
         let bytes = gpu.read_texture("the screenshot", &self.texture, width, height)?;
         Ok(atmo_gpu::frame_of(width, height, &bytes))
+    }
+}
+
+impl CpuFrame {
+    /// The frame at the picture's `size`: a preview stretched.
+    fn whole(&self, (width, height): (u32, u32)) -> Frame {
+        if (self.frame.width, self.frame.height) == (width, height) {
+            self.frame.clone()
+        } else {
+            self.frame.upscaled(width, height)
+        }
     }
 }
 

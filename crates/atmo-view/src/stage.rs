@@ -149,9 +149,8 @@ impl StageMode {
         );
         let same_file = text == self.text;
         if same_file && besides_camera.0 == besides_camera.1 {
-            let mut doc = edited.clone();
-            doc.apply_all(&self.size_edits())?;
-            self.scene.camera = Scene::camera_from_toml_str(&doc.to_string(), &origin)?;
+            let text = sized(&edited, &self.size_edits())?;
+            self.scene.camera = Scene::camera_from_toml_str(&text, &origin)?;
         } else {
             let scene = load(&self.path, &edited, &self.size_edits(), self.time_s)?;
             if !same_file || solid.0 != solid.1 {
@@ -373,11 +372,16 @@ impl StageMode {
 
 /// The scene of the edited file with `more` edits (the picture's size), posed.
 fn load(path: &Path, edited: &Document, more: &[Edit], time_s: f32) -> atmo::Result<Scene> {
-    let mut doc = edited.clone();
-    doc.apply_all(more)?;
-    let mut scene = Scene::from_text_at(&doc.to_string(), path)?;
+    let mut scene = Scene::from_text_at(&sized(edited, more)?, path)?;
     scene.at_time(time_s);
     Ok(scene)
+}
+
+/// The text of the edited file with `more` edits (the picture's size).
+fn sized(edited: &Document, more: &[Edit]) -> atmo::Result<String> {
+    let mut doc = edited.clone();
+    doc.apply_all(more)?;
+    Ok(doc.to_string())
 }
 
 /// When the file was last modified, and its length.

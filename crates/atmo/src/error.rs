@@ -65,6 +65,15 @@ impl Error {
     }
 }
 
+/// TOML `text` read into `T`; `origin` names the text in the message of a file that
+/// does not parse (which carries the line and column).
+pub(crate) fn from_toml<T: serde::de::DeserializeOwned>(text: &str, origin: &str) -> Result<T> {
+    toml::from_str(text).map_err(|e| Error::Parse {
+        path: origin.to_string(),
+        message: e.to_string(),
+    })
+}
+
 /// Checks that `value` is finite and in `[min, max]`, naming `field` otherwise.
 pub fn check_range(field: &str, value: f64, min: f64, max: f64) -> Result<()> {
     if value.is_finite() && value >= min && value <= max {

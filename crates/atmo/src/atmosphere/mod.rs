@@ -287,11 +287,7 @@ impl Atmosphere {
 
     /// Parses and validates a TOML description; `origin` names it in error messages.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Self> {
-        let spec: AtmosphereSpec = toml::from_str(text).map_err(|e| Error::Parse {
-            path: origin.to_string(),
-            message: e.to_string(),
-        })?;
-        Self::from_spec(spec)
+        Self::from_spec(crate::error::from_toml(text, origin)?)
     }
 
     /// Reads, parses and validates a TOML file.

@@ -17,7 +17,7 @@ use super::spotlight::{light_frame, Falloff, Gobo, Profile, Sampling, Spotlight}
 use super::PlaneSettings;
 use crate::atmosphere::phase::PhaseFunction;
 use crate::atmosphere::spectrum::blackbody_srgb;
-use crate::error::{check_positive, check_range, Error, Result};
+use crate::error::{check_positive, check_range, from_toml, Error, Result};
 use crate::geometry::{Aabb, Mesh, Shape};
 use crate::image::{Display, ToneMap};
 use crate::view::{Camera, Fov};
@@ -513,20 +513,14 @@ impl Scene {
         struct CameraOnly {
             camera: CameraSpec,
         }
-        let spec: CameraOnly = toml::from_str(text).map_err(|e| Error::Parse {
-            path: origin.to_string(),
-            message: e.to_string(),
-        })?;
+        let spec: CameraOnly = from_toml(text, origin)?;
         spec.camera.validate()
     }
 
     /// Parses and validates scene TOML; `origin` names it in messages, `folder` is where
     /// relative gobo and OBJ paths start.
     pub fn from_toml_str(text: &str, origin: &str, folder: &Path) -> Result<Scene> {
-        let spec: SceneSpec = toml::from_str(text).map_err(|e| Error::Parse {
-            path: origin.to_string(),
-            message: e.to_string(),
-        })?;
+        let spec: SceneSpec = from_toml(text, origin)?;
         let camera = spec.camera.validate()?;
         let haze = spec.haze.validate()?;
         let planes = PlaneSettings {

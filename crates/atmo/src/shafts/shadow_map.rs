@@ -528,6 +528,60 @@ mod tests {
         );
     }
 
+    /// The blocks hold every texel in the field cone once, each with its centre's ray,
+    /// and a block's box of ray ends is the smallest around them, to the bit, whether
+    /// the reach cuts the rays that meet nothing or the surfaces: Fig. 6's lamp, and the
+    /// same lamp aimed level, half its rays into the open. The map's side is not a
+    /// multiple of the block's, so the last blocks are partial.
+    #[test]
+    fn end_boxes_hold_each_texels_ray_end_exactly() {
+        let (fig6, objects) = fig6();
+        let mut level = fig6.clone();
+        level.light_from_world = light_frame(Vec3::X, Vec3::Y).unwrap();
+        let size = 100;
+        let in_cone: Vec<usize> = (0..size * size)
+            .filter(|k| {
+                touches_disc(
+                    texel_centre(k % size, size),
+                    -texel_centre(k / size, size),
+                    size,
+                )
+            })
+            .collect();
+        let (mut open, mut exact, mut cut) = (0, 0, 0);
+        for light in [fig6, level] {
+            let map = ShadowMap::new(&light, &objects, size);
+            open += map.depth.iter().filter(|d| d.is_infinite()).count();
+            for reach in [1e3, 3.0] {
+                let mut seen = Vec::new();
+                for (block, ends) in map.end_boxes(&light, reach) {
+                    for (k, dir) in block_rays(&light, size, block) {
+                        let (u, v) = (texel_centre(k % size, size), -texel_centre(k / size, size));
+                        let want = light.world_direction(u, v);
+                        assert!((dir - want).length() <= 1e-6 * want.length(), "{k}: {dir}");
+                        seen.push(k);
+                    }
+                    let walked = map
+                        .block_ends(&light, reach, block)
+                        .fold(Aabb::EMPTY, Aabb::grow);
+                    match ends {
+                        Some(ends) => {
+                            assert_eq!(ends, walked, "block {block}, reach {reach}");
+                            exact += 1;
+                        }
+                        None => cut += 1,
+                    }
+                }
+                seen.sort_unstable();
+                assert_eq!(seen, in_cone, "reach {reach}");
+            }
+        }
+        assert!(
+            open > 1000 && exact > 50 && cut > 10,
+            "{open} {exact} {cut}"
+        );
+    }
+
     #[test]
     fn a_region_is_lit_or_dark_only_when_every_texel_under_it_is() {
         let (light, objects) = fig6();
