@@ -213,7 +213,7 @@ impl IntensityBuffer {
 
     /// `ln Gamma` at grid coordinates `g`, trilinear between voxel centres (clamped to
     /// the grid: 0 on the sun's side of it).
-    #[inline]
+    #[inline(always)]
     pub fn sample_log_grid(&self, g: Vec3) -> f32 {
         let n = self.resolution;
         if g.y < -0.5 {

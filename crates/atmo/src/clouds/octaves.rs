@@ -97,52 +97,29 @@ impl Octaves {
     /// within 1e-5), far below a level of the picture.
     #[inline]
     pub fn light(&self, phase: f32, e: &Emission) -> BlobLight {
-        const ISOTROPIC: f32 = 1.0 / (4.0 * std::f32::consts::PI);
-        let transmitted = (-e.tau).exp();
-        let [start, end] = e.log_ends();
-        // Each octave's share of ln Gamma and its weight times its phase.
+        self.terms().light(phase, e)
+    }
+
+    /// What [`Octaves::light`] needs of the octaves, worked out once for a picture
+    /// rather than at each of its millions of blob-pixels.
+    pub fn terms(&self) -> OctaveTerms {
         let count = self.count.clamp(1, Self::MAX) as usize;
-        let (mut share, mut weighted) = ([1.0f32; Self::MAX as usize], [phase; Self::MAX as usize]);
-        let (mut weight, mut shape) = (1.0, 1.0);
+        let mut terms = OctaveTerms {
+            count,
+            share: [1.0; Self::MAX as usize],
+            weight: [1.0; Self::MAX as usize],
+            shape: [1.0; Self::MAX as usize],
+            whole: None,
+        };
         for i in 1..count {
-            weight *= self.contribution;
-            shape *= self.eccentricity;
-            share[i] = share[i - 1] * self.attenuation;
-            weighted[i] = weight * (shape * phase + (1.0 - shape) * ISOTROPIC);
+            terms.weight[i] = terms.weight[i - 1] * self.contribution;
+            terms.shape[i] = terms.shape[i - 1] * self.eccentricity;
+            terms.share[i] = terms.share[i - 1] * self.attenuation;
         }
         let ratio = 1.0 / self.attenuation;
         let exact = ratio.fract() == 0.0 && ratio.powi(count as i32 - 1) <= 64.0;
-        let whole = exact.then_some(ratio as i32);
-        let mut light = BlobLight {
-            single: 0.0,
-            higher: 0.0,
-            transmitted,
-        };
-        let (mut near, mut far) = (0.0f32, 0.0f32);
-        for i in (0..count).rev() {
-            (near, far) = match whole {
-                Some(k) if i + 1 < count => (near.powi(k), far.powi(k)),
-                _ => ((share[i] * start).exp(), (share[i] * end).exp()),
-            };
-            // (e^x - 1) / x times e^(a^i start); near 0 by its series (within 5e-8 for
-            // |x| < 1/4), where the difference of the two ends' light would lose the
-            // digits that the powers' error leaves.
-            let x = share[i] * (end - start) - e.tau;
-            let integral = e.tau
-                * if x.abs() < 0.25 {
-                    let series = 1.0 / 120.0 + x * (1.0 / 720.0);
-                    let series = 1.0 / 6.0 + x * (1.0 / 24.0 + x * series);
-                    near * (1.0 + x * (0.5 + x * series))
-                } else {
-                    (far * transmitted - near) / x
-                };
-            if i == 0 {
-                light.single = weighted[0] * integral;
-            } else {
-                light.higher += weighted[i] * integral;
-            }
-        }
-        light
+        terms.whole = exact.then_some(ratio as i32);
+        terms
     }
 
     /// How much of the phase function's shape the octaves keep, weighted by their
@@ -212,6 +189,77 @@ pub struct BlobLight {
     pub transmitted: f32,
 }
 
+/// The octaves' weights `b^i`, phase shares `c^i` and sun shares `a^i` (as
+/// [`Octaves::light`] multiplies them up), and `1 / a` where it is a whole number
+/// whose powers stand for the lower octaves' `exp`s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OctaveTerms {
+    count: usize,
+    share: [f32; Octaves::MAX as usize],
+    weight: [f32; Octaves::MAX as usize],
+    shape: [f32; Octaves::MAX as usize],
+    whole: Option<i32>,
+}
+
+impl OctaveTerms {
+    /// [`Octaves::light`] of the octaves these terms are of.
+    #[inline]
+    pub fn light(&self, phase: f32, e: &Emission) -> BlobLight {
+        const ISOTROPIC: f32 = 1.0 / (4.0 * std::f32::consts::PI);
+        let transmitted = (-e.tau).exp();
+        let [start, end] = e.log_ends();
+        let mut light = BlobLight {
+            single: 0.0,
+            higher: 0.0,
+            transmitted,
+        };
+        let (mut near, mut far) = (0.0f32, 0.0f32);
+        for i in (0..self.count).rev() {
+            (near, far) = match self.whole {
+                Some(k) if i + 1 < self.count => (powi(near, k), powi(far, k)),
+                _ => ((self.share[i] * start).exp(), (self.share[i] * end).exp()),
+            };
+            // (e^x - 1) / x times e^(a^i start); near 0 by its series (within 5e-8 for
+            // |x| < 1/4), where the difference of the two ends' light would lose the
+            // digits that the powers' error leaves.
+            let x = self.share[i] * (end - start) - e.tau;
+            let integral = e.tau
+                * if x.abs() < 0.25 {
+                    let series = 1.0 / 120.0 + x * (1.0 / 720.0);
+                    let series = 1.0 / 6.0 + x * (1.0 / 24.0 + x * series);
+                    near * (1.0 + x * (0.5 + x * series))
+                } else {
+                    (far * transmitted - near) / x
+                };
+            if i == 0 {
+                light.single = phase * integral;
+            } else {
+                let shape = self.shape[i];
+                light.higher +=
+                    self.weight[i] * (shape * phase + (1.0 - shape) * ISOTROPIC) * integral;
+            }
+        }
+        light
+    }
+}
+
+/// `x^k` for `k >= 0` by repeated squaring, the steps of `f32::powi` (compiler-builtins'
+/// `__powisf2`, to the bit) without a call a blob-pixel.
+#[inline(always)]
+fn powi(mut x: f32, mut k: i32) -> f32 {
+    let mut product = 1.0f32;
+    loop {
+        if k & 1 != 0 {
+            product *= x;
+        }
+        k >>= 1;
+        if k == 0 {
+            return product;
+        }
+        x *= x;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -233,6 +281,17 @@ mod tests {
             share *= octaves.attenuation as f64;
         }
         out
+    }
+
+    /// The octaves' own powers are `f32::powi`'s to the bit (the pictures stay the same).
+    #[test]
+    fn powers_by_squaring_are_powi_to_the_bit() {
+        for k in 0..=64 {
+            for j in 0..500u32 {
+                let x = f32::from_bits(0x3000_0000 + j * 0x0011_7a3b);
+                assert_eq!(powi(x, k).to_bits(), x.powi(k).to_bits(), "{x}^{k}");
+            }
+        }
     }
 
     /// The powers that replace `exp`s where `1 / a` is whole, against the closed form

@@ -119,6 +119,7 @@ pub fn render(
         .collect();
     // The sky's light the droplets scatter along a ray, taken where a blob was drawn.
     let sky = light.ambient.scattered(light.phase, &light.scattering);
+    let octaves = light.scattering.terms();
     let mut frame = Frame::new(camera.width, camera.height);
     frame
         .pixels
@@ -206,7 +207,7 @@ pub fn render(
                             ],
                         };
                         let phase = phases[band * BAND * w + i];
-                        let blob = light.scattering.light(phase, &emission);
+                        let blob = octaves.light(phase, &emission);
                         pixels[i] += through[i] * blob.single * sun;
                         higher[i] += through[i] * blob.higher * sun;
                         skylit[i] += through[i] * (1.0 - blob.transmitted) * p.albedo;
