@@ -127,14 +127,10 @@ impl Octaves {
     /// scattered by every order is tilted by this share of the droplets' phase
     /// ([`crate::clouds::SkyLight::scattered`]).
     pub fn phase_share(&self) -> f32 {
-        let (mut weight, mut shape) = (1.0f32, 1.0f32);
-        let (mut kept, mut total) = (0.0f32, 0.0f32);
-        for _ in 0..self.count.clamp(1, Self::MAX) {
-            kept += weight * shape;
-            total += weight;
-            weight *= self.contribution;
-            shape *= self.eccentricity;
-        }
+        let t = self.terms();
+        let (kept, total) = (0..t.count).fold((0.0f32, 0.0f32), |(kept, total), i| {
+            (kept + t.weight[i] * t.shape[i], total + t.weight[i])
+        });
         kept / total
     }
 
