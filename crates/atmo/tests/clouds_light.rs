@@ -171,35 +171,69 @@ fn single_scattering_pictures_match_the_quadrature() {
     }
 }
 
+/// The mean of every order over the cloud's pixels against the path tracer's (24
+/// paths a pixel); the path tracer's against single scattering's.
+fn every_order(particles: &[Particle], camera: &Camera, to_sun: Vec3) -> (f64, f64) {
+    let cloud = reference(particles, to_sun);
+    let settings = PathSettings {
+        paths: 24,
+        orders: usize::MAX,
+        seed: 3,
+    };
+    let traced: Vec<f64> = cloud
+        .path_traced_picture(camera, &settings)
+        .iter()
+        .map(|p| p.0)
+        .collect();
+    let single = fast(particles, camera, to_sun, Octaves::SINGLE);
+    let multiple = fast(particles, camera, to_sun, Octaves::MULTIPLE);
+    let (m, t) = means(camera, &cloud, &multiple, &traced);
+    let (s, _) = means(camera, &cloud, &single, &traced);
+    (m / t, t / s)
+}
+
 #[test]
 fn every_order_matches_the_path_tracer() {
-    // Measured at 96 x 56, 128 paths: within 5 % (front), 5 % (side), 8 % (behind) in
-    // the mean; every order is 3 to 5 times single scattering here.
+    // Measured at 48 x 28: 0.99 (front), 1.15 (side), 0.89 (behind) in the mean;
+    // every order is 3 to 5.5 times single scattering here. The octaves are fitted to
+    // the worst of 36 views of three clouds (docs/clouds.md), which costs this thin
+    // cloud's side view some of what it had (1.05 with the phase's shape kept at 0.5
+    // an octave, whose worst view was 2.1).
     let particles = cloud();
     let camera = camera(&particles, 48, 28);
-    for (name, to_sun, cloud) in lit(&particles) {
-        let settings = PathSettings {
-            paths: 24,
-            orders: usize::MAX,
-            seed: 3,
-        };
-        let traced: Vec<f64> = cloud
-            .path_traced_picture(&camera, &settings)
-            .iter()
-            .map(|p| p.0)
-            .collect();
-        let single = fast(&particles, &camera, to_sun, Octaves::SINGLE);
-        let multiple = fast(&particles, &camera, to_sun, Octaves::MULTIPLE);
-        let (m, t) = means(&camera, &cloud, &multiple, &traced);
-        let (s, _) = means(&camera, &cloud, &single, &traced);
-        eprintln!(
-            "{name}: every order, billboards / path tracer {:.3}; path tracer / single {:.2}",
-            m / t,
-            t / s
-        );
-        assert!(t > 2.5 * s, "{name}: higher orders add light: {t} vs {s}");
-        assert!((m / t - 1.0).abs() < 0.12, "{name}: {m} vs {t}");
+    for (name, to_sun, _) in lit(&particles) {
+        let (ratio, gain) = every_order(&particles, &camera, to_sun);
+        eprintln!("{name}: every order, billboards / path tracer {ratio:.3}; path tracer / single {gain:.2}");
+        assert!(gain > 2.5, "{name}: higher orders add light: {gain}");
+        assert!((ratio - 1.0).abs() < 0.18, "{name}: {ratio}");
     }
+}
+
+#[test]
+fn every_order_holds_from_below_a_thick_cloud_against_the_sun() {
+    // A 500-particle cumulus of the generator's density (optical depth about 55
+    // through its centre along the sun) seen from 300 m, 1.8 km off, the sun 25 deg
+    // high behind it: the worst view of the octaves fitted to the thin clouds alone
+    // (1.64 of the path tracer here, the octaves' light carried through the cloud
+    // with too much of the droplets' forward lobe). Measured at 32 x 18: 1.18.
+    let particles = Cumulus {
+        particles: 500,
+        density: 0.04,
+        ..Cumulus::default()
+    }
+    .generate();
+    let centre = centre(&particles);
+    let a = 200f32.to_radians();
+    let eye = Vec3::new(
+        centre.x + a.sin() * 1800.0,
+        300.0,
+        centre.z - a.cos() * 1800.0,
+    );
+    let camera = Camera::look_at(eye, centre, Vec3::Y, Fov::Vertical(30.0), (32, 18)).unwrap();
+    let to_sun = Sun::from_degrees(25.0, 20.0).unwrap().toward();
+    let (ratio, gain) = every_order(&particles, &camera, to_sun);
+    eprintln!("thick, from below, sun behind: every order, billboards / path tracer {ratio:.3}; path tracer / single {gain:.2}");
+    assert!((ratio - 1.0).abs() < 0.3, "{ratio}");
 }
 
 #[test]
@@ -315,7 +349,7 @@ fn the_sky_light_matches_the_path_tracer_in_the_mean() {
             ratio(fast, 19..28)
         );
     }
-    // Measured: 0.98 in the mean, thirds 0.83, 0.93, 1.53 (the isotropic term 1.09;
+    // Measured: 1.00 in the mean, thirds 0.84, 0.95, 1.57 (the isotropic term 1.09;
     // 0.86, 1.03, 1.78): the rows at the bottom are the cloud's base seen from above,
     // where the droplets' forward lobe looks at the dark below. What is left there is
     // the sky's light not dimmed inside the cloud (docs/clouds.md).
