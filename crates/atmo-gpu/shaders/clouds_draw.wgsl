@@ -26,6 +26,8 @@ struct DrawParams {
     haze_inscatter: vec4<f32>,
     // atmo::clouds::Octaves: attenuation, contribution, eccentricity, depth scale.
     octaves: vec4<f32>,
+    // The slab's diffuse light (Octaves::diffuse): weight, extrapolation length.
+    diffuse: vec4<f32>,
     width: u32,
     height: u32,
     octave_count: u32,
@@ -239,7 +241,8 @@ fn fragment(b: Billboard) -> Colours {
     let n0 = emission_node(tau, 0.21132487);
     let n1 = emission_node(tau, 0.7886751);
     let u = vec2<f32>(n0.x, n1.x);
-    let l = vec2<f32>(log_gamma_at(g + n0.y * along), log_gamma_at(g + n1.y * along));
+    let near = g + n0.y * along;
+    let l = vec2<f32>(log_gamma_at(near), log_gamma_at(g + n1.y * along));
     // Octaves::light: single scattering, and the higher octaves apart.
     let p = phase(dot(params.to_sun.xyz, r) * inv_length);
     let single = p * blob_integral(tau, u, l);
@@ -253,6 +256,15 @@ fn fragment(b: Billboard) -> Colours {
         share *= params.octaves.x;
         let pi = shape * p + (1.0 - shape) / (4.0 * PI);
         higher += weight * pi * blob_integral(tau, u, share * l);
+    }
+    // OctaveTerms::light: the slab's diffuse light, the cloud's whole depth along the
+    // sun's ray through the nearer node (IntensityBuffer::column_depth_grid).
+    if params.diffuse.x > 0.0 {
+        let t = -log_gamma_at(vec3<f32>(near.x, f32(frame.resolution - 1u), near.z));
+        let e = params.diffuse.y;
+        let profile = max((vec2<f32>(t) + l + vec2<f32>(e)) / (t + 2.0 * e), vec2<f32>(0.0));
+        higher += params.diffuse.x * 0.5 * (profile.x + profile.y) * (1.0 - exp(-t))
+            * (1.0 - exp(-tau)) / (4.0 * PI);
     }
     // Premultiplied: colour + (1 - alpha) x what is behind, alpha = 1 - T_k; hazed, the
     // colour seen through the air plus the air's light where the particle hides what is

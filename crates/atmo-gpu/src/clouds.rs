@@ -69,6 +69,8 @@ gpu_struct! {
         haze_inscatter: [f32; 4],
         /// The octaves' attenuation, contribution, eccentricity and depth scale.
         octaves: [f32; 4],
+        /// The slab's diffuse light: its weight and extrapolation length (unused zw).
+        diffuse: [f32; 4],
         width: u32,
         height: u32,
         octave_count: u32,
@@ -395,6 +397,7 @@ impl GpuClouds {
                 octaves.eccentricity,
                 octaves.depth_scale,
             ],
+            diffuse: [octaves.diffuse, octaves.extrapolation, 0.0, 0.0],
             width: w,
             height: h,
             octave_count: octaves.count,

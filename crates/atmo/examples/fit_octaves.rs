@@ -8,7 +8,7 @@
 //! order: octaves").
 //!
 //! `cargo run --release -p atmo --example fit_octaves -- [--paths N] [--search]
-//! [--octaves COUNT,A,B,C,K]`. The path-traced pictures (48 x 28, N paths a pixel,
+//! [--octaves COUNT,A,B,C,K,D,E]` (the fields of `Octaves` in order). The path-traced pictures (48 x 28, N paths a pixel,
 //! default 32: a few minutes on two cores) are kept in the system's temporary folder
 //! and reused.
 
@@ -57,13 +57,15 @@ fn main() -> Result<()> {
     let paths: usize = value("--paths").map_or(32, |v| v.parse().expect("--paths N"));
     let octaves = value("--octaves").map_or(Octaves::MULTIPLE, |v| {
         let f: Vec<f32> = v.split(',').map(|x| x.parse().expect("a number")).collect();
-        assert_eq!(f.len(), 5, "--octaves COUNT,A,B,C,K");
+        assert_eq!(f.len(), 7, "--octaves COUNT,A,B,C,K,D,E");
         Octaves {
             count: f[0] as u32,
             attenuation: f[1],
             contribution: f[2],
             eccentricity: f[3],
             depth_scale: f[4],
+            diffuse: f[5],
+            extrapolation: f[6],
         }
     });
     octaves.validate()?;
@@ -78,20 +80,24 @@ fn main() -> Result<()> {
     if args.iter().any(|a| a == "--search") {
         // Every candidate's worst view, views within 10 % and blocks within 15 %.
         let mut found = Vec::new();
-        for count in [3, 4] {
-            for attenuation in [0.125, 0.2, 0.25, 0.5] {
-                for contribution in [0.75, 0.8, 0.85, 0.9, 0.95] {
-                    for eccentricity in [0.1, 0.2, 0.3, 0.4, 0.5] {
-                        for depth_scale in [0.15, 0.2, 0.3, 0.4, 0.5] {
-                            let o = Octaves {
-                                count,
-                                attenuation,
-                                contribution,
-                                eccentricity,
-                                depth_scale,
-                            };
-                            let scores = scores(&views, &o)?;
-                            found.push((worst(&scores), within(&scores), blocks(&scores), o));
+        for count in [1, 2, 3] {
+            for contribution in [0.8, 0.9, 1.0] {
+                for eccentricity in [0.2, 0.3, 0.4] {
+                    for depth_scale in [0.3] {
+                        for diffuse in [0.0, 1.0, 1.5, 2.0] {
+                            for extrapolation in [2.5, 5.0, 10.0] {
+                                let o = Octaves {
+                                    count,
+                                    attenuation: 0.25,
+                                    contribution,
+                                    eccentricity,
+                                    depth_scale,
+                                    diffuse,
+                                    extrapolation,
+                                };
+                                let scores = scores(&views, &o)?;
+                                found.push((worst(&scores), within(&scores), blocks(&scores), o));
+                            }
                         }
                     }
                 }

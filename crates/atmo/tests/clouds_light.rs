@@ -194,18 +194,18 @@ fn every_order(particles: &[Particle], camera: &Camera, to_sun: Vec3) -> (f64, f
 
 #[test]
 fn every_order_matches_the_path_tracer() {
-    // Measured at 48 x 28: 0.99 (front), 1.15 (side), 0.89 (behind) in the mean;
-    // every order is 3 to 5.5 times single scattering here. The octaves are fitted to
-    // the worst of 36 views of three clouds (docs/clouds.md), which costs this thin
-    // cloud's side view some of what it had (1.05 with the phase's shape kept at 0.5
-    // an octave, whose worst view was 2.1).
+    // Measured at 48 x 28: 1.06 (front), 1.12 (side), 0.83 (behind) in the mean;
+    // every order is 3 to 5.5 times single scattering here. The octaves and the slab's
+    // light are fitted to 36 views of three clouds (docs/clouds.md), which costs this
+    // thin cloud some of what it had (0.95, 1.05, 0.92 with three octaves fitted to the
+    // thin clouds alone, whose worst view was 2.1).
     let particles = cloud();
     let camera = camera(&particles, 48, 28);
     for (name, to_sun, _) in lit(&particles) {
         let (ratio, gain) = every_order(&particles, &camera, to_sun);
         eprintln!("{name}: every order, billboards / path tracer {ratio:.3}; path tracer / single {gain:.2}");
         assert!(gain > 2.5, "{name}: higher orders add light: {gain}");
-        assert!((ratio - 1.0).abs() < 0.18, "{name}: {ratio}");
+        assert!((ratio - 1.0).abs() < 0.2, "{name}: {ratio}");
     }
 }
 
@@ -214,8 +214,9 @@ fn every_order_holds_from_below_a_thick_cloud_against_the_sun() {
     // A 500-particle cumulus of the generator's density (optical depth about 55
     // through its centre along the sun) seen from 300 m, 1.8 km off, the sun 25 deg
     // high behind it: the worst view of the octaves fitted to the thin clouds alone
-    // (1.64 of the path tracer here, the octaves' light carried through the cloud
-    // with too much of the droplets' forward lobe). Measured at 32 x 18: 1.18.
+    // (1.61 of the path tracer here, the octaves' light carried through the cloud
+    // with too much of the droplets' forward lobe; 1.18 with three octaves refitted to
+    // thick clouds too). Measured at 32 x 18: 1.08.
     let particles = Cumulus {
         particles: 500,
         density: 0.04,
@@ -233,7 +234,7 @@ fn every_order_holds_from_below_a_thick_cloud_against_the_sun() {
     let to_sun = Sun::from_degrees(25.0, 20.0).unwrap().toward();
     let (ratio, gain) = every_order(&particles, &camera, to_sun);
     eprintln!("thick, from below, sun behind: every order, billboards / path tracer {ratio:.3}; path tracer / single {gain:.2}");
-    assert!((ratio - 1.0).abs() < 0.3, "{ratio}");
+    assert!((ratio - 1.0).abs() < 0.2, "{ratio}");
 }
 
 #[test]
@@ -349,7 +350,7 @@ fn the_sky_light_matches_the_path_tracer_in_the_mean() {
             ratio(fast, 19..28)
         );
     }
-    // Measured: 1.00 in the mean, thirds 0.84, 0.95, 1.57 (the isotropic term 1.09;
+    // Measured: 0.97 in the mean, thirds 0.83, 0.92, 1.48 (the isotropic term 1.09;
     // 0.86, 1.03, 1.78): the rows at the bottom are the cloud's base seen from above,
     // where the droplets' forward lobe looks at the dark below. What is left there is
     // the sky's light not dimmed inside the cloud (docs/clouds.md).

@@ -211,6 +211,14 @@ impl IntensityBuffer {
         self.sample_log_grid(g).exp()
     }
 
+    /// The optical depth of the whole cloud along the sun's ray through grid
+    /// coordinates `g`: `-ln Gamma` at the grid's far end (its last layer along the
+    /// light), bilinear across the light.
+    #[inline]
+    pub fn column_depth_grid(&self, g: Vec3) -> f32 {
+        -self.sample_log_grid(Vec3::new(g.x, (self.resolution - 1) as f32, g.z))
+    }
+
     /// `ln Gamma` at grid coordinates `g`, trilinear between voxel centres (clamped to
     /// the grid: 0 on the sun's side of it).
     #[inline(always)]

@@ -192,19 +192,26 @@ pub fn render(
                         }
                         // The sunlight at two depths of the blob along the ray (see
                         // `emission_nodes`), from which Octaves::light integrates what
-                        // the blob sends toward the eye; the phase for this ray.
+                        // the blob sends toward the eye, and the cloud's whole depth
+                        // along the sun's ray through the nearer; the phase for this ray.
                         let inv_length = rr.sqrt().recip();
                         let g_ray = g0 + xf * gx + yf * gy;
                         let g = g_eye + t * g_ray;
                         let along = (s * inv_length) * g_ray;
                         let [(u0, l0), (u1, l1)] = tabulated_emission_nodes(tau);
+                        let near = g + l0 * along;
                         let emission = Emission {
                             tau,
                             u: [u0, u1],
                             log_gamma: [
-                                buffer.sample_log_grid(g + l0 * along),
+                                buffer.sample_log_grid(near),
                                 buffer.sample_log_grid(g + l1 * along),
                             ],
+                            slab: if octaves.needs_slab() {
+                                buffer.column_depth_grid(near)
+                            } else {
+                                0.0
+                            },
                         };
                         let phase = phases[band * BAND * w + i];
                         let blob = octaves.light(phase, &emission);

@@ -179,7 +179,8 @@ mod tests {
         let every = sky.scattered(phase, &Octaves::MULTIPLE);
         let o = Octaves::MULTIPLE;
         let (b, c) = (o.contribution, o.eccentricity);
-        let share = (1.0 + b * c + b * b * c * c) / (1.0 + b + b * b);
+        let sum = |x: f32| (0..o.count as i32).map(|i| x.powi(i)).sum::<f32>();
+        let share = sum(b * c) / sum(b);
         assert_eq!(single.harmonics[0], every.harmonics[0]);
         assert!((every.harmonics[1].x / single.harmonics[1].x - share).abs() < 1e-6);
         // Seen from above (the ray down) the droplets' forward lobe looks at the dark
