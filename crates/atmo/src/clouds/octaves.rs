@@ -116,18 +116,19 @@ impl Octaves {
     /// `sum_i b^i p_i integral exp(a^i ln Gamma(u)) e^-u du` over the blob's own
     /// optical depth `u` on the line, `0..tau` from the eye's side ([`Emission`]);
     /// `phase` is the phase function's value for the angle, 1/sr. Octave 0 (single
-    /// scattering) and the sum of the higher ones, apart (the pixel scales the latter,
-    /// [`Octaves::higher_share`]), and the blob's transmittance `e^-tau`.
+    /// scattering) and the sum of the higher ones with the slab's diffuse light (the
+    /// module doc), apart (the pixel scales the latter, [`Octaves::higher_share`]), and
+    /// the blob's transmittance `e^-tau`.
     ///
     /// Each octave's integral is exact for `ln Gamma` linear in `u` and capped at 0
     /// ([`Emission::log_ends`]): `tau (e^(a^i end - tau) - e^(a^i start)) / x`,
-    /// `x = a^i (end - start) - tau`. Where `1 / a` is a whole number `k` (the fitted
-    /// octaves' 4) the octaves are taken from the highest down, each one's
+    /// `x = a^i (end - start) - tau`. Where `1 / a` is a whole number `k` (4 for the
+    /// fitted `a`) the octaves are taken from the highest down, each one's
     /// `e^(a^i start)` the `k`-th power of the one above's: two `exp`s a blob instead
     /// of two an octave. Each power multiplies the `exp`'s relative error (an ulp) by
     /// `k`, so powers are taken only while `k^(octaves - 1) <= 64`; the light is then
-    /// within 4e-5 of the closed form in double precision (the fitted octaves, 16:
-    /// within 1e-5), far below a level of the picture.
+    /// within 4e-5 of the closed form in double precision (three octaves, powers to the
+    /// 16th: within 1e-5), far below a level of the picture.
     #[inline]
     pub fn light(&self, phase: f32, e: &Emission) -> BlobLight {
         self.terms().light(phase, e)
