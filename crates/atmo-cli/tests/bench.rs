@@ -21,6 +21,7 @@ fn bench_lines_report_their_peak_memory() {
     for field in [
         "\"scattering\":\"multiple\"",
         "\"vs_path_traced\":",
+        "\"blocks_within_15\":",
         "\"ratio\":",
     ] {
         assert!(multiple.contains(field), "{field} in {multiple}");

@@ -16,7 +16,7 @@ use std::path::Path;
 
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, SkyLight, Splat};
-use atmo::reference::clouds::{PathSettings, ReferenceCloud, ReferenceLight};
+use atmo::reference::clouds::{Agreement, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
 use glam::Vec3;
 
@@ -36,15 +36,6 @@ struct View {
     buffer: IntensityBuffer,
     traced: Vec<f64>,
     covered: Vec<bool>,
-}
-
-/// How the octaves do on one view.
-struct Score {
-    /// Mean radiance of the octaves over the path tracer's, on the cloud's pixels.
-    mean: f64,
-    /// 8 x 8 blocks (with at least half their pixels on the cloud) whose mean is within
-    /// 15 % of the path tracer's, and all such blocks.
-    blocks: (usize, usize),
 }
 
 fn main() -> Result<()> {
@@ -73,7 +64,7 @@ fn main() -> Result<()> {
     for (view, score) in views.iter().zip(scores(&views, &octaves)?) {
         println!(
             "{:<22} octaves / path tracer {:.3}   blocks within 15 %: {} of {}",
-            view.name, score.mean, score.blocks.0, score.blocks.1
+            view.name, score.mean_ratio, score.blocks_within_15, score.blocks
         );
     }
     println!("{octaves:?}: {}", summary(&scores(&views, &octaves)?));
@@ -215,7 +206,7 @@ fn traced(file: &Path, make: impl FnOnce() -> Vec<f64>) -> Result<Vec<f64>> {
 }
 
 /// The octaves' score on each view.
-fn scores(views: &[View], octaves: &Octaves) -> Result<Vec<Score>> {
+fn scores(views: &[View], octaves: &Octaves) -> Result<Vec<Agreement>> {
     views
         .iter()
         .map(|view| {
@@ -229,64 +220,46 @@ fn scores(views: &[View], octaves: &Octaves) -> Result<Vec<Score>> {
             };
             let frame = render(&view.particles, &view.buffer, &view.camera, &light, None)?;
             let fast: Vec<f64> = frame.pixels.iter().map(|p| p.x as f64).collect();
-            // Sums of the octaves' and the path tracer's radiance over the cloud's
-            // pixels among `pixels`, and how many there are.
-            let sums = |pixels: &mut dyn Iterator<Item = usize>| {
-                pixels
-                    .filter(|&k| view.covered[k])
-                    .fold((0.0, 0.0, 0), |(f, t, n), k| {
-                        (f + fast[k], t + view.traced[k], n + 1)
-                    })
-            };
-            let (f, t, _) = sums(&mut (0..fast.len()));
-            let w = SIZE.0 as usize;
-            let mut blocks = (0, 0);
-            for by in 0..SIZE.1 as usize / 8 {
-                for bx in 0..w / 8 {
-                    let mut block = (by * 8..by * 8 + 8)
-                        .flat_map(|y| (bx * 8..bx * 8 + 8).map(move |x| y * w + x));
-                    let (bf, bt, n) = sums(&mut block);
-                    if n >= 32 {
-                        blocks.1 += 1;
-                        blocks.0 += usize::from((bf / bt - 1.0).abs() < 0.15);
-                    }
-                }
-            }
-            Ok(Score {
-                mean: f / t,
-                blocks,
-            })
+            Ok(Agreement::of(
+                &fast,
+                &view.traced,
+                &view.covered,
+                SIZE.0 as usize,
+            ))
         })
         .collect()
 }
 
 /// The worst view's distance from the path tracer, as a ratio (1.3: 30 % off either way).
-fn worst(scores: &[Score]) -> f64 {
+fn worst(scores: &[Agreement]) -> f64 {
     scores
         .iter()
-        .map(|s| s.mean.ln().abs())
+        .map(|s| s.mean_ratio.ln().abs())
         .fold(0.0, f64::max)
         .exp()
 }
 
 /// How many views are within 10 % of the path tracer in the mean.
-fn within(scores: &[Score]) -> usize {
-    scores.iter().filter(|s| (s.mean - 1.0).abs() < 0.1).count()
+fn within(scores: &[Agreement]) -> usize {
+    scores
+        .iter()
+        .filter(|s| (s.mean_ratio - 1.0).abs() < 0.1)
+        .count()
 }
 
 /// The share of all views' 8 x 8 blocks within 15 % of the path tracer.
-fn blocks(scores: &[Score]) -> f64 {
+fn blocks(scores: &[Agreement]) -> f64 {
     let (good, all) = scores
         .iter()
-        .fold((0, 0), |(g, a), s| (g + s.blocks.0, a + s.blocks.1));
+        .fold((0, 0), |(g, a), s| (g + s.blocks_within_15, a + s.blocks));
     good as f64 / all as f64
 }
 
 /// The worst view, the typical one (the geometric mean of the ratios' distance from 1),
 /// the views within 10 % and the blocks within 15 %.
-fn summary(scores: &[Score]) -> String {
+fn summary(scores: &[Agreement]) -> String {
     let typical =
-        (scores.iter().map(|s| s.mean.ln().abs()).sum::<f64>() / scores.len() as f64).exp();
+        (scores.iter().map(|s| s.mean_ratio.ln().abs()).sum::<f64>() / scores.len() as f64).exp();
     format!(
         "worst view {:.3}, typical {typical:.3}, {} of {} views within 10 %, blocks within 15 % {:.0} %",
         worst(scores),

@@ -504,6 +504,51 @@ impl<'a> ReferenceCloud<'a> {
     }
 }
 
+/// How a picture of a cloud agrees with a reference picture of it (both row by row,
+/// `width` wide), over the pixels the cloud covers ([`ReferenceCloud::covered`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Agreement {
+    /// The picture's mean over the covered pixels, over the reference's.
+    pub mean_ratio: f64,
+    /// 8 x 8 blocks with at least half their pixels covered whose means are within 15 %
+    /// of each other, and all such blocks (the measure of a picture's shape).
+    pub blocks_within_15: usize,
+    pub blocks: usize,
+}
+
+impl Agreement {
+    /// Compares `picture` with `reference` over the `covered` pixels.
+    pub fn of(picture: &[f64], reference: &[f64], covered: &[bool], width: usize) -> Agreement {
+        // Sums of the picture and the reference over the covered pixels among `pixels`,
+        // and how many those are.
+        let sums = |pixels: &mut dyn Iterator<Item = usize>| {
+            pixels
+                .filter(|&k| covered[k])
+                .fold((0.0, 0.0, 0), |(p, r, n), k| {
+                    (p + picture[k], r + reference[k], n + 1)
+                })
+        };
+        let (p, r, _) = sums(&mut (0..picture.len()));
+        let mut agreement = Agreement {
+            mean_ratio: p / r,
+            blocks_within_15: 0,
+            blocks: 0,
+        };
+        for by in 0..picture.len() / width / 8 {
+            for bx in 0..width / 8 {
+                let mut block = (by * 8..by * 8 + 8)
+                    .flat_map(|y| (bx * 8..bx * 8 + 8).map(move |x| y * width + x));
+                let (bp, br, n) = sums(&mut block);
+                if n >= 32 {
+                    agreement.blocks += 1;
+                    agreement.blocks_within_15 += usize::from((bp / br - 1.0).abs() < 0.15);
+                }
+            }
+        }
+        agreement
+    }
+}
+
 /// [`ReferenceCloud::ground_irradiance`]: per unit sun irradiance, W m^-2 per W m^-2.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GroundIrradiance {
@@ -533,4 +578,50 @@ fn pixels(camera: &Camera) -> Vec<(DVec3, DVec3)> {
             )
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The same picture agrees block by block; a block a fifth brighter drops out of
+    /// those within 15 % and moves the mean by its share; a block under half covered is
+    /// not counted, and pixels the cloud does not cover count for nothing.
+    #[test]
+    fn agreement_counts_blocks_and_the_mean() {
+        let (w, h) = (24, 16);
+        let reference: Vec<f64> = (0..w * h).map(|k| 1.0 + (k % 7) as f64).collect();
+        let mut covered = vec![true; w * h];
+        // Block (2, 1) covered on 16 of its 64 pixels.
+        for y in 8..16 {
+            for x in 16..24 {
+                covered[y * w + x] = x < 18;
+            }
+        }
+        let mut picture = reference.clone();
+        let first_block = |k: usize| k % w < 8 && k / w < 8;
+        for k in 0..w * h {
+            if first_block(k) {
+                picture[k] *= 1.2;
+            } else if !covered[k] {
+                picture[k] = 1e9;
+            }
+        }
+        let same = Agreement::of(&reference, &reference, &covered, w);
+        assert_eq!(
+            (same.mean_ratio, same.blocks_within_15, same.blocks),
+            (1.0, 5, 5)
+        );
+        let brighter = Agreement::of(&picture, &reference, &covered, w);
+        let total: f64 = (0..w * h)
+            .filter(|&k| covered[k])
+            .map(|k| reference[k])
+            .sum();
+        let block: f64 = (0..w * h)
+            .filter(|&k| first_block(k))
+            .map(|k| reference[k])
+            .sum();
+        assert!((brighter.mean_ratio - (1.0 + 0.2 * block / total)).abs() < 1e-12);
+        assert_eq!((brighter.blocks_within_15, brighter.blocks), (4, 5));
+    }
 }
