@@ -257,19 +257,19 @@ fn fragment(b: Billboard) -> Colours {
         let pi = shape * p + (1.0 - shape) / (4.0 * PI);
         higher += weight * pi * blob_integral(tau, u, share * l);
     }
+    let alpha = 1.0 - exp(-tau);
     // OctaveTerms::light: the slab's diffuse light, the cloud's whole depth along the
     // sun's ray through the nearer node (IntensityBuffer::column_depth_grid).
     if params.diffuse.x > 0.0 {
         let t = -log_gamma_at(vec3<f32>(near.x, f32(frame.resolution - 1u), near.z));
         let e = params.diffuse.y;
         let profile = max((vec2<f32>(t) + l + vec2<f32>(e)) / (t + 2.0 * e), vec2<f32>(0.0));
-        higher += params.diffuse.x * 0.5 * (profile.x + profile.y) * (1.0 - exp(-t))
-            * (1.0 - exp(-tau)) / (4.0 * PI);
+        higher += params.diffuse.x * 0.5 * (profile.x + profile.y) * (1.0 - exp(-t)) * alpha
+            / (4.0 * PI);
     }
     // Premultiplied: colour + (1 - alpha) x what is behind, alpha = 1 - T_k; hazed, the
     // colour seen through the air plus the air's light where the particle hides what is
     // behind (summed over the particles, the CPU's haze exactly).
-    let alpha = 1.0 - exp(-tau);
     let haze = params.haze_transmittance.xyz;
     var out: Colours;
     let sky = b.albedo * sky_along(r * inv_length);

@@ -294,7 +294,7 @@ impl OctaveTerms {
                     self.weight[i] * (shape * phase + (1.0 - shape) * ISOTROPIC) * integral;
             }
         }
-        if self.diffuse > 0.0 {
+        if self.needs_slab() {
             // The slab's profile at the two emission nodes, whose mean times the blob's
             // absorbed fraction is the two-point Gauss-Legendre rule of its integral
             // over the blob's depth (the nodes are that rule's in the absorbed fraction).
