@@ -130,25 +130,59 @@ fn bilinear(c: [Vec3; 4], w: [f32; 4]) -> Vec3 {
 /// No cell: the pixel is computed.
 const NONE: u32 = u32::MAX;
 
-/// The values of a `width x height` picture, row by row: computed by `compute(pixels,
-/// out)` (pixel indices `y * width + x` in, their values out; each list in one call,
-/// which may spread it over threads) where needed, interpolated elsewhere.
-/// `interpolable(pixel, corners, weights)` says whether a pixel may take the bilinear
-/// interpolation of the corner pixels with those weights.
+/// The memory of [`refine`] the size of its picture, kept by each thread between calls:
+/// fresh memory costs a page fault a page at first touch, which on Fig. 6 (720 x 480)
+/// in the bench's process cost some 8 ms of a 34 ms adaptive frame. Taken out while in
+/// use, so a call nested on the same thread (a rayon worker that steals another
+/// picture's work while it waits) finds none and makes its own.
+#[derive(Default)]
+struct Scratch {
+    /// The computed pixels' values.
+    values: Vec<Vec3>,
+    /// Whether each pixel was computed.
+    computed: Vec<bool>,
+    /// Each pixel's finest cell that stood, as an index into the kept cells.
+    owner: Vec<u32>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::Cell<Scratch> = std::cell::Cell::new(Scratch::default());
+}
+
+/// `v` cleared and filled with `n` copies of `value`, in the memory it has.
+fn refill<T: Copy>(v: &mut Vec<T>, n: usize, value: T) -> &mut [T] {
+    v.clear();
+    v.resize(n, value);
+    v
+}
+
+/// Adds the values of a `width x height` picture to `out` (row by row, that size):
+/// computed by `compute(pixels, values)` (pixel indices `y * width + x` in, their
+/// values out; each list in one call, which may spread it over threads) where needed,
+/// interpolated elsewhere. `interpolable(pixel, corners, weights)` says whether a pixel
+/// may take the bilinear interpolation of the corner pixels with those weights.
 ///
 /// The cells are decided level by level, computing the centres and then the split
 /// points; every pixel not computed then takes the interpolation of the finest cell
 /// that holds it and stood the test, over both cores, and those the guard refuses are
-/// computed last.
+/// computed last. Added into the caller's buffer rather than returned in a new one (see
+/// [`Scratch`]).
 pub fn refine(
     (width, height): (u32, u32),
     tolerance: Tolerance,
     mut compute: impl FnMut(&[u32], &mut [Vec3]),
     interpolable: impl Fn(u32, [u32; 4], [f32; 4]) -> bool + Sync,
-) -> (Vec<Vec3>, Counts) {
+    out: &mut [Vec3],
+) -> Counts {
     let n = (width * height) as usize;
-    let mut values = vec![Vec3::ZERO; n];
-    let mut computed = vec![false; n];
+    assert_eq!(out.len(), n, "a {width} x {height} picture");
+    let mut scratch = SCRATCH.take();
+    let Scratch {
+        values,
+        computed,
+        owner,
+    } = &mut scratch;
+    let (values, computed) = (refill(values, n, Vec3::ZERO), refill(computed, n, false));
     let index = |x: u32, y: u32| y * width + x;
     // Columns and rows of the first corners: every COARSEST-th, and the last.
     let grid = |size: u32| -> Vec<u32> {
@@ -175,19 +209,17 @@ pub fn refine(
         .iter()
         .flat_map(|&y| xs.iter().map(move |&x| index(x, y)))
         .collect();
-    let mut scratch = Vec::new();
+    let mut batch = Vec::new();
     // Computes the queued pixels (each once) and empties the queue.
     let mut run = |queue: &mut Vec<u32>, values: &mut [Vec3], computed: &mut [bool]| {
         queue.retain(|&p| !std::mem::replace(&mut computed[p as usize], true));
-        scratch.clear();
-        scratch.resize(queue.len(), Vec3::ZERO);
-        compute(queue, &mut scratch);
-        for (&p, v) in queue.iter().zip(&scratch) {
+        compute(queue, refill(&mut batch, queue.len(), Vec3::ZERO));
+        for (&p, v) in queue.iter().zip(&batch) {
             values[p as usize] = *v;
         }
         queue.clear();
     };
-    run(&mut queue, &mut values, &mut computed);
+    run(&mut queue, values, computed);
     // The cells that stood the test, coarsest first.
     let mut kept: Vec<Cell> = Vec::new();
     while !cells.is_empty() {
@@ -195,7 +227,7 @@ pub fn refine(
             let (x, y) = c.centre();
             index(x, y)
         }));
-        run(&mut queue, &mut values, &mut computed);
+        run(&mut queue, values, computed);
         let mut split = Vec::new();
         for cell in cells {
             let c = cell.corners(width).map(|p| values[p as usize]);
@@ -233,46 +265,44 @@ pub fn refine(
                 }
             }
         }
-        run(&mut queue, &mut values, &mut computed);
+        run(&mut queue, values, computed);
         cells = split;
     }
     // Each pixel's finest cell that stood (later, finer cells paint over).
-    let mut owner = vec![NONE; n];
+    let owner = refill(owner, n, NONE);
     for (k, cell) in kept.iter().enumerate() {
         for y in cell.y0..=cell.y1 {
             owner[index(cell.x0, y) as usize..=index(cell.x1, y) as usize].fill(k as u32);
         }
     }
-    // Interpolated where the guard allows, over both cores; `None` where it refuses.
-    let interpolated: Vec<Option<Vec3>> = (0..n)
-        .into_par_iter()
-        .map(|p| {
-            if computed[p] {
-                return Some(values[p]);
-            }
-            let cell = kept[owner[p] as usize];
-            let p = p as u32;
-            let corners = cell.corners(width);
-            let weights = cell.weights(p % width, p / width);
-            interpolable(p, corners, weights)
-                .then(|| bilinear(corners.map(|c| values[c as usize]), weights))
-        })
-        .collect();
-    for (p, v) in interpolated.iter().enumerate() {
-        match v {
-            Some(v) => values[p] = *v,
-            None => queue.push(p as u32),
+    // Computed values added, the others interpolated where the guard allows, over both
+    // cores; the pixels it refuses listed, computed and added last.
+    queue.par_extend(out.par_iter_mut().enumerate().filter_map(|(p, o)| {
+        if computed[p] {
+            *o += values[p];
+            return None;
         }
+        let cell = kept[owner[p] as usize];
+        let p = p as u32;
+        let corners = cell.corners(width);
+        let weights = cell.weights(p % width, p / width);
+        if !interpolable(p, corners, weights) {
+            return Some(p);
+        }
+        *o += bilinear(corners.map(|c| values[c as usize]), weights);
+        None
+    }));
+    let refused = queue.clone();
+    run(&mut queue, values, computed);
+    for p in refused {
+        out[p as usize] += values[p as usize];
     }
-    run(&mut queue, &mut values, &mut computed);
     let done = computed.iter().filter(|&&c| c).count();
-    (
-        values,
-        Counts {
-            computed: done,
-            interpolated: n - done,
-        },
-    )
+    SCRATCH.set(scratch);
+    Counts {
+        computed: done,
+        interpolated: n - done,
+    }
 }
 
 #[cfg(test)]
@@ -293,7 +323,8 @@ mod tests {
         guard: impl Fn(u32, [u32; 4], [f32; 4]) -> bool + Sync,
     ) -> (Vec<Vec3>, Counts) {
         let mut asked = vec![0u32; (w * h) as usize];
-        let result = refine(
+        let mut values = vec![Vec3::ZERO; (w * h) as usize];
+        let counts = refine(
             (w, h),
             TOLERANCE,
             |pixels, out| {
@@ -303,10 +334,11 @@ mod tests {
                 }
             },
             guard,
+            &mut values,
         );
         assert!(asked.iter().all(|&n| n <= 1), "a pixel computed twice");
-        assert_eq!(asked.iter().filter(|&&n| n == 1).count(), result.1.computed);
-        result
+        assert_eq!(asked.iter().filter(|&&n| n == 1).count(), counts.computed);
+        (values, counts)
     }
 
     #[test]
@@ -379,5 +411,34 @@ mod tests {
                 assert!((*v - exact).abs().max_element() < 1e-3, "{w}x{h} {p}");
             }
         }
+    }
+
+    /// A refinement begun inside another's `compute` on the same thread (as a rayon
+    /// worker may, stealing another picture's work) keeps its own memory: both give
+    /// what they give alone, and so does the next one, which reuses the memory.
+    #[test]
+    fn a_refinement_nested_on_the_same_thread_keeps_its_own_memory() {
+        let inner = |x: u32, y: u32| Vec3::new(x as f32, 2.0 * y as f32, 1.0);
+        let (alone, _) = refined((30, 20), inner, |_, _, _| true);
+        let outer = |x: u32, y: u32| Vec3::splat(if 3 * x + y > 40 { 2.0 } else { 1.0 });
+        let mut nested = Vec::new();
+        let mut values = vec![Vec3::ZERO; 40 * 30];
+        refine(
+            (40, 30),
+            TOLERANCE,
+            |pixels, out| {
+                if nested.is_empty() {
+                    nested = refined((30, 20), inner, |_, _, _| true).0;
+                }
+                for (p, o) in pixels.iter().zip(out) {
+                    *o = outer(p % 40, p / 40);
+                }
+            },
+            |_, _, _| true,
+            &mut values,
+        );
+        assert_eq!(nested, alone);
+        assert_eq!(values, refined((40, 30), outer, |_, _, _| true).0);
+        assert_eq!(refined((30, 20), inner, |_, _, _| true).0, alone);
     }
 }

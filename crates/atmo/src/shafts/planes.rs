@@ -359,47 +359,53 @@ impl<'a> SamplePlanes<'a> {
         pixels: &mut [Vec3],
     ) -> adaptive::Counts {
         let width = self.scene.camera.width;
-        let mut surfaces = vec![(Vec3::ZERO, 0.0f32); pixels.len()];
-        surfaces
-            .par_iter_mut()
+        // The surfaces' light added, and where each ray ends, m.
+        let mut ends = vec![0.0f32; pixels.len()];
+        pixels
+            .par_chunks_mut(width as usize)
+            .zip(ends.par_chunks_mut(width as usize))
             .enumerate()
-            .for_each(|(p, s)| *s = self.surface(ray(p as u32)));
+            .for_each(|(y, (row, ends))| {
+                let first = y as u32 * width;
+                for (x, (pixel, end)) in row.iter_mut().zip(ends).enumerate() {
+                    let surface;
+                    (surface, *end) = self.surface(ray(first + x as u32));
+                    *pixel += surface;
+                }
+            });
         let compute = |list: &[u32], out: &mut [Vec3]| {
             list.par_chunks(LANES)
                 .zip(out.par_chunks_mut(LANES))
                 .with_min_len(16)
                 .for_each(|(list, out)| {
                     let (rays, offsets) = lanes_of(list.iter().copied(), ray, width);
-                    let mut ends = [0.0f32; LANES];
-                    for (end, &p) in ends.iter_mut().zip(list) {
-                        *end = surfaces[p as usize].1;
+                    let mut lane_ends = [0.0f32; LANES];
+                    for (end, &p) in lane_ends.iter_mut().zip(list) {
+                        *end = ends[p as usize];
                     }
                     let count = list.len();
                     out.fill(Vec3::ZERO);
-                    self.scattered_rays(&rays[..count], &offsets[..count], &ends, out);
+                    self.scattered_rays(&rays[..count], &offsets[..count], &lane_ends, out);
                 });
         };
-        let (scattered, counts) = self.scattered_adaptive(&surfaces, compute);
-        for ((pixel, (surface, _)), s) in pixels.iter_mut().zip(&surfaces).zip(scattered) {
-            *pixel += *surface + s;
-        }
-        counts
+        self.scattered_adaptive(&ends, compute, pixels)
     }
 
-    /// The scattered light of every pixel by [`adaptive::refine`] (and its counts),
-    /// computing with `compute`. The guard lets a pixel take its corners'
-    /// interpolation only where its ray ends (on a surface or at the far plane,
-    /// `surfaces`) where interpolating the corners' ends puts it, within the tolerance
-    /// or one sub-sample spacing (an object's silhouette cuts the haze in front of it
-    /// short, and a thin one, a truss or a stand, passes between corners), and not
-    /// near a lamp's image: within [`LAMP_REACH`] pixels, where `1/s^2` peaks inside
-    /// one pixel, and as far again as the beam is narrower than a cell (a beam seen
-    /// across opens by `tan(field / 2)` a pixel of distance from its apex).
+    /// Adds the scattered light of every pixel to `out` by [`adaptive::refine`] (and
+    /// gives its counts), computing with `compute`. The guard lets a pixel take its
+    /// corners' interpolation only where its ray ends (on a surface or at the far
+    /// plane, `ends`, m) where interpolating the corners' ends puts it, within the
+    /// tolerance or one sub-sample spacing (an object's silhouette cuts the haze in
+    /// front of it short, and a thin one, a truss or a stand, passes between corners),
+    /// and not near a lamp's image: within [`LAMP_REACH`] pixels, where `1/s^2` peaks
+    /// inside one pixel, and as far again as the beam is narrower than a cell (a beam
+    /// seen across opens by `tan(field / 2)` a pixel of distance from its apex).
     fn scattered_adaptive(
         &self,
-        surfaces: &[(Vec3, f32)],
+        ends: &[f32],
         compute: impl Fn(&[u32], &mut [Vec3]),
-    ) -> (Vec<Vec3>, adaptive::Counts) {
+        out: &mut [Vec3],
+    ) -> adaptive::Counts {
         let scene = self.scene;
         let spacing = self
             .lights
@@ -429,15 +435,21 @@ impl<'a> SamplePlanes<'a> {
             {
                 return false;
             }
-            let end = surfaces[p as usize].1;
+            let end = ends[p as usize];
             let estimate: f32 = corners
                 .iter()
                 .zip(weights)
-                .map(|(&c, w)| w * surfaces[c as usize].1)
+                .map(|(&c, w)| w * ends[c as usize])
                 .sum();
             (end - estimate).abs() <= tolerance.relative * end + spacing
         };
-        adaptive::refine((camera.width, camera.height), tolerance, compute, guard)
+        adaptive::refine(
+            (camera.width, camera.height),
+            tolerance,
+            compute,
+            guard,
+            out,
+        )
     }
 
     /// The radiance along one camera ray (unit length along the view axis), its
