@@ -536,6 +536,19 @@ impl Gpu {
         &self,
         what: &str,
         texture: &wgpu::Texture,
+        size: (u32, u32, u32),
+    ) -> Result<Vec<u8>, GpuError> {
+        self.read_texture_region(what, texture, wgpu::Origin3d::ZERO, size)
+    }
+
+    /// Copies the `width` x `height` x `depth` texels of a texture from `origin` back
+    /// (an uncompressed format), rows unpadded, slice after slice: a part of a
+    /// picture without the rest's copy.
+    pub fn read_texture_region(
+        &self,
+        what: &str,
+        texture: &wgpu::Texture,
+        origin: wgpu::Origin3d,
         (width, height, depth): (u32, u32, u32),
     ) -> Result<Vec<u8>, GpuError> {
         let texel = texture.format().block_copy_size(None).unwrap_or(16);
@@ -550,7 +563,10 @@ impl Gpu {
         });
         self.run(what, |encoder| {
             encoder.copy_texture_to_buffer(
-                texture.as_image_copy(),
+                wgpu::TexelCopyTextureInfo {
+                    origin,
+                    ..texture.as_image_copy()
+                },
                 wgpu::TexelCopyBufferInfo {
                     buffer: &buffer,
                     layout: wgpu::TexelCopyBufferLayout {

@@ -20,6 +20,7 @@ use winit::window::{Window, WindowId};
 
 use crate::input::{Input, Key};
 use crate::layer::PanelLayer;
+use crate::pixels::WindowPixels;
 use crate::{Backend, Mode, Options, Picture};
 
 /// Opens the window and runs until it is closed or [`Options::frames`] are drawn. Bad
@@ -72,10 +73,21 @@ struct App {
     timings: Timings,
 }
 
+/// Where the frames go.
+enum Screen {
+    /// The adapter's surface: a picture on the GPU, shown by the display pass or
+    /// (levels made on the CPU) copied in.
+    Surface(wgpu::Surface<'static>),
+    /// The window's own pixels: a picture drawn on the CPU ([`crate::pixels`]).
+    Pixels(WindowPixels),
+}
+
 /// The window once it is up.
 struct Running {
     window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
+    screen: Screen,
+    /// The surface's configuration; with [`Screen::Pixels`], the window's size and the
+    /// panel layer's format.
     config: wgpu::SurfaceConfiguration,
     gpu: Gpu,
     mode: Box<dyn Mode>,
@@ -314,10 +326,28 @@ fn open(
     let copies = surface.get_capabilities(&adapter).usages;
     let direct =
         texel_order(config.format).filter(|_| copies.contains(wgpu::TextureUsages::COPY_DST));
-    if direct.is_some() {
-        config.usage |= wgpu::TextureUsages::COPY_DST;
-    }
-    surface.configure(&gpu.device, &config);
+    // A picture drawn on the CPU goes into the window's own pixels where the window
+    // system gives them; else, as a GPU picture, through the adapter's surface.
+    let pixels = (!on_gpu)
+        .then(|| WindowPixels::new(window.clone(), (config.width, config.height)))
+        .and_then(|made| {
+            made.map_err(|e| eprintln!("atmo view: {e}; shown through the adapter instead"))
+                .ok()
+        });
+    let screen = match pixels {
+        Some(pixels) => {
+            // The panel's layer in the order of the window's pixels, blended as stored.
+            config.format = wgpu::TextureFormat::Bgra8Unorm;
+            Screen::Pixels(pixels)
+        }
+        None => {
+            if direct.is_some() {
+                config.usage |= wgpu::TextureUsages::COPY_DST;
+            }
+            surface.configure(&gpu.device, &config);
+            Screen::Surface(surface)
+        }
+    };
     let display = DisplayPass::new(&gpu, config.format).map_err(opening)?;
     let layer =
         PanelLayer::new(&gpu, config.format, (config.width, config.height)).map_err(opening)?;
@@ -335,7 +365,7 @@ fn open(
     let egui_renderer = egui_wgpu::Renderer::new(&gpu.device, config.format, Default::default());
     Ok(Running {
         window,
-        surface,
+        screen,
         config,
         gpu,
         mode,
@@ -367,7 +397,14 @@ impl Running {
             return;
         }
         (self.config.width, self.config.height) = (size.width, size.height);
-        self.surface.configure(&self.gpu.device, &self.config);
+        match &mut self.screen {
+            Screen::Surface(surface) => surface.configure(&self.gpu.device, &self.config),
+            Screen::Pixels(pixels) => {
+                if let Err(e) = pixels.resize((size.width, size.height)) {
+                    self.message = Some(e.to_string());
+                }
+            }
+        }
         let made = Picture::new(&self.gpu, (size.width, size.height)).and_then(|picture| {
             let layer = PanelLayer::new(&self.gpu, self.config.format, (size.width, size.height))?;
             Ok((picture, layer))
@@ -476,14 +513,48 @@ impl Running {
         Ok(())
     }
 
-    /// The picture on the surface (a CPU frame's levels copied, or the texture through
-    /// the display pass), the panel over it; the frame's commands submitted.
-    fn show(&mut self, mut encoder: wgpu::CommandEncoder) -> Result<()> {
-        let texture = match self.surface.get_current_texture() {
+    /// The picture in the window, the panel over it; the frame's commands submitted.
+    fn show(&mut self, encoder: wgpu::CommandEncoder) -> Result<()> {
+        match self.screen {
+            Screen::Surface(_) => self.show_on_surface(encoder),
+            Screen::Pixels(_) => self.show_in_pixels(encoder),
+        }
+    }
+
+    /// [`Running::show`] through the window's own pixels: the panel, where it is due,
+    /// drawn into its layer and read back; the picture's levels and the panel's layer
+    /// put into the pixels on the CPU.
+    fn show_in_pixels(&mut self, mut encoder: wgpu::CommandEncoder) -> Result<()> {
+        let redraw = self.show_panel && self.layer.due(Instant::now());
+        let extra = if redraw {
+            self.draw_panel(&mut encoder)
+        } else {
+            Vec::new()
+        };
+        self.gpu
+            .queue
+            .submit(extra.into_iter().chain([encoder.finish()]));
+        let Screen::Pixels(pixels) = &mut self.screen else {
+            unreachable!("shown through the window's pixels")
+        };
+        if redraw {
+            pixels.panel = self.layer.read(&self.gpu)?;
+        }
+        let texels = self.picture.texels(self.mode.display(), TexelOrder::Bgra);
+        pixels.show(&self.window, texels, self.show_panel)
+    }
+
+    /// [`Running::show`] on the adapter's surface: a CPU frame's levels copied, or the
+    /// texture through the display pass.
+    fn show_on_surface(&mut self, mut encoder: wgpu::CommandEncoder) -> Result<()> {
+        let Screen::Surface(surface) = &self.screen else {
+            unreachable!("shown on the surface")
+        };
+        let texture = match surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                self.surface.configure(&self.gpu.device, &self.config);
+                surface.configure(&self.gpu.device, &self.config);
                 self.gpu.queue.submit([encoder.finish()]);
                 return Ok(());
             }

@@ -16,6 +16,8 @@ use std::time::{Duration, Instant};
 use atmo_gpu::display::cleared_pass;
 use atmo_gpu::{Gpu, GpuError};
 
+use crate::pixels::PanelPixels;
+
 /// How stale the panel may get while nobody touches it: the values it shows (the
 /// altitude of a flight, the frame time) are redrawn at least this often.
 pub const REFRESH: Duration = Duration::from_millis(250);
@@ -63,7 +65,9 @@ impl PanelLayer {
             "the panel layer",
             (size.0, size.1),
             format,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
         );
         let view = texture.create_view(&Default::default());
         let group = gpu.bind_group(
@@ -127,6 +131,22 @@ impl PanelLayer {
             [left, top, right - left, bottom - top]
         });
         self.next = Some(Instant::now() + repaint.min(REFRESH));
+    }
+
+    /// The layer's texels within the panel's rectangle, read back (after what drew it
+    /// was submitted), for a window shown through its own pixels; `None` before the
+    /// panel was drawn or where it covers nothing.
+    pub fn read(&self, gpu: &Gpu) -> Result<Option<PanelPixels>, GpuError> {
+        let Some(rect @ [x, y, w, h]) = self.rect.filter(|r| r[2] > 0 && r[3] > 0) else {
+            return Ok(None);
+        };
+        let origin = wgpu::Origin3d { x, y, z: 0 };
+        let bytes = gpu.read_texture_region("the panel layer", &self.texture, origin, (w, h, 1))?;
+        let texels = bytes
+            .chunks_exact(4)
+            .map(|t| [t[0], t[1], t[2], t[3]])
+            .collect();
+        Ok(Some(PanelPixels { rect, texels }))
     }
 
     /// Records the layer over what `pass` (into the window's surface) holds, within the

@@ -10,7 +10,8 @@
 //! through `atmo_gpu` into an RGBA f32 texture (the sky's [`SkyPass`] recorded into
 //! this program's encoder), which `atmo_gpu`'s display pass tone-maps onto the window's
 //! surface; or on the CPU by `atmo`'s methods into a frame, whose 8-bit levels (those
-//! the still writes to PNG, by [`atmo::image::Levels`]) are copied into the surface.
+//! the still writes to PNG, by [`atmo::image::Levels`]) go into the window's own pixels
+//! (softbuffer; the surface where the window system gives none).
 //! A screenshot reads the picture back (or takes the CPU's frame) and writes it as the
 //! stills do, so a screenshot and the still command's file can be compared level for
 //! level.
@@ -26,6 +27,7 @@ pub mod clouds;
 pub mod input;
 mod layer;
 mod panel;
+mod pixels;
 pub mod sky;
 pub mod stage;
 
@@ -298,7 +300,7 @@ impl Picture {
 
     /// The CPU's frame as 4-byte texels in `order` under `display`, made again only
     /// where the frame or the display changed; `None` when the picture is the GPU's.
-    fn texels(&mut self, display: Display, order: TexelOrder) -> Option<&[u8]> {
+    pub(crate) fn texels(&mut self, display: Display, order: TexelOrder) -> Option<&[u8]> {
         let cpu = self.cpu.as_mut()?;
         let levels = match cpu.levels.take() {
             Some(levels) if levels.display() == display => levels,

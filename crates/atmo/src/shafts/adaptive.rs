@@ -165,8 +165,9 @@ fn refill<T: Copy>(v: &mut Vec<T>, n: usize, value: T) -> &mut [T] {
 /// The cells are decided level by level, computing the centres and then the split
 /// points; every pixel not computed then takes the interpolation of the finest cell
 /// that holds it and stood the test, over both cores, and those the guard refuses are
-/// computed last. Added into the caller's buffer rather than returned in a new one (see
-/// [`Scratch`]).
+/// computed last. Added into the caller's buffer rather than returned in a new one, its
+/// own per-pixel memory kept by the thread between calls: fresh memory costs a page
+/// fault a page (`Scratch`).
 pub fn refine(
     (width, height): (u32, u32),
     tolerance: Tolerance,
