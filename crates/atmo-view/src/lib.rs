@@ -148,6 +148,10 @@ pub struct Picture {
     /// 1/`k` of the size in each direction (`Some(k)`, the CPU's methods; see
     /// [`Options::preview`]), then must draw it whole at the next frame without one.
     pub preview: Option<u32>,
+    /// The window takes this frame's picture as 8-bit texels in this order and nothing
+    /// else of it (no screenshot, no upload): a CPU method may draw the texels alone
+    /// ([`Picture::draw_cpu_texels`]).
+    pub texels_only: Option<TexelOrder>,
     /// The frame drawn on the CPU, while the picture is one.
     cpu: Option<CpuFrame>,
 }
@@ -168,6 +172,9 @@ struct CpuFrame {
     /// The frame was drawn since its texels were made / since it was uploaded.
     texels_stale: bool,
     upload_stale: bool,
+    /// Set where the texels were drawn alone ([`Picture::draw_cpu_texels`]): their
+    /// display and order; `frame` is not the picture then.
+    texels_of: Option<(Display, TexelOrder)>,
 }
 
 impl Picture {
@@ -179,6 +186,7 @@ impl Picture {
             view,
             size,
             preview: None,
+            texels_only: None,
             cpu: None,
         })
     }
@@ -204,6 +212,34 @@ impl Picture {
         }
     }
 
+    /// Draws the picture on the CPU at its size under `display`: only its 8-bit texels
+    /// (`texels(levels, order, texels)`, row by row) where the window takes nothing else
+    /// this frame ([`Picture::texels_only`]), else the frame of radiances (`whole`).
+    /// Texels drawn alone leave no frame behind, so a mode that draws them draws every
+    /// frame (the sky): a later frame's screenshot, display or upload has its own draw.
+    pub fn draw_cpu_texels(
+        &mut self,
+        display: Display,
+        whole: impl FnOnce(&mut Frame),
+        texels: impl FnOnce(&Levels, TexelOrder, &mut [[u8; 4]]),
+    ) {
+        let Some(order) = self.texels_only else {
+            return whole(self.frame());
+        };
+        let n = (self.size.0 * self.size.1) as usize;
+        self.frame();
+        let cpu = self.cpu.as_mut().expect("made by frame()");
+        let levels = match cpu.levels.take() {
+            Some(levels) if levels.display() == display => levels,
+            _ => Levels::new(display),
+        };
+        cpu.texels.resize(n, [0; 4]);
+        texels(&levels, order, &mut cpu.texels);
+        cpu.levels = Some(levels);
+        cpu.texels_of = Some((display, order));
+        cpu.texels_stale = false;
+    }
+
     /// The frame a CPU method draws the picture into (the picture's size; what was
     /// drawn last, or black when new): the picture is this frame from now on.
     pub fn frame(&mut self) -> &mut Frame {
@@ -225,8 +261,9 @@ impl Picture {
             levels: None,
             texels_stale: true,
             upload_stale: true,
+            texels_of: None,
         });
-        (cpu.texels_stale, cpu.upload_stale) = (true, true);
+        (cpu.texels_stale, cpu.upload_stale, cpu.texels_of) = (true, true, None);
         &mut cpu.frame
     }
 
@@ -302,6 +339,10 @@ impl Picture {
     /// where the frame or the display changed; `None` when the picture is the GPU's.
     pub(crate) fn texels(&mut self, display: Display, order: TexelOrder) -> Option<&[u8]> {
         let cpu = self.cpu.as_mut()?;
+        if let Some(drawn) = cpu.texels_of {
+            // Drawn as texels alone: those, or nothing (no frame to make others from).
+            return (drawn == (display, order)).then_some(cpu.texels.as_flattened());
+        }
         let levels = match cpu.levels.take() {
             Some(levels) if levels.display() == display => levels,
             _ => {
@@ -337,6 +378,12 @@ impl Picture {
     /// The picture: the CPU's frame, or the texture read back.
     fn read(&self, gpu: &Gpu) -> Result<Frame, GpuError> {
         if let Some(cpu) = &self.cpu {
+            if cpu.texels_of.is_some() {
+                return Err(GpuError::Internal {
+                    what: "the screenshot".into(),
+                    message: "the picture was drawn as 8-bit texels alone".into(),
+                });
+            }
             return Ok(cpu.whole(self.size));
         }
         let (width, height) = self.size;
@@ -387,6 +434,45 @@ pub(crate) fn test_gpu() -> Option<Gpu> {
 mod tests {
     use super::*;
     use atmo::image::ToneMap;
+
+    /// Texels drawn alone are what the window gets for their display and order, and
+    /// nothing for another or for a screenshot; without `texels_only` the frame is
+    /// drawn.
+    #[test]
+    fn texels_drawn_alone_stand_for_the_picture_only_as_drawn() {
+        let Some(gpu) = test_gpu() else { return };
+        let mut picture = Picture::new(&gpu, (3, 2)).unwrap();
+        let display = Display {
+            exposure: 1.0,
+            tone: ToneMap::Clamp,
+        };
+        let draw = |picture: &mut Picture| {
+            picture.draw_cpu_texels(
+                display,
+                |frame| frame.pixels.fill(glam::Vec3::splat(0.5)),
+                |levels, order, texels| {
+                    assert_eq!(order, TexelOrder::Bgra);
+                    texels.fill([levels.level(0.25), 1, 2, 255]);
+                },
+            )
+        };
+        picture.texels_only = Some(TexelOrder::Bgra);
+        draw(&mut picture);
+        let low = Levels::new(display).level(0.25);
+        let texels = picture.texels(display, TexelOrder::Bgra).unwrap().to_vec();
+        assert_eq!(texels, [low, 1, 2, 255].repeat(6));
+        assert!(picture.texels(display, TexelOrder::Rgba).is_none());
+        assert!(picture.read(&gpu).is_err(), "no frame to save");
+        picture.texels_only = None;
+        draw(&mut picture);
+        assert_eq!(
+            picture.read(&gpu).unwrap().pixels,
+            vec![glam::Vec3::splat(0.5); 6]
+        );
+        let half = Levels::new(display).level(0.5);
+        let texels = picture.texels(display, TexelOrder::Rgba).unwrap().to_vec();
+        assert_eq!(texels, [half, half, half, 255].repeat(6));
+    }
 
     /// A picture that changed is drawn small and stretched where previews are allowed,
     /// whole where not or once it stops changing.

@@ -367,10 +367,11 @@ impl Mode for SkyMode {
         let altitude = p.altitude_m;
         match self.drawer.as_mut().expect("made above") {
             Drawer::CpuTable(table) => {
-                SkyPicture::from_table(table, sun, altitude)?.render_into(&view, picture.frame());
+                let sky = SkyPicture::from_table(table, sun, altitude)?;
+                draw_cpu(&sky, &view, self.display(), picture);
             }
             Drawer::CpuShells(model) => {
-                SkyPicture::new(model, sun).render_into(&view, picture.frame());
+                draw_cpu(&SkyPicture::new(model, sun), &view, self.display(), picture);
             }
             Drawer::GpuTable(sky, pass) => {
                 sky.prepare(gpu, encoder, pass, sun, altitude, &view)?;
@@ -437,6 +438,16 @@ impl Mode for SkyMode {
 }
 
 /// `frame` at `size`, reallocated only when the size changed.
+/// Draws `sky` through `view` into `picture` on the CPU, as the texels of `display`
+/// alone where the window takes nothing else this frame (every frame is drawn anew).
+fn draw_cpu(sky: &SkyPicture, view: &View, display: Display, picture: &mut Picture) {
+    picture.draw_cpu_texels(
+        display,
+        |frame| sky.render_into(view, frame),
+        |levels, order, texels| sky.render_texels_into(view, levels, order, texels),
+    );
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

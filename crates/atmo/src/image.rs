@@ -164,6 +164,17 @@ impl Levels {
         (display.value(x) * 255.0 + 0.5).clamp(0.0, 255.0) as u8
     }
 
+    /// The texels of `pixels` in `order` (alpha 255) into `texels` (as many).
+    pub fn texels(&self, pixels: &[Vec3], order: TexelOrder, texels: &mut [[u8; 4]]) {
+        for (t, p) in texels.iter_mut().zip(pixels) {
+            let [r, g, b] = [self.level(p.x), self.level(p.y), self.level(p.z)];
+            *t = match order {
+                TexelOrder::Rgba => [r, g, b, 255],
+                TexelOrder::Bgra => [b, g, r, 255],
+            };
+        }
+    }
+
     /// The level of `x` (negative and NaN: 0, as the tone maps take them).
     #[inline]
     pub fn level(&self, x: f32) -> u8 {
@@ -338,21 +349,10 @@ impl Frame {
     pub fn to_texels(&self, levels: &Levels, order: TexelOrder, texels: &mut Vec<[u8; 4]>) {
         let width = self.width as usize;
         texels.resize(self.pixels.len(), [0; 4]);
-        let texel = |p: &Vec3| {
-            let [r, g, b] = [levels.level(p.x), levels.level(p.y), levels.level(p.z)];
-            match order {
-                TexelOrder::Rgba => [r, g, b, 255],
-                TexelOrder::Bgra => [b, g, r, 255],
-            }
-        };
         texels
             .par_chunks_mut(width)
             .zip(self.pixels.par_chunks(width))
-            .for_each(|(row, pixels)| {
-                for (t, p) in row.iter_mut().zip(pixels) {
-                    *t = texel(p);
-                }
-            });
+            .for_each(|(row, pixels)| levels.texels(pixels, order, row));
     }
 
     /// The frame stretched to `width` x `height` by bilinear interpolation

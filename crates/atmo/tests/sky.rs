@@ -340,6 +340,29 @@ fn pictures_are_symmetric_about_the_suns_vertical_plane() {
     let toward = picture.radiance(direction_of(237f64.to_radians(), 0.2), false);
     let away = picture.radiance(direction_of(57f64.to_radians(), 0.2), false);
     assert!(toward.x > 1.2 * away.x, "{toward} {away}");
+    // A window's texels drawn row by row are the frame's levels, in either order
+    // (the sun's disc and the horizon in view, a width that splits no row evenly).
+    use atmo::image::{Display, Levels, TexelOrder, ToneMap};
+    use atmo::sky::View;
+    use atmo::view::{Camera, Fov};
+    let camera = Camera::yaw_pitch(glam::Vec3::ZERO, 237.0, 5.0, Fov::Vertical(40.0), (97, 61));
+    let view = View {
+        camera: camera.unwrap(),
+        sun_disc: true,
+    };
+    let levels = Levels::new(Display {
+        exposure: 0.3,
+        tone: ToneMap::Exponential,
+    });
+    let frame = picture.render(&view);
+    for order in [TexelOrder::Rgba, TexelOrder::Bgra] {
+        let mut want = Vec::new();
+        frame.to_texels(&levels, order, &mut want);
+        let mut texels = vec![[0u8; 4]; want.len()];
+        picture.render_texels_into(&view, &levels, order, &mut texels);
+        assert_eq!(texels, want, "{order:?}");
+        assert!(want.iter().any(|t| t[0] != t[2]), "a sky of colours");
+    }
 }
 
 #[test]

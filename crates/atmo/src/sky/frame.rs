@@ -19,7 +19,7 @@ use crate::atmosphere::Atmosphere;
 #[cfg(feature = "table")]
 use crate::error::Result;
 use crate::fast::fast_acos;
-use crate::image::Frame;
+use crate::image::{Frame, Levels, TexelOrder};
 use crate::view::{Camera, Sun};
 
 /// The sky's own frame (x east, y north, z up, centred on the planet's axis through
@@ -311,7 +311,7 @@ impl SkyPicture {
     pub fn render_into(&self, view: &View, frame: &mut Frame) {
         let camera = view.camera.pixel_basis().rotated(sky_from_world);
         let pixel = camera.pixel_angle();
-        self.shade_rows(frame, pixel, view.sun_disc, |x, y| {
+        self.shade_frame(frame, pixel, view.sun_disc, |x, y| {
             camera.direction(x, y).unwrap_or(Vec3::NAN)
         });
     }
@@ -328,35 +328,83 @@ impl SkyPicture {
         direction: impl Fn(u32, u32) -> Vec3 + Sync,
     ) -> Frame {
         let mut frame = Frame::new(width, height);
-        self.shade_rows(&mut frame, pixel, sun_disc, |x, y| {
+        self.shade_frame(&mut frame, pixel, sun_disc, |x, y| {
             sky_from_world(direction(x, y))
         });
         frame
     }
 
+    /// Renders `view` as the 8-bit texels of `levels` in `order` (the view's size, row
+    /// by row, alpha 255), rows in parallel: what a window shows, without a frame of
+    /// radiances between the shading and the levels. Each row is shaded into memory of
+    /// its own and turned into levels while it is still in the cache: at 1280 x 720
+    /// the frame's 11 MB written and read again took longer than the levels' table.
+    pub fn render_texels_into(
+        &self,
+        view: &View,
+        levels: &Levels,
+        order: TexelOrder,
+        texels: &mut [[u8; 4]],
+    ) {
+        let camera = view.camera.pixel_basis().rotated(sky_from_world);
+        let pixel = camera.pixel_angle();
+        let width = view.camera.width as usize;
+        self.shade_rows(
+            texels,
+            width,
+            pixel,
+            view.sun_disc,
+            |x, y| camera.direction(x, y).unwrap_or(Vec3::NAN),
+            |row, texels| levels.texels(row, order, texels),
+        );
+    }
+
     /// Shades every pixel of `frame`, rows in parallel, along the sky-frame direction
     /// `direction(x, y)` (NaN for none).
-    fn shade_rows(
+    fn shade_frame(
         &self,
         frame: &mut Frame,
         pixel: f32,
         sun_disc: bool,
         direction: impl Fn(u32, u32) -> Vec3 + Sync,
     ) {
+        let width = frame.width as usize;
+        self.shade_rows(
+            &mut frame.pixels,
+            width,
+            pixel,
+            sun_disc,
+            direction,
+            |row, out| out.copy_from_slice(row),
+        );
+    }
+
+    /// Shades the rows of `out` (`width` long), in parallel, along the sky-frame
+    /// direction `direction(x, y)` (NaN for none), each into a row of radiances that
+    /// `put` writes into `out`'s row.
+    fn shade_rows<T: Send>(
+        &self,
+        out: &mut [T],
+        width: usize,
+        pixel: f32,
+        sun_disc: bool,
+        direction: impl Fn(u32, u32) -> Vec3 + Sync,
+        put: impl Fn(&[Vec3], &mut [T]) + Sync,
+    ) {
         let edges = Edges {
             sun_disc,
             pixel,
             sun_cos_outer: (self.sun_radius + pixel).cos(),
         };
-        let width = frame.width as usize;
-        frame
-            .pixels
-            .par_chunks_mut(width)
-            .enumerate()
-            .for_each_init(Rays::default, |rays, (y, row)| {
-                rays.fill(row.len(), |x| direction(x as u32, y as u32));
+        out.par_chunks_mut(width).enumerate().for_each_init(
+            || (Rays::default(), Vec::new()),
+            |(rays, row), (y, out)| {
+                rays.fill(out.len(), |x| direction(x as u32, y as u32));
+                row.resize(out.len(), Vec3::ZERO);
                 self.shade(rays, edges, row);
-            });
+                put(row, out);
+            },
+        );
     }
 }
 
