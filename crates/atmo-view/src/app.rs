@@ -441,10 +441,12 @@ impl Running {
         // one a screenshot is taken of.
         let whole = options.frames == Some(self.frame + 1) || self.shot.is_some();
         self.picture.preview = Some(options.preview).filter(|&k| k > 1 && !whole);
-        // The window's texels alone, where that is all it takes of this frame.
+        // The window's texels alone, where that is all it takes of this frame (a surface
+        // of another size than the picture's takes the frame, uploaded).
+        let fits = (self.config.width, self.config.height) == self.picture.size;
         let order = match self.screen {
             Screen::Pixels(_) => Some(TexelOrder::Bgra),
-            Screen::Surface(_) => self.direct,
+            Screen::Surface(_) => self.direct.filter(|_| fits),
         };
         self.picture.texels_only = order.filter(|_| !whole);
         let drawn = self.mode.draw(&self.gpu, &mut encoder, &mut self.picture);
