@@ -229,10 +229,7 @@ impl Picture {
         let n = (self.size.0 * self.size.1) as usize;
         self.frame();
         let cpu = self.cpu.as_mut().expect("made by frame()");
-        let levels = match cpu.levels.take() {
-            Some(levels) if levels.display() == display => levels,
-            _ => Levels::new(display),
-        };
+        let levels = cpu.levels_of(display);
         cpu.texels.resize(n, [0; 4]);
         texels(&levels, order, &mut cpu.texels);
         cpu.levels = Some(levels);
@@ -343,13 +340,7 @@ impl Picture {
             // Drawn as texels alone: those, or nothing (no frame to make others from).
             return (drawn == (display, order)).then_some(cpu.texels.as_flattened());
         }
-        let levels = match cpu.levels.take() {
-            Some(levels) if levels.display() == display => levels,
-            _ => {
-                cpu.texels_stale = true;
-                Levels::new(display)
-            }
-        };
+        let levels = cpu.levels_of(display);
         if cpu.texels_stale {
             let drawn = (cpu.frame.width, cpu.frame.height);
             if drawn == self.size {
@@ -393,6 +384,18 @@ impl Picture {
 }
 
 impl CpuFrame {
+    /// The levels table of `display`, taken out (to be put back): the one kept if it
+    /// is of `display`, else a new one, the texels then stale.
+    fn levels_of(&mut self, display: Display) -> Levels {
+        match self.levels.take() {
+            Some(levels) if levels.display() == display => levels,
+            _ => {
+                self.texels_stale = true;
+                Levels::new(display)
+            }
+        }
+    }
+
     /// The frame at the picture's `size`: a preview stretched.
     fn whole(&self, (width, height): (u32, u32)) -> Frame {
         if (self.frame.width, self.frame.height) == (width, height) {

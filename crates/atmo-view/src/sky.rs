@@ -437,7 +437,6 @@ impl Mode for SkyMode {
     }
 }
 
-/// `frame` at `size`, reallocated only when the size changed.
 /// Draws `sky` through `view` into `picture` on the CPU, as the texels of `display`
 /// alone where the window takes nothing else this frame (every frame is drawn anew).
 fn draw_cpu(sky: &SkyPicture, view: &View, display: Display, picture: &mut Picture) {
