@@ -33,7 +33,7 @@ use rayon::prelude::*;
 
 use super::shadow_map::{ShadowMap, Stretch};
 use super::spotlight::{Gobo, Spotlight};
-use super::surface::{first_hit, shadow_ray, surface_radiance, SurfacePoint};
+use super::surface::{first_hit_among, shadow_ray, surface_radiance, SurfacePoint};
 use super::tables::{AttenuationTable, PhaseTable};
 use super::{adaptive, PlaneSettings, Scene};
 use crate::fast::interleaved_offset;
@@ -217,6 +217,8 @@ pub struct SamplePlanes<'a> {
     pub lights: Vec<LightPlanes<'a>>,
     phase: PhaseTable,
     attenuation: AttenuationTable,
+    /// Per object, where on the image it can show ([`screen_box`]).
+    screen: Vec<ScreenBox>,
 }
 
 impl<'a> SamplePlanes<'a> {
@@ -286,6 +288,12 @@ impl<'a> SamplePlanes<'a> {
             lights,
             phase: PhaseTable::new(&scene.haze),
             attenuation: AttenuationTable::new(&scene.haze, s_max, t_max),
+            screen: scene
+                .objects
+                .list
+                .iter()
+                .map(|o| screen_box(o, camera))
+                .collect(),
         }
     }
 
@@ -309,11 +317,11 @@ impl<'a> SamplePlanes<'a> {
         let weight = 1.0 / subpixels.len() as f32;
         let mut counts = adaptive::Counts::default();
         for &(dx, dy) in &subpixels {
-            let ray = |p: u32| camera.ray((p % width) as f32 + dx, (p / width) as f32 + dy);
+            let point = |p: u32| ((p % width) as f32 + dx, (p / width) as f32 + dy);
             let pass = if self.scene.planes.adaptive {
-                self.add_adaptive(&ray, &mut frame.pixels)
+                self.add_adaptive(&point, &mut frame.pixels)
             } else {
-                self.add_every_pixel(&ray, &mut frame.pixels);
+                self.add_every_pixel(&point, &mut frame.pixels);
                 adaptive::Counts {
                     computed: n,
                     interpolated: 0,
@@ -328,9 +336,10 @@ impl<'a> SamplePlanes<'a> {
         (frame, counts)
     }
 
-    /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`, all of
-    /// it computed: rows in parallel, each [`LANES`] pixels at a time.
-    fn add_every_pixel(&self, ray: &(impl Fn(u32) -> Vec3 + Sync), pixels: &mut [Vec3]) {
+    /// Adds the light along the rays through the image points `point(p)` (pixels from
+    /// the top-left corner) of every pixel `p` to `pixels`, all of it computed: rows in
+    /// parallel, each [`LANES`] pixels at a time.
+    fn add_every_pixel(&self, point: &(impl Fn(u32) -> (f32, f32) + Sync), pixels: &mut [Vec3]) {
         let width = self.scene.camera.width;
         pixels
             .par_chunks_mut(width as usize)
@@ -339,10 +348,11 @@ impl<'a> SamplePlanes<'a> {
                 let first = y as u32 * width;
                 for (k, out) in row.chunks_mut(LANES).enumerate() {
                     let start = first + (k * LANES) as u32;
-                    let (rays, offsets) = lanes_of(start..start + out.len() as u32, ray, width);
+                    let pixels = start..start + out.len() as u32;
+                    let (rays, offsets) = lanes_of(pixels.clone(), self.ray(point), width);
                     let mut ends = [0.0f32; LANES];
-                    for l in 0..out.len() {
-                        let (surface, end) = self.surface(rays[l]);
+                    for (l, p) in pixels.enumerate() {
+                        let (surface, end) = self.surface(rays[l], Some(point(p)));
                         (out[l], ends[l]) = (out[l] + surface, end);
                     }
                     let count = out.len();
@@ -351,13 +361,15 @@ impl<'a> SamplePlanes<'a> {
             });
     }
 
-    /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`, the
-    /// surfaces computed at every pixel, the scattered light by [`adaptive::refine`].
+    /// Adds the light along the rays through the image points `point(p)` of every pixel
+    /// `p` to `pixels`, the surfaces computed at every pixel, the scattered light by
+    /// [`adaptive::refine`].
     fn add_adaptive(
         &self,
-        ray: &(impl Fn(u32) -> Vec3 + Sync),
+        point: &(impl Fn(u32) -> (f32, f32) + Sync),
         pixels: &mut [Vec3],
     ) -> adaptive::Counts {
+        let ray = self.ray(point);
         let width = self.scene.camera.width;
         // The surfaces' light added, and where each ray ends, m.
         let mut ends = vec![0.0f32; pixels.len()];
@@ -369,7 +381,8 @@ impl<'a> SamplePlanes<'a> {
                 let first = y as u32 * width;
                 for (x, (pixel, end)) in row.iter_mut().zip(ends).enumerate() {
                     let surface;
-                    (surface, *end) = self.surface(ray(first + x as u32));
+                    let p = first + x as u32;
+                    (surface, *end) = self.surface(ray(p), Some(point(p)));
                     *pixel += surface;
                 }
             });
@@ -378,7 +391,7 @@ impl<'a> SamplePlanes<'a> {
                 .zip(out.par_chunks_mut(LANES))
                 .with_min_len(16)
                 .for_each(|(list, out)| {
-                    let (rays, offsets) = lanes_of(list.iter().copied(), ray, width);
+                    let (rays, offsets) = lanes_of(list.iter().copied(), &ray, width);
                     let mut lane_ends = [0.0f32; LANES];
                     for (end, &p) in lane_ends.iter_mut().zip(list) {
                         *end = ends[p as usize];
@@ -456,19 +469,44 @@ impl<'a> SamplePlanes<'a> {
     /// sub-sample planes shifted by `offset` in [0, 1) of their spacing (1/2: the
     /// paper's, centred in their slices).
     pub fn radiance(&self, ray: Vec3, offset: f32) -> Vec3 {
-        let (surface, end) = self.surface(ray);
+        let (surface, end) = self.surface(ray, None);
         let mut out = [Vec3::ZERO];
         self.scattered_rays(&[ray], &[offset], &[end; LANES], &mut out);
         surface + out[0]
     }
 
+    /// The camera ray (unit length along the view axis) through the image point
+    /// `point(p)` of pixel `p`.
+    fn ray<'p>(
+        &self,
+        point: &'p (impl Fn(u32) -> (f32, f32) + Sync),
+    ) -> impl Fn(u32) -> Vec3 + Sync + 'p
+    where
+        'a: 'p,
+    {
+        let camera = &self.scene.camera;
+        move |p| {
+            let (x, y) = point(p);
+            camera.ray(x, y)
+        }
+    }
+
     /// The light a camera ray (unit length along the view axis) gets from the surface it
-    /// meets, and how far it goes before it meets it (the far plane if none), m.
-    fn surface(&self, ray: Vec3) -> (Vec3, f32) {
+    /// meets, and how far it goes before it meets it (the far plane if none), m. With
+    /// the image point the ray passes through, only the objects whose [`screen_box`]
+    /// holds it are tried.
+    fn surface(&self, ray: Vec3, at: Option<(f32, f32)>) -> (Vec3, f32) {
         let scene = self.scene;
         let length = ray.length();
         let far = scene.camera.far * length;
-        match first_hit(scene, ray / length, far) {
+        let objects = scene
+            .objects
+            .list
+            .iter()
+            .zip(&self.screen)
+            .filter(|(_, b)| at.is_none_or(|(x, y)| b.holds(x, y)))
+            .map(|(o, _)| o);
+        match first_hit_among(scene, objects, ray / length, far) {
             Some(point) => (
                 surface_radiance(scene, &point, |k, light| self.visibility(k, light, &point)),
                 point.distance,
@@ -637,6 +675,55 @@ impl<'a> SamplePlanes<'a> {
             sum[l] += if gobo { js } else { Vec3::splat(js.x) } * g;
         }
     }
+}
+
+/// Where on the image an object can show: image coordinates (pixels from the top-left
+/// corner), inclusive.
+#[derive(Debug, Clone, Copy)]
+struct ScreenBox {
+    x: [f32; 2],
+    y: [f32; 2],
+}
+
+impl ScreenBox {
+    #[inline]
+    fn holds(&self, x: f32, y: f32) -> bool {
+        x >= self.x[0] && x <= self.x[1] && y >= self.y[0] && y <= self.y[1]
+    }
+}
+
+/// Where `object` can show in `camera`'s picture: the box around its bounding box's
+/// corners seen by the camera, widened by a pixel; everywhere for an unbounded plane
+/// or a box reaching to or behind the eye's plane. A camera ray through an image point
+/// outside cannot meet the object (its box is convex, and in front of the eye its
+/// picture is the hull of its corners').
+fn screen_box(object: &super::objects::Object, camera: &Camera) -> ScreenBox {
+    let everywhere = ScreenBox {
+        x: [f32::NEG_INFINITY, f32::INFINITY],
+        y: [f32::NEG_INFINITY, f32::INFINITY],
+    };
+    let Some(bounds) = object.shape.bounds() else {
+        return everywhere;
+    };
+    bounds
+        .corners()
+        .into_iter()
+        .try_fold(
+            ScreenBox {
+                x: [f32::INFINITY, f32::NEG_INFINITY],
+                y: [f32::INFINITY, f32::NEG_INFINITY],
+            },
+            |b, c| {
+                // Corners too near the eye's plane project anywhere.
+                (camera.depth(c) > 1e-3).then_some(())?;
+                let (x, y) = camera.pixel_of(c)?;
+                Some(ScreenBox {
+                    x: [b.x[0].min(x - 1.0), b.x[1].max(x + 1.0)],
+                    y: [b.y[0].min(y - 1.0), b.y[1].max(y + 1.0)],
+                })
+            },
+        )
+        .unwrap_or(everywhere)
 }
 
 /// The rays `ray(p)` of up to [`LANES`] pixels `p` of a picture `width` wide, and their
@@ -964,6 +1051,50 @@ mod tests {
             .iter()
             .map(|f| Scene::from_file(&folder.join(f)).unwrap())
             .collect()
+    }
+
+    /// A camera ray meets an object only through an image point in its screen box, so
+    /// leaving the others out changes nothing; and bounded objects in front of the
+    /// camera get boxes smaller than the picture (else the test proves nothing).
+    #[test]
+    fn camera_rays_meet_objects_only_inside_their_screen_boxes() {
+        let mut bounded = 0;
+        for scene in scenes() {
+            let camera = &scene.camera;
+            let boxes: Vec<ScreenBox> = scene
+                .objects
+                .list
+                .iter()
+                .map(|o| screen_box(o, camera))
+                .collect();
+            let (w, h) = (camera.width as f32, camera.height as f32);
+            bounded += boxes
+                .iter()
+                .filter(|b| (b.x[1] - b.x[0]) * (b.y[1] - b.y[0]) < 0.5 * w * h)
+                .count();
+            for (y, x) in (0..camera.height).flat_map(|y| (0..camera.width).map(move |x| (y, x))) {
+                let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
+                let dir = camera.ray(px, py).normalize();
+                let ray = crate::geometry::Ray {
+                    origin: camera.position,
+                    dir,
+                };
+                for (object, b) in scene.objects.list.iter().zip(&boxes) {
+                    if object.shape.intersect(&ray, f32::INFINITY).is_some() {
+                        assert!(
+                            b.holds(px, py),
+                            "pixel ({x}, {y}) meets {:?}",
+                            object.shape.bounds()
+                        );
+                    }
+                }
+            }
+        }
+        // Fig. 6's sphere; the stage's rectangle, box, mesh and sphere.
+        assert!(
+            bounded >= 4,
+            "{bounded} objects with boxes smaller than the picture"
+        );
     }
 
     /// The lit volume's extent found from the blocks' boxes is the walk over every

@@ -5,6 +5,7 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::Vec3;
 
+use super::objects::{nearest_hit, Object};
 use super::spotlight::Spotlight;
 use super::Scene;
 use crate::geometry::Ray;
@@ -25,8 +26,18 @@ pub struct SurfacePoint {
 /// The nearest surface along the unit direction `dir` from the camera, within
 /// `max_distance` m.
 pub fn first_hit(scene: &Scene, dir: Vec3, max_distance: f32) -> Option<SurfacePoint> {
+    first_hit_among(scene, &scene.objects.list, dir, max_distance)
+}
+
+/// [`first_hit`] among `objects` alone (the others known not to lie on the ray).
+pub fn first_hit_among<'a>(
+    scene: &Scene,
+    objects: impl IntoIterator<Item = &'a Object>,
+    dir: Vec3,
+    max_distance: f32,
+) -> Option<SurfacePoint> {
     let origin = scene.camera.position;
-    let hit = scene.objects.hit(&Ray { origin, dir }, max_distance)?;
+    let hit = nearest_hit(objects, &Ray { origin, dir }, max_distance)?;
     let normal = if hit.normal.dot(dir) > 0.0 {
         -hit.normal
     } else {
