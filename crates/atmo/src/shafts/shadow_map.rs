@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use super::objects::Objects;
 use super::spotlight::Spotlight;
-use crate::geometry::{triangle_hit, Aabb, Ray, Shape};
+use crate::geometry::{triangle_hit, Aabb, Ray, Shape, RAY_EPSILON};
 
 /// Depths of the nearest surfaces seen from a light.
 #[derive(Debug, Clone)]
@@ -71,9 +71,9 @@ impl ShadowMap {
     /// triangle by triangle, any other bounded shape by its box, each tested only
     /// against the texels its projection covers (widened by a texel), with the texel's
     /// ray and the ray cast's own test, so the depths are those of a ray cast; an
-    /// unbounded plane covers the whole map. That replaces a walk down a mesh's
-    /// hierarchy for every texel under its box, and a test of every shape at every
-    /// texel.
+    /// unbounded plane covers the whole map, its depth in closed form (no ray). That
+    /// replaces a walk down a mesh's hierarchy for every texel under its box, and a
+    /// test of every shape at every texel.
     pub fn new(light: &Spotlight, objects: &Objects, size: usize) -> ShadowMap {
         let mut depth = vec![f32::INFINITY; size * size];
         let whole = [0, size - 1, 0, size - 1];
@@ -84,6 +84,9 @@ impl ShadowMap {
                     let corners = [tri[0], tri[0] + tri[1], tri[0] + tri[2]];
                     Some((Drawn::Triangle(tri), footprint(light, corners, size)?))
                 })),
+                Shape::Plane { point, normal } => {
+                    drawn.push((Drawn::plane(light, *point, *normal), whole))
+                }
                 shape => {
                     let area = shape
                         .bounds()
@@ -105,10 +108,9 @@ impl ShadowMap {
                             if !touches_disc(u, v, size) {
                                 continue;
                             }
-                            let (ray, length) = texel_ray(light, u, v);
                             let d = &mut rows[(row - first) * size + col];
-                            if let Some(t) = shape.hit(&ray, *d * length) {
-                                *d = t / length;
+                            if let Some(nearer) = shape.depth(light, u, v, *d) {
+                                *d = nearer;
                             }
                         }
                     }
@@ -324,15 +326,54 @@ const BAND: usize = 8;
 enum Drawn<'a> {
     Triangle(&'a [Vec3; 3]),
     Shape(&'a Shape),
+    /// An unbounded plane in light space: its depth at `(u, v)` is
+    /// `depth / (slope . (u, v, 1))`.
+    Plane {
+        depth: f32,
+        slope: Vec3,
+    },
 }
 
 impl Drawn<'_> {
-    /// The nearest `t` along `ray` in `(RAY_EPSILON, t_max)` where it meets this.
+    /// The plane through `point` with unit `normal` (world space) seen from `light`:
+    /// the point `z (u tan, v tan, 1)` (light space) lies on it where
+    /// `z (n . (u tan, v tan, 1)) = n . (point - lamp)`, `n` the light-space normal.
+    fn plane(light: &Spotlight, point: Vec3, normal: Vec3) -> Drawn<'static> {
+        let n = light.light_from_world * normal;
+        let tan = light.tan_field();
+        Drawn::Plane {
+            depth: normal.dot(point - light.position),
+            slope: Vec3::new(n.x * tan, n.y * tan, n.z),
+        }
+    }
+
+    /// The light-space depth at which the ray of `light` through `(u, v)` first meets
+    /// this nearer than `nearer_than`, at a distance from the lamp above
+    /// [`RAY_EPSILON`], as a ray cast finds it.
     #[inline]
-    fn hit(&self, ray: &Ray, t_max: f32) -> Option<f32> {
+    fn depth(&self, light: &Spotlight, u: f32, v: f32, nearer_than: f32) -> Option<f32> {
+        let hit = |hit: Option<f32>, length: f32| hit.map(|t| t / length);
         match self {
-            Drawn::Triangle(tri) => triangle_hit(ray, tri, t_max),
-            Drawn::Shape(shape) => shape.intersect(ray, t_max).map(|(t, _)| t),
+            Drawn::Triangle(tri) => {
+                let (ray, length) = texel_ray(light, u, v);
+                hit(triangle_hit(&ray, tri, nearer_than * length), length)
+            }
+            Drawn::Shape(shape) => {
+                let (ray, length) = texel_ray(light, u, v);
+                hit(
+                    shape.intersect(&ray, nearer_than * length).map(|(t, _)| t),
+                    length,
+                )
+            }
+            Drawn::Plane { depth, slope } => {
+                let z = depth / (slope.x * u + slope.y * v + slope.z);
+                // The distance is z times the direction's length, which is at least 1:
+                // squared, without a root.
+                let tan = light.tan_field();
+                let length2 = 1.0 + (u * tan).powi(2) + (v * tan).powi(2);
+                (z > 0.0 && z * z * length2 > RAY_EPSILON * RAY_EPSILON && z < nearer_than)
+                    .then_some(z)
+            }
         }
     }
 }
