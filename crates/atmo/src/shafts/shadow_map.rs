@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use super::objects::Objects;
 use super::spotlight::Spotlight;
-use crate::geometry::{triangle_hit, Aabb, Ray, Shape, RAY_EPSILON};
+use crate::geometry::{Aabb, Ray, Shape, RAY_EPSILON};
 
 /// Depths of the nearest surfaces seen from a light.
 #[derive(Debug, Clone)]
@@ -69,11 +69,12 @@ impl ShadowMap {
     ///
     /// Every shape is drawn over its footprint alone, as a rasteriser would: a mesh
     /// triangle by triangle, any other bounded shape by its box, each tested only
-    /// against the texels its projection covers (widened by a texel), with the texel's
-    /// ray and the ray cast's own test, so the depths are those of a ray cast; an
-    /// unbounded plane covers the whole map, its depth in closed form (no ray). That
-    /// replaces a walk down a mesh's hierarchy for every texel under its box, and a
-    /// test of every shape at every texel.
+    /// against the texels its projection covers (widened by a texel); an unbounded
+    /// plane covers the whole map. Flat shapes (planes, rectangles, triangles) are
+    /// drawn in closed form in the texel's `(u, v)` ([`Flat`]), spheres and boxes by
+    /// the ray cast's own test on the texel's ray: the depths are those of a ray cast
+    /// within rounding. That replaces a walk down a mesh's hierarchy for every texel
+    /// under its box, and a test of every shape at every texel.
     pub fn new(light: &Spotlight, objects: &Objects, size: usize) -> ShadowMap {
         let mut depth = vec![f32::INFINITY; size * size];
         let whole = [0, size - 1, 0, size - 1];
@@ -82,8 +83,26 @@ impl ShadowMap {
             match &object.shape {
                 Shape::Mesh(mesh) => drawn.extend(mesh.triangles().iter().filter_map(|tri| {
                     let corners = [tri[0], tri[0] + tri[1], tri[0] + tri[2]];
-                    Some((Drawn::Triangle(tri), footprint(light, corners, size)?))
+                    let flat = Flat::new(light, tri[0], tri[1], tri[2], Flat::TRIANGLE)?;
+                    Some((Drawn::Flat(flat), footprint(light, corners, size)?))
                 })),
+                Shape::Rect {
+                    corner,
+                    edge_a,
+                    edge_b,
+                } => {
+                    let corners = [
+                        *corner,
+                        *corner + *edge_a,
+                        *corner + *edge_b,
+                        *corner + *edge_a + *edge_b,
+                    ];
+                    let flat = Flat::new(light, *corner, *edge_a, *edge_b, Flat::PARALLELOGRAM);
+                    drawn.extend(
+                        flat.zip(footprint(light, corners, size))
+                            .map(|(f, area)| (Drawn::Flat(f), area)),
+                    );
+                }
                 Shape::Plane { point, normal } => {
                     drawn.push((Drawn::plane(light, *point, *normal), whole))
                 }
@@ -324,14 +343,13 @@ const BAND: usize = 8;
 /// What a shadow map draws: one triangle of a mesh, or a whole shape.
 #[derive(Clone, Copy)]
 enum Drawn<'a> {
-    Triangle(&'a [Vec3; 3]),
+    /// A triangle of a mesh or a rectangle.
+    Flat(Flat),
+    /// A sphere or a box, ray cast.
     Shape(&'a Shape),
     /// An unbounded plane in light space: its depth at `(u, v)` is
     /// `depth / (slope . (u, v, 1))`.
-    Plane {
-        depth: f32,
-        slope: Vec3,
-    },
+    Plane { depth: f32, slope: Vec3 },
 }
 
 impl Drawn<'_> {
@@ -354,10 +372,7 @@ impl Drawn<'_> {
     fn depth(&self, light: &Spotlight, u: f32, v: f32, nearer_than: f32) -> Option<f32> {
         let hit = |hit: Option<f32>, length: f32| hit.map(|t| t / length);
         match self {
-            Drawn::Triangle(tri) => {
-                let (ray, length) = texel_ray(light, u, v);
-                hit(triangle_hit(&ray, tri, nearer_than * length), length)
-            }
+            Drawn::Flat(flat) => flat.depth(u, v, nearer_than),
             Drawn::Shape(shape) => {
                 let (ray, length) = texel_ray(light, u, v);
                 hit(
@@ -367,15 +382,90 @@ impl Drawn<'_> {
             }
             Drawn::Plane { depth, slope } => {
                 let z = depth / (slope.x * u + slope.y * v + slope.z);
-                // The distance is z times the direction's length, which is at least 1:
-                // squared, without a root.
-                let tan = light.tan_field();
-                let length2 = 1.0 + (u * tan).powi(2) + (v * tan).powi(2);
-                (z > 0.0 && z * z * length2 > RAY_EPSILON * RAY_EPSILON && z < nearer_than)
-                    .then_some(z)
+                valid_depth(z, u, v, light.tan_field(), nearer_than).then_some(z)
             }
         }
     }
+}
+
+/// A parallelogram `corner + a edge_a + b edge_b` (`a, b` in [0, 1]) or a triangle
+/// (`a, b >= 0`, `a + b <= 1`) seen from a light, as functions of the texel's `(u, v)`:
+/// its plane's depth `z = depth / (slope . (u, v, 1))` as for a plane, and the
+/// point's `a` and `b`, `z (a_slope . (u, v, 1)) - a_at_lamp` (the same for `b`): the
+/// light-space point `z (u tan, v tan, 1)` dotted with the edges' dual vectors. No ray
+/// and no root a texel, where Moller-Trumbore on the texel's unit ray took both.
+#[derive(Clone, Copy)]
+struct Flat {
+    depth: f32,
+    slope: Vec3,
+    a_slope: Vec3,
+    b_slope: Vec3,
+    a_at_lamp: f32,
+    b_at_lamp: f32,
+    /// `a + b` at most this: 1 for a triangle, 2 (always so) for a parallelogram.
+    sum_max: f32,
+    /// `tan(field / 2)` of the light, for the distance's guard.
+    tan: f32,
+}
+
+impl Flat {
+    const TRIANGLE: f32 = 1.0;
+    const PARALLELOGRAM: f32 = 2.0;
+
+    /// The flat shape with world-space `corner` and edges seen from `light`; `None`
+    /// when it is degenerate (no area).
+    fn new(
+        light: &Spotlight,
+        corner: Vec3,
+        edge_a: Vec3,
+        edge_b: Vec3,
+        sum_max: f32,
+    ) -> Option<Flat> {
+        let m = light.light_from_world;
+        let (c, ea, eb) = (m * (corner - light.position), m * edge_a, m * edge_b);
+        let n = ea.cross(eb);
+        let n2 = n.length_squared();
+        if n2 <= 0.0 || !n2.is_finite() {
+            return None;
+        }
+        // (p - c) . dual_a = a and (p - c) . dual_b = b for p = c + a ea + b eb.
+        let (dual_a, dual_b) = (eb.cross(n) / n2, n.cross(ea) / n2);
+        let tan = light.tan_field();
+        let texel = |w: Vec3| Vec3::new(w.x * tan, w.y * tan, w.z);
+        Some(Flat {
+            depth: n.dot(c),
+            slope: texel(n),
+            a_slope: texel(dual_a),
+            b_slope: texel(dual_b),
+            a_at_lamp: c.dot(dual_a),
+            b_at_lamp: c.dot(dual_b),
+            sum_max,
+            tan,
+        })
+    }
+
+    /// The depth of the texel ray through `(u, v)` where it meets the shape, nearer than
+    /// `nearer_than` and farther from the lamp than [`RAY_EPSILON`].
+    #[inline]
+    fn depth(&self, u: f32, v: f32, nearer_than: f32) -> Option<f32> {
+        let at = |w: Vec3| w.x * u + w.y * v + w.z;
+        let z = self.depth / at(self.slope);
+        let (a, b) = (
+            z * at(self.a_slope) - self.a_at_lamp,
+            z * at(self.b_slope) - self.b_at_lamp,
+        );
+        let inside = (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) && a + b <= self.sum_max;
+        (inside && valid_depth(z, u, v, self.tan, nearer_than)).then_some(z)
+    }
+}
+
+/// Whether a surface at light-space depth `z` on the texel ray through `(u, v)` counts:
+/// nearer than `nearer_than`, and farther from the lamp than [`RAY_EPSILON`] (the
+/// distance is `z` times the direction's length, compared squared, without a root).
+#[inline]
+fn valid_depth(z: f32, u: f32, v: f32, tan: f32, nearer_than: f32) -> bool {
+    let length2 = 1.0 + (u * tan).powi(2) + (v * tan).powi(2);
+    z > 0.0 && z * z * length2 > RAY_EPSILON * RAY_EPSILON && z < nearer_than
 }
 
 /// The columns and rows `[i0, i1, j0, j1]` (inclusive) of a `size`-texel map of `light`
