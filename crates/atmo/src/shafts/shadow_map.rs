@@ -139,22 +139,21 @@ impl ShadowMap {
         let ends = (0..blocks * blocks)
             .into_par_iter()
             .map(|block| {
-                let none = EndBlock {
+                let mut e = EndBlock {
                     met: Aabb::EMPTY,
                     deepest: 0.0,
                     open: Aabb::EMPTY,
                 };
-                block_rays(light, size, block).fold(none, |e, (k, dir)| match depth[k] {
-                    d if d.is_finite() => EndBlock {
-                        met: e.met.grow(light.position + d * dir),
-                        deepest: e.deepest.max(d),
-                        ..e
-                    },
-                    _ => EndBlock {
-                        open: e.open.grow(dir),
-                        ..e
-                    },
-                })
+                block_rays(light, size, block).for_each(|(k, dir)| {
+                    let d = depth[k];
+                    if d.is_finite() {
+                        e.met = e.met.grow(light.position + d * dir);
+                        e.deepest = e.deepest.max(d);
+                    } else {
+                        e.open = e.open.grow(dir);
+                    }
+                });
+                e
             })
             .collect();
         ShadowMap {
