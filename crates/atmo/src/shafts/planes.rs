@@ -57,6 +57,8 @@ pub struct LightPlanes<'a> {
     /// A box around the lit volume (the lamp and its shadow map's ray ends): rays that
     /// miss it skip the light.
     pub bounds: Aabb,
+    /// Where that box shows on the camera's view plane: rays elsewhere miss it.
+    view: ViewBox,
     /// Whether the lamp is in the haze: then its in-haze distance to any point in the
     /// (convex) haze is the whole distance.
     lamp_in_haze: bool,
@@ -217,8 +219,8 @@ pub struct SamplePlanes<'a> {
     pub lights: Vec<LightPlanes<'a>>,
     phase: PhaseTable,
     attenuation: AttenuationTable,
-    /// Per object, where on the image it can show ([`screen_box`]).
-    screen: Vec<ScreenBox>,
+    /// Per object, where it shows on the camera's view plane.
+    objects: Vec<ViewBox>,
 }
 
 impl<'a> SamplePlanes<'a> {
@@ -270,6 +272,7 @@ impl<'a> SamplePlanes<'a> {
                     z_near: lo.max(NEAR_PLANE),
                     z_far: hi.min(camera.far),
                     bounds: extent.bounds,
+                    view: ViewBox::of(Some(extent.bounds), camera),
                     lamp_in_haze: scene.haze.bounds.is_none_or(|b| b.contains(light.position)),
                     eye: light.to_light(camera.position),
                 }
@@ -288,11 +291,11 @@ impl<'a> SamplePlanes<'a> {
             lights,
             phase: PhaseTable::new(&scene.haze),
             attenuation: AttenuationTable::new(&scene.haze, s_max, t_max),
-            screen: scene
+            objects: scene
                 .objects
                 .list
                 .iter()
-                .map(|o| screen_box(o, camera))
+                .map(|o| ViewBox::of(o.shape.bounds(), camera))
                 .collect(),
         }
     }
@@ -317,11 +320,11 @@ impl<'a> SamplePlanes<'a> {
         let weight = 1.0 / subpixels.len() as f32;
         let mut counts = adaptive::Counts::default();
         for &(dx, dy) in &subpixels {
-            let point = |p: u32| ((p % width) as f32 + dx, (p / width) as f32 + dy);
+            let ray = |p: u32| camera.ray((p % width) as f32 + dx, (p / width) as f32 + dy);
             let pass = if self.scene.planes.adaptive {
-                self.add_adaptive(&point, &mut frame.pixels)
+                self.add_adaptive(&ray, &mut frame.pixels)
             } else {
-                self.add_every_pixel(&point, &mut frame.pixels);
+                self.add_every_pixel(&ray, &mut frame.pixels);
                 adaptive::Counts {
                     computed: n,
                     interpolated: 0,
@@ -336,10 +339,9 @@ impl<'a> SamplePlanes<'a> {
         (frame, counts)
     }
 
-    /// Adds the light along the rays through the image points `point(p)` (pixels from
-    /// the top-left corner) of every pixel `p` to `pixels`, all of it computed: rows in
-    /// parallel, each [`LANES`] pixels at a time.
-    fn add_every_pixel(&self, point: &(impl Fn(u32) -> (f32, f32) + Sync), pixels: &mut [Vec3]) {
+    /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`, all of
+    /// it computed: rows in parallel, each [`LANES`] pixels at a time.
+    fn add_every_pixel(&self, ray: &(impl Fn(u32) -> Vec3 + Sync), pixels: &mut [Vec3]) {
         let width = self.scene.camera.width;
         pixels
             .par_chunks_mut(width as usize)
@@ -348,11 +350,10 @@ impl<'a> SamplePlanes<'a> {
                 let first = y as u32 * width;
                 for (k, out) in row.chunks_mut(LANES).enumerate() {
                     let start = first + (k * LANES) as u32;
-                    let pixels = start..start + out.len() as u32;
-                    let (rays, offsets) = lanes_of(pixels.clone(), self.ray(point), width);
+                    let (rays, offsets) = lanes_of(start..start + out.len() as u32, ray, width);
                     let mut ends = [0.0f32; LANES];
-                    for (l, p) in pixels.enumerate() {
-                        let (surface, end) = self.surface(rays[l], Some(point(p)));
+                    for l in 0..out.len() {
+                        let (surface, end) = self.surface(rays[l]);
                         (out[l], ends[l]) = (out[l] + surface, end);
                     }
                     let count = out.len();
@@ -361,15 +362,13 @@ impl<'a> SamplePlanes<'a> {
             });
     }
 
-    /// Adds the light along the rays through the image points `point(p)` of every pixel
-    /// `p` to `pixels`, the surfaces computed at every pixel, the scattered light by
-    /// [`adaptive::refine`].
+    /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`, the
+    /// surfaces computed at every pixel, the scattered light by [`adaptive::refine`].
     fn add_adaptive(
         &self,
-        point: &(impl Fn(u32) -> (f32, f32) + Sync),
+        ray: &(impl Fn(u32) -> Vec3 + Sync),
         pixels: &mut [Vec3],
     ) -> adaptive::Counts {
-        let ray = self.ray(point);
         let width = self.scene.camera.width;
         // The surfaces' light added, and where each ray ends, m.
         let mut ends = vec![0.0f32; pixels.len()];
@@ -381,8 +380,7 @@ impl<'a> SamplePlanes<'a> {
                 let first = y as u32 * width;
                 for (x, (pixel, end)) in row.iter_mut().zip(ends).enumerate() {
                     let surface;
-                    let p = first + x as u32;
-                    (surface, *end) = self.surface(ray(p), Some(point(p)));
+                    (surface, *end) = self.surface(ray(first + x as u32));
                     *pixel += surface;
                 }
             });
@@ -391,7 +389,7 @@ impl<'a> SamplePlanes<'a> {
                 .zip(out.par_chunks_mut(LANES))
                 .with_min_len(16)
                 .for_each(|(list, out)| {
-                    let (rays, offsets) = lanes_of(list.iter().copied(), &ray, width);
+                    let (rays, offsets) = lanes_of(list.iter().copied(), ray, width);
                     let mut lane_ends = [0.0f32; LANES];
                     for (end, &p) in lane_ends.iter_mut().zip(list) {
                         *end = ends[p as usize];
@@ -469,42 +467,22 @@ impl<'a> SamplePlanes<'a> {
     /// sub-sample planes shifted by `offset` in [0, 1) of their spacing (1/2: the
     /// paper's, centred in their slices).
     pub fn radiance(&self, ray: Vec3, offset: f32) -> Vec3 {
-        let (surface, end) = self.surface(ray, None);
+        let (surface, end) = self.surface(ray);
         let mut out = [Vec3::ZERO];
         self.scattered_rays(&[ray], &[offset], &[end; LANES], &mut out);
         surface + out[0]
     }
 
-    /// The camera ray (unit length along the view axis) through the image point
-    /// `point(p)` of pixel `p`.
-    fn ray<'p>(
-        &self,
-        point: &'p (impl Fn(u32) -> (f32, f32) + Sync),
-    ) -> impl Fn(u32) -> Vec3 + Sync + 'p
-    where
-        'a: 'p,
-    {
-        let camera = &self.scene.camera;
-        move |p| {
-            let (x, y) = point(p);
-            camera.ray(x, y)
-        }
-    }
-
     /// The light a camera ray (unit length along the view axis) gets from the surface it
-    /// meets, and how far it goes before it meets it (the far plane if none), m. With
-    /// the image point the ray passes through, only the objects whose [`screen_box`]
-    /// holds it are tried.
-    fn surface(&self, ray: Vec3, at: Option<(f32, f32)>) -> (Vec3, f32) {
+    /// meets, and how far it goes before it meets it (the far plane if none), m. Only
+    /// the objects whose [`ViewBox`] holds the ray are tried.
+    fn surface(&self, ray: Vec3) -> (Vec3, f32) {
         let scene = self.scene;
         let length = ray.length();
         let far = scene.camera.far * length;
-        let objects = scene
-            .objects
-            .list
-            .iter()
-            .zip(&self.screen)
-            .filter(|(_, b)| at.is_none_or(|(x, y)| b.holds(x, y)))
+        let at = view_point(&scene.camera, ray);
+        let objects = (scene.objects.list.iter().zip(&self.objects))
+            .filter(|(_, b)| b.holds(at))
             .map(|(o, _)| o);
         match first_hit_among(scene, objects, ray / length, far) {
             Some(point) => (
@@ -516,7 +494,8 @@ impl<'a> SamplePlanes<'a> {
     }
 
     /// Adds the light scattered toward the eye along `rays` (at most [`LANES`]; with
-    /// their sub-sample `offsets` and `ends`, m) to `out`, light by light.
+    /// their sub-sample `offsets` and `ends`, m) to `out`, light by light: those whose
+    /// lit volume some ray may meet ([`LightPlanes::view`]).
     fn scattered_rays(
         &self,
         rays: &[Vec3],
@@ -524,7 +503,15 @@ impl<'a> SamplePlanes<'a> {
         ends: &[f32; LANES],
         out: &mut [Vec3],
     ) {
+        let mut at = [(0.0f32, 0.0f32); LANES];
+        for (at, ray) in at.iter_mut().zip(rays) {
+            *at = view_point(&self.scene.camera, *ray);
+        }
+        let at = &at[..rays.len()];
         for (light, planes) in self.scene.lights.iter().zip(&self.lights) {
+            if !at.iter().any(|&p| planes.view.holds(p)) {
+                continue;
+            }
             let lanes = Lanes::new(self, light, planes, rays, offsets, ends);
             let scattered = self.scattered(light, planes, &lanes);
             for (out, s) in out.iter_mut().zip(scattered) {
@@ -677,53 +664,64 @@ impl<'a> SamplePlanes<'a> {
     }
 }
 
-/// Where on the image an object can show: image coordinates (pixels from the top-left
-/// corner), inclusive.
+/// A camera ray's point on the view plane at unit distance (`ray` unit length along
+/// the view axis): its components along the camera's right and up.
+#[inline]
+fn view_point(camera: &Camera, ray: Vec3) -> (f32, f32) {
+    (ray.dot(camera.right), ray.dot(camera.up))
+}
+
+/// Where a box shows on the camera's view plane ([`view_point`]): a ray through a
+/// point outside cannot meet it, as its picture in front of the eye is the hull of its
+/// corners'.
 #[derive(Debug, Clone, Copy)]
-struct ScreenBox {
+struct ViewBox {
     x: [f32; 2],
     y: [f32; 2],
 }
 
-impl ScreenBox {
-    #[inline]
-    fn holds(&self, x: f32, y: f32) -> bool {
-        x >= self.x[0] && x <= self.x[1] && y >= self.y[0] && y <= self.y[1]
-    }
-}
-
-/// Where `object` can show in `camera`'s picture: the box around its bounding box's
-/// corners seen by the camera, widened by a pixel; everywhere for an unbounded plane
-/// or a box reaching to or behind the eye's plane. A camera ray through an image point
-/// outside cannot meet the object (its box is convex, and in front of the eye its
-/// picture is the hull of its corners').
-fn screen_box(object: &super::objects::Object, camera: &Camera) -> ScreenBox {
-    let everywhere = ScreenBox {
+impl ViewBox {
+    /// Everywhere: what an unbounded plane, or a box reaching to the eye's plane, gets.
+    const EVERYWHERE: ViewBox = ViewBox {
         x: [f32::NEG_INFINITY, f32::INFINITY],
         y: [f32::NEG_INFINITY, f32::INFINITY],
     };
-    let Some(bounds) = object.shape.bounds() else {
-        return everywhere;
-    };
-    bounds
-        .corners()
-        .into_iter()
-        .try_fold(
-            ScreenBox {
-                x: [f32::INFINITY, f32::NEG_INFINITY],
-                y: [f32::INFINITY, f32::NEG_INFINITY],
-            },
-            |b, c| {
-                // Corners too near the eye's plane project anywhere.
-                (camera.depth(c) > 1e-3).then_some(())?;
-                let (x, y) = camera.pixel_of(c)?;
-                Some(ScreenBox {
-                    x: [b.x[0].min(x - 1.0), b.x[1].max(x + 1.0)],
-                    y: [b.y[0].min(y - 1.0), b.y[1].max(y + 1.0)],
-                })
-            },
-        )
-        .unwrap_or(everywhere)
+
+    /// The box around `bounds`' corners seen by `camera`, widened by 1e-4 of a unit
+    /// and of its coordinates (well above the rounding of a ray's point and of a hit
+    /// test at the edge).
+    fn of(bounds: Option<Aabb>, camera: &Camera) -> ViewBox {
+        let Some(bounds) = bounds else {
+            return ViewBox::EVERYWHERE;
+        };
+        let widen = |x: f32, sign: f32| x + sign * 1e-4 * (1.0 + x.abs());
+        bounds
+            .corners()
+            .into_iter()
+            .try_fold(
+                ViewBox {
+                    x: [f32::INFINITY, f32::NEG_INFINITY],
+                    y: [f32::INFINITY, f32::NEG_INFINITY],
+                },
+                |b, c| {
+                    let d = c - camera.position;
+                    let z = d.dot(camera.forward);
+                    // A corner near or behind the eye's plane projects anywhere.
+                    (z > 1e-3 * d.length()).then_some(())?;
+                    let (x, y) = (d.dot(camera.right) / z, d.dot(camera.up) / z);
+                    Some(ViewBox {
+                        x: [b.x[0].min(widen(x, -1.0)), b.x[1].max(widen(x, 1.0))],
+                        y: [b.y[0].min(widen(y, -1.0)), b.y[1].max(widen(y, 1.0))],
+                    })
+                },
+            )
+            .unwrap_or(ViewBox::EVERYWHERE)
+    }
+
+    #[inline]
+    fn holds(&self, (x, y): (f32, f32)) -> bool {
+        x >= self.x[0] && x <= self.x[1] && y >= self.y[0] && y <= self.y[1]
+    }
 }
 
 /// The rays `ray(p)` of up to [`LANES`] pixels `p` of a picture `width` wide, and their
@@ -1042,6 +1040,7 @@ fn ceil_nonnegative(x: f32) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::{Ray, Shape};
 
     /// The example scenes: one beam with a sphere's shadow, five lights over a mesh, a
     /// box and a gobo, and a measured (asymmetric) profile.
@@ -1053,48 +1052,45 @@ mod tests {
             .collect()
     }
 
-    /// A camera ray meets an object only through an image point in its screen box, so
-    /// leaving the others out changes nothing; and bounded objects in front of the
-    /// camera get boxes smaller than the picture (else the test proves nothing).
+    /// A camera ray meets an object, or a light's lit volume, only through a point of
+    /// the view plane inside its box, so leaving the others out changes nothing; and
+    /// bounded objects in front of the camera get boxes smaller than the picture (else
+    /// the test proves nothing).
     #[test]
-    fn camera_rays_meet_objects_only_inside_their_screen_boxes() {
+    fn camera_rays_meet_objects_and_lit_volumes_only_inside_their_view_boxes() {
         let mut bounded = 0;
         for scene in scenes() {
             let camera = &scene.camera;
-            let boxes: Vec<ScreenBox> = scene
+            let method = SamplePlanes::new(&scene);
+            let boxes = method
                 .objects
-                .list
                 .iter()
-                .map(|o| screen_box(o, camera))
-                .collect();
-            let (w, h) = (camera.width as f32, camera.height as f32);
+                .chain(method.lights.iter().map(|l| &l.view));
+            let shapes = scene.objects.list.iter().map(|o| o.shape.clone());
+            let volumes = method.lights.iter().map(|l| Shape::Box(l.bounds));
+            let (tw, th) = camera.pinhole("a test").unwrap();
             bounded += boxes
-                .iter()
-                .filter(|b| (b.x[1] - b.x[0]) * (b.y[1] - b.y[0]) < 0.5 * w * h)
+                .clone()
+                .filter(|b| (b.x[1] - b.x[0]) * (b.y[1] - b.y[0]) < 2.0 * tw * th)
                 .count();
             for (y, x) in (0..camera.height).flat_map(|y| (0..camera.width).map(move |x| (y, x))) {
-                let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
-                let dir = camera.ray(px, py).normalize();
-                let ray = crate::geometry::Ray {
+                let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+                let at = view_point(camera, ray);
+                let ray = Ray {
                     origin: camera.position,
-                    dir,
+                    dir: ray.normalize(),
                 };
-                for (object, b) in scene.objects.list.iter().zip(&boxes) {
-                    if object.shape.intersect(&ray, f32::INFINITY).is_some() {
-                        assert!(
-                            b.holds(px, py),
-                            "pixel ({x}, {y}) meets {:?}",
-                            object.shape.bounds()
-                        );
+                for (shape, b) in shapes.clone().chain(volumes.clone()).zip(boxes.clone()) {
+                    if shape.intersect(&ray, f32::INFINITY).is_some()
+                        || matches!(shape, Shape::Box(a) if a.contains(camera.position))
+                    {
+                        assert!(b.holds(at), "pixel ({x}, {y}) meets {:?}", shape.bounds());
                     }
                 }
             }
         }
-        // Fig. 6's sphere; the stage's rectangle, box, mesh and sphere.
-        assert!(
-            bounded >= 4,
-            "{bounded} objects with boxes smaller than the picture"
-        );
+        // Fig. 6's sphere; the stage's rectangle, box, mesh and sphere; lit volumes.
+        assert!(bounded >= 6, "{bounded} boxes smaller than the picture");
     }
 
     /// The lit volume's extent found from the blocks' boxes is the walk over every
