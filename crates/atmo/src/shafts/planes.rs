@@ -333,8 +333,10 @@ impl<'a> SamplePlanes<'a> {
             counts.computed += pass.computed;
             counts.interpolated += pass.interpolated;
         }
-        for pixel in frame.pixels.iter_mut() {
-            *pixel *= weight;
+        if subpixels.len() > 1 {
+            for pixel in frame.pixels.iter_mut() {
+                *pixel *= weight;
+            }
         }
         (frame, counts)
     }

@@ -13,6 +13,8 @@
 
 use std::sync::Arc;
 
+use rayon::prelude::*;
+
 use super::haze::Haze;
 use super::photometry::Symmetry;
 use super::spotlight::{Profile, Spotlight};
@@ -164,7 +166,9 @@ impl AttenuationTable {
         let n = Self::SIZE;
         let step = |max: f32| max.max(1e-3) / (n - 1) as f32;
         let (ds, dt) = (step(s_max), step(t_max));
+        // Made a frame (its extent follows the lit volume): over both cores.
         let values = (0..n * n)
+            .into_par_iter()
             .map(|k| {
                 let (j, i) = (k / n, k % n);
                 haze.scattering() * (-haze.extinction * (i as f32 * ds + j as f32 * dt)).exp()
