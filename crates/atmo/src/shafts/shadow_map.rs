@@ -71,7 +71,7 @@ impl ShadowMap {
     /// triangle by triangle, any other bounded shape by its box, each tested only
     /// against the texels its projection covers (widened by a texel); an unbounded
     /// plane covers the whole map. Flat shapes (planes, rectangles, triangles) are
-    /// drawn in closed form in the texel's `(u, v)` ([`Flat`]), spheres and boxes by
+    /// drawn in closed form in the texel's `(u, v)` (`Flat`), spheres and boxes by
     /// the ray cast's own test on the texel's ray: the depths are those of a ray cast
     /// within rounding. That replaces a walk down a mesh's hierarchy for every texel
     /// under its box, and a test of every shape at every texel.
