@@ -144,13 +144,19 @@ impl ShadowMap {
                     deepest: 0.0,
                     open: Aabb::EMPTY,
                 };
+                // Comparisons, not `Aabb::grow`'s `min` and `max` with their NaN rule
+                // (nothing here is NaN): the same boxes.
+                let grow = |b: &mut Aabb, p: Vec3| {
+                    b.min = Vec3::select(p.cmplt(b.min), p, b.min);
+                    b.max = Vec3::select(p.cmpgt(b.max), p, b.max);
+                };
                 block_rays(light, size, block).for_each(|(k, dir)| {
                     let d = depth[k];
                     if d.is_finite() {
-                        e.met = e.met.grow(light.position + d * dir);
-                        e.deepest = e.deepest.max(d);
+                        grow(&mut e.met, light.position + d * dir);
+                        e.deepest = if d > e.deepest { d } else { e.deepest };
                     } else {
-                        e.open = e.open.grow(dir);
+                        grow(&mut e.open, dir);
                     }
                 });
                 e
