@@ -466,6 +466,15 @@ fn subpixel(q: u32) -> vec2<f32> {
 
 // --- the sample planes (atmo::shafts::planes, shafts (5)-(9)) ---
 
+// A slab passes near the lamp when its length along the ray is more than NEAR_LAMP times
+// its centre's distance from the lamp; there its light is summed at points evenly spaced
+// in the scattering angle, at most ANGLE_STEP radians apart (SamplePlanes::near_slabs;
+// the constants come from the prelude).
+
+fn near_lamp(s2: f32, slab: f32) -> bool {
+    return s2 * (NEAR_LAMP * NEAR_LAMP) < slab * slab;
+}
+
 // J_i g_i dz |r| / m I_l (without the sub-pixel weight) of plane `plane` of light `k`
 // along sub-pixel ray `q` of pixel (x, y): the sub-samples of the plane's slice
 // averaged (shafts (9)), times g at the plane (shafts (6)).
@@ -497,6 +506,56 @@ fn plane_term(k: u32, plane: u32, q: u32, x: u32, y: u32) -> vec3<f32> {
     }
     let origin = vec3<f32>(derived[pa], derived[pa + 1u], derived[pa + 2u]);
     let step = light_dir(l, ray);
+    var entry = 0.0;
+    if params.haze_box != 0u {
+        let span = clip_box(params.haze_min.xyz, params.haze_max.xyz, eye, safe_recip(dir), 0.0, NO_HIT);
+        if span.x <= span.y {
+            entry = span.x;
+        }
+    }
+    // A slab near the lamp: points evenly spaced in the scattering angle instead.
+    let centre = origin + (z_near + (f32(plane) + 0.5) * dz) * step;
+    if near_lamp(dot(centre, centre), dz * len) {
+        let z0 = z_near + f32(plane) * dz;
+        var sum = vec3<f32>(0.0);
+        let d_near = -dot(origin, step) / (len * len);
+        let foot = origin + d_near * step;
+        let b = max(length(foot), 1e-6);
+        let a0 = atan2(b, -(z0 - d_near) * len);
+        let a1 = atan2(b, -(z0 + dz - d_near) * len);
+        let count = u32(clamp(ceil((a1 - a0) / ANGLE_STEP), 1.0, MAX_ANGLE_SAMPLES));
+        let d_angle = (a1 - a0) / f32(count);
+        for (var j = 0u; j < count; j++) {
+            let a = a0 + (f32(j) + 0.5) * d_angle;
+            let sn = sin(a);
+            let cs = cos(a);
+            let tau = -b * cs / sn;
+            let d = d_near + tau / len;
+            let p = eye + d * ray;
+            if d * len >= end || d >= z_far || any(p < box_min) || any(p > box_max) || !in_haze(p) {
+                continue;
+            }
+            let local = foot + tau * (step / len);
+            let lz = max(local.z, 1e-6);
+            let scale = 1.0 / (l.position.w * lz);
+            let u = local.x * scale;
+            let v = local.y * scale;
+            let weight = f32(lit_at(k, u, v, lz)) * light_map(l, u, v);
+            if weight == 0.0 {
+                continue;
+            }
+            var lit = vec3<f32>(weight);
+            if l.gobo != GOBO_NONE {
+                lit = weight * gobo_sample(l, u, v);
+            }
+            var s_haze = b / sn;
+            if derived[pa + 3u] == 0.0 {
+                s_haze = length_inside(l.position.xyz, p);
+            }
+            sum += lit * phase_f(cs) * attenuation(s_haze, max(d * len - entry, 0.0));
+        }
+        return l.intensity.xyz * sum * (d_angle / b);
+    }
     let offset = interleaved_offset(x, y);
     let inv_tan = 1.0 / l.position.w;
     var j_sum = vec3<f32>(0.0);
@@ -535,13 +594,6 @@ fn plane_term(k: u32, plane: u32, q: u32, x: u32, y: u32) -> vec3<f32> {
     var s_haze = s2 * inv_s;
     if derived[pa + 3u] == 0.0 {
         s_haze = length_inside(l.position.xyz, eye + dc * ray);
-    }
-    var entry = 0.0;
-    if params.haze_box != 0u {
-        let span = clip_box(params.haze_min.xyz, params.haze_max.xyz, eye, safe_recip(dir), 0.0, NO_HIT);
-        if span.x <= span.y {
-            entry = span.x;
-        }
     }
     let t_haze = max(dc * len - entry, 0.0);
     let g = phase_f(cos_alpha) * attenuation(s_haze, t_haze) * inv_s * inv_s;

@@ -10,6 +10,7 @@ use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::FOOTPRINT;
 use atmo::clouds::particles::FADE_SCALE;
 use atmo::clouds::render::OPAQUE;
+use atmo::shafts::planes::{ANGLE_STEP, MAX_ANGLE_SAMPLES, NEAR_LAMP};
 use atmo::shafts::shadow_map::RECEIVER_BIAS;
 use atmo::sky::shells::export;
 
@@ -135,7 +136,8 @@ const FILES: &[(&str, &str)] = &[
 /// The constants WGSL shares with the Rust, generated: `const PHASE_RAYLEIGH: u32 = 0u;`
 /// and the rest of [`PhaseFunction::CODES`], this module's codes, the sky model's
 /// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, the clouds' `FOOTPRINT`,
-/// `FADE_SCALE` and `OPAQUE`, and the shadow maps' `RECEIVER_BIAS`.
+/// `FADE_SCALE` and `OPAQUE`, the shadow maps' `RECEIVER_BIAS`, and the shafts' near-lamp
+/// slabs' `NEAR_LAMP`, `ANGLE_STEP` and `MAX_ANGLE_SAMPLES`.
 pub fn prelude() -> String {
     let phases = PhaseFunction::CODES
         .iter()
@@ -163,6 +165,14 @@ pub fn prelude() -> String {
         "const RECEIVER_BIAS: f32 = {:?};\n",
         RECEIVER_BIAS
     ));
+    // Which slabs of the shafts' planes pass near the lamp, and their angle spacing.
+    for (name, value) in [
+        ("NEAR_LAMP", NEAR_LAMP),
+        ("ANGLE_STEP", ANGLE_STEP),
+        ("MAX_ANGLE_SAMPLES", MAX_ANGLE_SAMPLES),
+    ] {
+        out.push_str(&format!("const {name}: f32 = {value:?};\n"));
+    }
     out
 }
 

@@ -152,7 +152,7 @@ impl ShadowMap {
                     b.min = Vec3::select(p.cmplt(b.min), p, b.min);
                     b.max = Vec3::select(p.cmpgt(b.max), p, b.max);
                 };
-                block_rays(light, size, block).for_each(|(k, dir)| {
+                for (k, dir) in block_rays(light, size, block) {
                     let d = depth[k];
                     if d.is_finite() {
                         grow(&mut e.met, light.position + d * dir);
@@ -160,7 +160,7 @@ impl ShadowMap {
                     } else {
                         grow(&mut e.open, dir);
                     }
-                });
+                }
                 e
             })
             .collect();
