@@ -466,11 +466,6 @@ fn subpixel(q: u32) -> vec2<f32> {
 
 // --- the sample planes (atmo::shafts::planes, shafts (5)-(9)) ---
 
-// A slab passes near the lamp when its length along the ray is more than NEAR_LAMP times
-// its centre's distance from the lamp; there its light is summed at points evenly spaced
-// in the scattering angle, at most ANGLE_STEP radians apart (SamplePlanes::near_slabs;
-// the constants come from the prelude).
-
 // Where the ray from `eye` along the unit `dir` enters the haze box, m (0 without one).
 fn haze_entry(eye: vec3<f32>, dir: vec3<f32>) -> f32 {
     if params.haze_box != 0u {
@@ -482,6 +477,10 @@ fn haze_entry(eye: vec3<f32>, dir: vec3<f32>) -> f32 {
     return 0.0;
 }
 
+// A slab passes near the lamp when its length along the ray is more than NEAR_LAMP times
+// its centre's distance from the lamp; there its light is summed at points evenly spaced
+// in the scattering angle, at most ANGLE_STEP radians apart (SamplePlanes::near_slabs;
+// the constants come from the prelude).
 fn near_lamp(s2: f32, slab: f32) -> bool {
     return s2 * (NEAR_LAMP * NEAR_LAMP) < slab * slab;
 }
