@@ -771,9 +771,9 @@ impl<'a> SamplePlanes<'a> {
 /// angle, when its length along the ray is more than this times its centre's distance
 /// from the lamp: there one `g` at the plane errs by 2 % and more (the midpoint rule
 /// on `1 / s^2` where the ray passes the lamp: `(length / s)^2 / 12`), and by far more
-/// where it passes closer (the lamp's own pixels came out dark). Fig. 6 against the converged
-/// reference: RMS 0.082 levels, max 9.3 at 0.25; 0.072, max 4.8 at 0.5; at 1 the ring
-/// 10 to 15 pixels from the lamp's image stays 0.66 levels RMS (0.09 at 0.5).
+/// where it passes closer (the lamp's own pixels came out dark). Fig. 6 against the
+/// converged reference: RMS 0.082 levels, max 9.3 at 0.25; 0.072, max 4.8 at 0.5; at 1
+/// the ring 10 to 15 pixels from the lamp's image stays 0.66 levels RMS (0.09 at 0.5).
 pub const NEAR_LAMP: f32 = 0.5;
 
 /// Largest spacing of a near slab's points in the scattering angle, radians, and most
@@ -982,10 +982,8 @@ impl Lanes {
                 // overlaps the lit stretch, so the stretch comes within
                 // `slab (1 / NEAR_LAMP + 1/2)` of the lamp (1 % more for rounding).
                 let reach = 1.01 * dz * length * (1.0 / NEAR_LAMP + 0.5);
-                let nearest = (-planes.eye.dot(step) / step.length_squared()).clamp(za, zb);
+                let nearest = (-planes.eye.dot(step) / (length * length)).clamp(za, zb);
                 lanes.near_lamp |= (planes.eye + nearest * step).length_squared() < reach * reach;
-            }
-            if za < zb {
                 lanes.k_first[l] = ceil_nonnegative((za - planes.z_near) * inv_sub - offset) as u32;
                 lanes.k_last[l] =
                     ceil_nonnegative((zb - planes.z_near) * inv_sub - offset).min(n * m) as u32;

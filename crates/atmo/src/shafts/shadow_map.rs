@@ -372,10 +372,9 @@ impl PlaneDepth {
     /// From the light-space normal `n` (any length) and `depth`, `n` dotted with a
     /// point of the plane relative to the lamp.
     fn new(light: &Spotlight, n: Vec3, depth: f32) -> PlaneDepth {
-        let tan = light.tan_field();
         PlaneDepth {
             depth,
-            slope: Vec3::new(n.x * tan, n.y * tan, n.z),
+            slope: texel_slope(light, n),
         }
     }
 
@@ -415,6 +414,13 @@ impl Drawn<'_> {
             }
         }
     }
+}
+
+/// The light-space vector `w` as a function of the texel's `(u, v)`: `w` dotted with
+/// the texel ray's point `(u tan, v tan, 1)` is `texel_slope . (u, v, 1)`.
+fn texel_slope(light: &Spotlight, w: Vec3) -> Vec3 {
+    let tan = light.tan_field();
+    Vec3::new(w.x * tan, w.y * tan, w.z)
 }
 
 /// A parallelogram `corner + a edge_a + b edge_b` (`a, b` in [0, 1]) or a triangle
@@ -458,16 +464,14 @@ impl Flat {
         }
         // (p - c) . dual_a = a and (p - c) . dual_b = b for p = c + a ea + b eb.
         let (dual_a, dual_b) = (eb.cross(n) / n2, n.cross(ea) / n2);
-        let tan = light.tan_field();
-        let texel = |w: Vec3| Vec3::new(w.x * tan, w.y * tan, w.z);
         Some(Flat {
             plane: PlaneDepth::new(light, n, n.dot(c)),
-            a_slope: texel(dual_a),
-            b_slope: texel(dual_b),
+            a_slope: texel_slope(light, dual_a),
+            b_slope: texel_slope(light, dual_b),
             a_at_lamp: c.dot(dual_a),
             b_at_lamp: c.dot(dual_b),
             sum_max,
-            tan,
+            tan: light.tan_field(),
         })
     }
 
