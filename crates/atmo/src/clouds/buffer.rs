@@ -22,6 +22,7 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::particles::{erf_table, Particle};
+use super::{first, Lanes, LANES};
 use crate::error::{check_range, Error, Result};
 
 /// How each particle's factor goes into the buffer.
@@ -216,39 +217,82 @@ impl IntensityBuffer {
     /// light), bilinear across the light.
     #[inline]
     pub fn column_depth_grid(&self, g: Vec3) -> f32 {
-        -self.sample_log_grid(Vec3::new(g.x, (self.resolution - 1) as f32, g.z))
+        first(self.lookup_lanes::<true>([g.x, g.y, g.z].map(Lanes::splat))[1])
     }
 
     /// `ln Gamma` at grid coordinates `g`, trilinear between voxel centres (clamped to
     /// the grid: 0 on the sun's side of it).
-    #[inline(always)]
+    #[inline]
     pub fn sample_log_grid(&self, g: Vec3) -> f32 {
+        first(self.sample_log_lanes([g.x, g.y, g.z].map(Lanes::splat)))
+    }
+
+    /// [`IntensityBuffer::sample_log_grid`] at eight points (grid coordinates).
+    #[inline(always)]
+    pub(crate) fn sample_log_lanes(&self, g: [Lanes; 3]) -> Lanes {
+        self.lookup_lanes::<false>(g)[0]
+    }
+
+    /// [`IntensityBuffer::sample_log_grid`] and [`IntensityBuffer::column_depth_grid`]
+    /// at eight points (grid coordinates), which share the voxel across the light.
+    #[inline(always)]
+    pub(crate) fn sample_log_and_depth_lanes(&self, g: [Lanes; 3]) -> [Lanes; 2] {
+        self.lookup_lanes::<true>(g)
+    }
+
+    /// `ln Gamma` at eight points and, with `DEPTH`, the whole cloud's optical depth
+    /// along the light through them (else 0): the voxel and the fractions in lanes, the
+    /// values each point needs read one by one (no gather on the baseline instruction
+    /// set), the lerps in lanes.
+    #[inline(always)]
+    fn lookup_lanes<const DEPTH: bool>(&self, g: [Lanes; 3]) -> [Lanes; 2] {
         let n = self.resolution;
-        if g.y < -0.5 {
-            return 0.0;
+        let sun_side = g[1].simd_lt(Lanes::splat(-0.5));
+        let last = Lanes::splat((n - 1) as f32);
+        // Clamped to the grid; then the lower voxel, at most the last but one, and the
+        // fraction past it. Through i32 (truncation: g >= 0 here).
+        let top = wide::i32x8::splat(n as i32 - 2);
+        let c = g.map(|v| v.fast_max(Lanes::ZERO).fast_min(last));
+        let i = c.map(|v| v.trunc_int().min(top));
+        let f: [Lanes; 3] = std::array::from_fn(|k| c[k] - Lanes::from_i32x8(i[k]));
+        let [ix, iy, iz] = i.map(|v| v.to_array());
+        // [x][z][y]: the two y neighbours are adjacent. Corner (dx, dz)'s pair at
+        // `pairs[2 (2 dx + dz) + dy]`, its value in the last layer at `layer[2 dx + dz]`.
+        let mut pairs = [[0.0f32; LANES]; 8];
+        let mut layer = [[0.0f32; LANES]; 4];
+        for lane in 0..LANES {
+            let column = (ix[lane] as usize * n + iz[lane] as usize) * n;
+            for (corner, offset) in [0, n, n * n, n * n + n].into_iter().enumerate() {
+                let at = column + offset + iy[lane] as usize;
+                let at = &self.log_gamma[at..at + 2];
+                pairs[2 * corner][lane] = at[0];
+                pairs[2 * corner + 1][lane] = at[1];
+                if DEPTH {
+                    layer[corner][lane] = self.log_gamma[column + offset + n - 1];
+                }
+            }
         }
-        let last = (n - 1) as f32;
-        let g = g.clamp(Vec3::ZERO, Vec3::splat(last));
-        // Through i32: cheaper than to unsigned, and g >= 0 here.
-        let top = n as i32 - 2;
-        let (ix, iy, iz) = (
-            (g.x as i32).min(top) as usize,
-            (g.y as i32).min(top) as usize,
-            (g.z as i32).min(top) as usize,
-        );
-        let f = g - Vec3::new(ix as f32, iy as f32, iz as f32);
-        // [x][z][y]: the two y neighbours are adjacent.
-        let at = |x: usize, z: usize| {
-            let i = (x * n + z) * n + iy;
-            let (a, b) = (self.log_gamma[i], self.log_gamma[i + 1]);
-            a + f.y * (b - a)
+        let lerp = |a: Lanes, b: Lanes, t: Lanes| a + t * (b - a);
+        let across = |corners: [Lanes; 4]| {
+            lerp(
+                lerp(corners[0], corners[2], f[0]),
+                lerp(corners[1], corners[3], f[0]),
+                f[2],
+            )
         };
-        let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
-        lerp(
-            lerp(at(ix, iz), at(ix + 1, iz), f.x),
-            lerp(at(ix, iz + 1), at(ix + 1, iz + 1), f.x),
-            f.z,
-        )
+        let log_gamma = across(std::array::from_fn(|corner| {
+            lerp(
+                Lanes::new(pairs[2 * corner]),
+                Lanes::new(pairs[2 * corner + 1]),
+                f[1],
+            )
+        }));
+        let depth = if DEPTH {
+            -across(layer.map(Lanes::new))
+        } else {
+            Lanes::ZERO
+        };
+        [sun_side.select(Lanes::ZERO, log_gamma), depth]
     }
 }
 

@@ -49,6 +49,7 @@
 //! in a deep shadow lit only from the side stays a little dark (docs/clouds.md).
 
 use super::render::OPAQUE;
+use super::{exp_lanes, first, Lanes};
 
 /// The octaves of the approximation: octave 0 is single scattering.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -129,9 +130,13 @@ impl Octaves {
     /// `k`, so powers are taken only while `k^(octaves - 1) <= 64`; the light is then
     /// within 4e-5 of the closed form in double precision (three octaves, powers to the
     /// 16th: within 1e-5), far below a level of the picture.
-    #[inline]
     pub fn light(&self, phase: f32, e: &Emission) -> BlobLight {
-        self.terms().light(phase, e)
+        let light = self.terms().light(Lanes::splat(phase), &e.lanes());
+        BlobLight {
+            single: first(light.single),
+            higher: first(light.higher),
+            transmitted: first(light.transmitted),
+        }
     }
 
     /// What [`Octaves::light`] needs of the octaves, worked out once for a picture
@@ -197,13 +202,13 @@ impl Octaves {
 /// `tau`, and at two depths `u` of it (its emission nodes,
 /// [`crate::clouds::particles::emission_nodes`]) the sunlight, `ln Gamma`; and the
 /// optical depth `slab` of the whole cloud along the sun's ray through it (read only
-/// where [`Octaves::diffuse`] is not 0).
+/// where [`Octaves::diffuse`] is not 0). `T` is `f32`, or eight lanes in the drawing.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Emission {
-    pub tau: f32,
-    pub u: [f32; 2],
-    pub log_gamma: [f32; 2],
-    pub slab: f32,
+pub struct Emission<T = f32> {
+    pub tau: T,
+    pub u: [T; 2],
+    pub log_gamma: [T; 2],
+    pub slab: T,
 }
 
 impl Emission {
@@ -211,29 +216,47 @@ impl Emission {
     /// line through the values at the two depths, capped at 0 (no more than the sun's
     /// whole light). With them the light is exact for a lone blob lit along the line
     /// of sight from either end ([`Octaves::light`]).
-    #[inline]
     pub fn log_ends(&self) -> [f32; 2] {
+        self.lanes().log_ends().map(first)
+    }
+
+    /// The same in every lane.
+    fn lanes(&self) -> Emission<Lanes> {
+        Emission {
+            tau: Lanes::splat(self.tau),
+            u: self.u.map(Lanes::splat),
+            log_gamma: self.log_gamma.map(Lanes::splat),
+            slab: Lanes::splat(self.slab),
+        }
+    }
+}
+
+impl Emission<Lanes> {
+    /// [`Emission::log_ends`] in lanes.
+    #[inline(always)]
+    fn log_ends(&self) -> [Lanes; 2] {
         let [u0, u1] = self.u;
-        let slope = if u1 - u0 > 1e-6 * self.tau {
-            (self.log_gamma[1] - self.log_gamma[0]) / (u1 - u0)
-        } else {
-            0.0
-        };
-        let start = (self.log_gamma[0] - slope * u0).min(0.0);
-        let end = (self.log_gamma[0] + slope * (self.tau - u0)).min(0.0);
+        let [g0, g1] = self.log_gamma;
+        let span = u1 - u0;
+        let slope = span
+            .simd_gt(Lanes::splat(1e-6) * self.tau)
+            .select((g1 - g0) / span, Lanes::ZERO);
+        let start = (g0 - slope * u0).fast_min(Lanes::ZERO);
+        let end = (g0 + slope * (self.tau - u0)).fast_min(Lanes::ZERO);
         [start, end]
     }
 }
 
-/// What one blob sends toward the eye along a pixel's ray ([`Octaves::light`]).
+/// What one blob sends toward the eye along a pixel's ray ([`Octaves::light`]); `T`
+/// as in [`Emission`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BlobLight {
+pub struct BlobLight<T = f32> {
     /// Single scattering (octave 0), per unit sun irradiance and albedo, 1/sr.
-    pub single: f32,
+    pub single: T,
     /// The higher octaves, summed.
-    pub higher: f32,
+    pub higher: T,
     /// What the blob lets through of what is behind it, `e^-tau`.
-    pub transmitted: f32,
+    pub transmitted: T,
 }
 
 /// The octaves' weights `b^i`, phase shares `c^i` and sun shares `a^i` (as
@@ -257,70 +280,78 @@ impl OctaveTerms {
         self.diffuse > 0.0
     }
 
-    /// [`Octaves::light`] of the octaves these terms are of.
-    #[inline]
-    pub fn light(&self, phase: f32, e: &Emission) -> BlobLight {
-        const ISOTROPIC: f32 = 1.0 / (4.0 * std::f32::consts::PI);
-        let transmitted = (-e.tau).exp();
+    /// [`Octaves::light`] of the octaves these terms are of, for eight blob-pixels.
+    #[inline(always)]
+    pub(crate) fn light(&self, phase: Lanes, e: &Emission<Lanes>) -> BlobLight<Lanes> {
+        let splat = Lanes::splat;
+        let isotropic = splat(1.0 / (4.0 * std::f32::consts::PI));
+        let transmitted = exp_lanes(-e.tau);
         let [start, end] = e.log_ends();
         let mut light = BlobLight {
-            single: 0.0,
-            higher: 0.0,
+            single: Lanes::ZERO,
+            higher: Lanes::ZERO,
             transmitted,
         };
-        let (mut near, mut far) = (0.0f32, 0.0f32);
+        let (mut near, mut far) = (Lanes::ZERO, Lanes::ZERO);
         for i in (0..self.count).rev() {
+            let share = splat(self.share[i]);
             (near, far) = match self.whole {
                 Some(k) if i + 1 < self.count => (powi(near, k), powi(far, k)),
-                _ => ((self.share[i] * start).exp(), (self.share[i] * end).exp()),
+                _ => (exp_lanes(share * start), exp_lanes(share * end)),
             };
             // (e^x - 1) / x times e^(a^i start); near 0 by its series (within 5e-8 for
             // |x| < 1/4), where the difference of the two ends' light would lose the
             // digits that the powers' error leaves.
-            let x = self.share[i] * (end - start) - e.tau;
+            let x = share * (end - start) - e.tau;
+            let series = splat(1.0 / 120.0) + x * splat(1.0 / 720.0);
+            let series = splat(1.0 / 6.0) + x * (splat(1.0 / 24.0) + x * series);
+            let series = near * (Lanes::ONE + x * (splat(0.5) + x * series));
             let integral = e.tau
-                * if x.abs() < 0.25 {
-                    let series = 1.0 / 120.0 + x * (1.0 / 720.0);
-                    let series = 1.0 / 6.0 + x * (1.0 / 24.0 + x * series);
-                    near * (1.0 + x * (0.5 + x * series))
-                } else {
-                    (far * transmitted - near) / x
-                };
+                * x.abs()
+                    .simd_lt(splat(0.25))
+                    .select(series, (far * transmitted - near) / x);
             if i == 0 {
                 light.single = phase * integral;
             } else {
-                let shape = self.shape[i];
-                light.higher +=
-                    self.weight[i] * (shape * phase + (1.0 - shape) * ISOTROPIC) * integral;
+                let shape = splat(self.shape[i]);
+                light.higher += splat(self.weight[i])
+                    * (shape * phase + (Lanes::ONE - shape) * isotropic)
+                    * integral;
             }
         }
         if self.needs_slab() {
             // The slab's profile at the two emission nodes, whose mean times the blob's
             // absorbed fraction is the two-point Gauss-Legendre rule of its integral
             // over the blob's depth (the nodes are that rule's in the absorbed fraction).
-            let (t, length) = (e.slab, self.extrapolation);
-            let profile = |log_gamma: f32| ((t + log_gamma + length) / (t + 2.0 * length)).max(0.0);
-            let mean = 0.5 * (profile(e.log_gamma[0]) + profile(e.log_gamma[1]));
-            light.higher += self.diffuse * mean * -(-t).exp_m1() * (1.0 - transmitted) * ISOTROPIC;
+            let (t, length) = (e.slab, splat(self.extrapolation));
+            let profile = |log_gamma: Lanes| {
+                ((t + log_gamma + length) / (t + splat(2.0) * length)).fast_max(Lanes::ZERO)
+            };
+            let mean = splat(0.5) * (profile(e.log_gamma[0]) + profile(e.log_gamma[1]));
+            light.higher += splat(self.diffuse)
+                * mean
+                * (Lanes::ONE - exp_lanes(-t))
+                * (Lanes::ONE - transmitted)
+                * isotropic;
         }
         light
     }
 }
 
 /// `x^k` for `k >= 0` by repeated squaring, the steps of `f32::powi` (compiler-builtins'
-/// `__powisf2`, to the bit) without a call a blob-pixel.
+/// `__powisf2`, to the bit) without a call a blob-pixel; in lanes or not.
 #[inline(always)]
-fn powi(mut x: f32, mut k: i32) -> f32 {
-    let mut product = 1.0f32;
+fn powi<T: Copy + std::ops::Mul<Output = T> + From<f32>>(mut x: T, mut k: i32) -> T {
+    let mut product = T::from(1.0);
     loop {
         if k & 1 != 0 {
-            product *= x;
+            product = product * x;
         }
         k >>= 1;
         if k == 0 {
             return product;
         }
-        x *= x;
+        x = x * x;
     }
 }
 
@@ -425,7 +456,8 @@ mod tests {
                     };
                     let light = octaves.light(phase, &e);
                     let got = light.single + light.higher;
-                    assert_eq!(light.transmitted, (-tau).exp());
+                    let exact = (-tau as f64).exp();
+                    assert!((light.transmitted as f64 - exact).abs() < 3e-7 * exact);
                     let steps = 20_000;
                     let h = tau as f64 / steps as f64;
                     let mut want = 0.0f64;

@@ -18,6 +18,7 @@
 use glam::Vec3;
 
 use super::buffer::FOOTPRINT;
+use super::{exp_lanes, first, Lanes, LANES};
 
 /// `FOOTPRINT^2 / 2`: the Gaussian's exponent at the billboards' cut.
 const CUT_EXPONENT: f32 = FOOTPRINT * FOOTPRINT / 2.0;
@@ -68,13 +69,18 @@ impl Particle {
     /// particle's extinction cross-section, is the Gaussian's. Zero outside the cut.
     #[inline]
     pub fn faded_column(&self, b2: f32) -> f32 {
+        first(self.faded_column_lanes(Lanes::splat(b2)))
+    }
+
+    /// [`Particle::faded_column`] of eight lines.
+    #[inline(always)]
+    pub(crate) fn faded_column_lanes(&self, b2: Lanes) -> Lanes {
         let s = self.sigma();
-        let x = b2 / (2.0 * s * s);
-        if x >= CUT_EXPONENT {
-            return 0.0;
-        }
+        let x = b2 * Lanes::splat(1.0 / (2.0 * s * s));
         let (scale, floor) = self.faded_column_parts();
-        scale * ((-x).exp() - floor)
+        let column = Lanes::splat(scale) * (exp_lanes(-x) - Lanes::splat(floor));
+        x.simd_lt(Lanes::splat(CUT_EXPONENT))
+            .select(column, Lanes::ZERO)
     }
 
     /// [`Particle::faded_column`] as `max(0, scale (g - floor))` with
@@ -212,6 +218,13 @@ const GAUSS_LEGENDRE: [f32; 2] = [0.211_324_87, 0.788_675_1];
 /// the rest of the pixel.
 #[inline]
 pub fn tabulated_emission_nodes(tau: f32) -> [(f32, f32); 2] {
+    let [u0, l0, u1, l1] = tabulated_emission_nodes_lanes(Lanes::splat(tau)).map(first);
+    [(u0, l0), (u1, l1)]
+}
+
+/// [`tabulated_emission_nodes`] of eight columns: `[u0, l0, u1, l1]`, each in lanes.
+#[inline(always)]
+pub(crate) fn tabulated_emission_nodes_lanes(tau: Lanes) -> [Lanes; 4] {
     const STEPS: usize = 4096;
     const TOP: f32 = 400.0;
     static TABLE: std::sync::OnceLock<Vec<[f32; 4]>> = std::sync::OnceLock::new();
@@ -230,12 +243,21 @@ pub fn tabulated_emission_nodes(tau: f32) -> [(f32, f32); 2] {
             })
             .collect()
     });
-    let x = (tau.max(0.0).sqrt() / TOP.sqrt() * STEPS as f32).min(STEPS as f32 - 1e-3);
-    let k = x as usize;
-    let f = x - k as f32;
-    let (a, b) = (table[k], table[k + 1]);
-    let at = |i: usize| a[i] + f * (b[i] - a[i]);
-    [(at(0) * tau, at(1)), (at(2) * tau, at(3))]
+    let x = (tau.fast_max(Lanes::ZERO).sqrt() / Lanes::splat(TOP.sqrt())
+        * Lanes::splat(STEPS as f32))
+    .fast_min(Lanes::splat(STEPS as f32 - 1e-3));
+    let k = x.trunc_int();
+    let f = (x - Lanes::from_i32x8(k)).to_array();
+    // Each lane's two rows, lerped; then as lanes.
+    let mut nodes = [[0.0f32; LANES]; 4];
+    for (lane, &k) in k.to_array().iter().enumerate() {
+        let (a, b) = (table[k as usize], table[k as usize + 1]);
+        for (i, node) in nodes.iter_mut().enumerate() {
+            node[lane] = a[i] + f[lane] * (b[i] - a[i]);
+        }
+    }
+    let [q0, l0, q1, l1] = nodes.map(Lanes::new);
+    [q0 * tau, l0, q1 * tau, l1]
 }
 
 #[cfg(test)]
