@@ -519,8 +519,11 @@ fn plane_term(k: u32, plane: u32, q: u32, x: u32, y: u32) -> vec3<f32> {
     // A slab near the lamp: points evenly spaced in the scattering angle instead. (On
     // llvmpipe this block costs every fragment a quarter more, taken or not; one loop
     // body for both kinds of slab, with the near one's `g` under an `if`, cost more.)
-    let centre = origin + (z_near + (f32(plane) + 0.5) * dz) * step;
-    if near_lamp(dot(centre, centre), dz * len) {
+    // The slab's centre: its camera depth and its point in the light's space.
+    let dc = z_near + (f32(plane) + 0.5) * dz;
+    let centre = origin + dc * step;
+    let s2 = dot(centre, centre);
+    if near_lamp(s2, dz * len) {
         let entry = haze_entry(eye, dir);
         let z0 = z_near + f32(plane) * dz;
         var sum = vec3<f32>(0.0);
@@ -591,12 +594,9 @@ fn plane_term(k: u32, plane: u32, q: u32, x: u32, y: u32) -> vec3<f32> {
     if l.gobo == GOBO_NONE {
         j_sum = vec3<f32>(j_sum.x);
     }
-    // g of shafts (6) at the plane.
-    let dc = z_near + (f32(plane) + 0.5) * dz;
-    let local = origin + dc * step;
-    let s2 = dot(local, local);
+    // g of shafts (6) at the plane, at the slab's centre.
     let inv_s = 1.0 / sqrt(s2);
-    let cos_alpha = -dot(local, step) * inv_s / len;
+    let cos_alpha = -dot(centre, step) * inv_s / len;
     var s_haze = s2 * inv_s;
     if derived[pa + 3u] == 0.0 {
         s_haze = length_inside(l.position.xyz, eye + dc * ray);

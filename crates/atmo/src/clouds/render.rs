@@ -117,11 +117,13 @@ pub fn render(
     // Pixel `k`'s unit ray; the phase function for it, the same for every blob it
     // crosses (one lane-load past the last pixel is read and not used).
     let ray = |k: usize| (r0 + (k % w) as f32 * rx + (k / w) as f32 * ry).normalize();
-    let mut phases: Vec<f32> = (0..w * h)
-        .into_par_iter()
-        .map(|k| light.phase.eval_f32(light.to_sun.dot(ray(k))))
-        .collect();
-    phases.resize(w * h + LANES, 0.0);
+    let mut phases = Vec::with_capacity(w * h + LANES);
+    phases.par_extend(
+        (0..w * h)
+            .into_par_iter()
+            .map(|k| light.phase.eval_f32(light.to_sun.dot(ray(k)))),
+    );
+    phases.extend([0.0f32; LANES]);
     // The sky's light the droplets scatter along a ray, taken where a blob was drawn.
     let sky = light.ambient.scattered(light.phase, &light.scattering);
     let octaves = light.scattering.terms();
