@@ -30,7 +30,16 @@ fn every_method_gives_the_same_picture_on_the_gpu_and_the_cpu() {
     ];
     let mut envmap_args = shell_args.to_vec();
     envmap_args.extend(["--envmap", "equirect", "--envmap-size", "16"]);
-    let shafts_args = ["shafts", &fig6, "--planes", "8", "--supersampling", "1"];
+    // Every pixel on the CPU too: the GPU has no adaptive sampling.
+    let shafts_args = [
+        "shafts",
+        &fig6,
+        "--planes",
+        "8",
+        "--supersampling",
+        "1",
+        "--every-pixel",
+    ];
     let clouds_args = [
         "clouds",
         "--generate",

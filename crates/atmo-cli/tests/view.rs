@@ -328,9 +328,9 @@ fn each_backend_matches_its_still(
 fn scripted_stage_windows_give_the_pictures_of_their_still_commands() {
     let dir = scratch("view-stage");
     // The camera orbited, a gel changed, a light aimed by the mouse, the exposure,
-    // adaptive sampling (the panel's checkbox; the GPU draws every pixel either way).
+    // adaptive sampling off (the panel's checkbox; the GPU draws every pixel either way).
     let script = "1 drag 40 -10\n2 set spotlight[2].color [1, 0.2, 0.1]\n2 aim 1 40 52\n\
-                  3 set display.exposure 1.5\n3 set render.adaptive true\n";
+                  3 set display.exposure 1.5\n3 set render.adaptive false\n";
     let display = Display {
         exposure: 1.5,
         tone: ToneMap::Exponential,
@@ -347,7 +347,7 @@ fn scripted_stage_windows_give_the_pictures_of_their_still_commands() {
         "--set 'spotlight[2].color=[1, 0.2, 0.1]'",
         "--set spotlight[1].aim=[",
         "--set display.exposure=1.5",
-        "--set render.adaptive=true",
+        "--set render.adaptive=false",
         "--set camera.width=96",
     ];
     each_backend_matches_its_still(&dir, &args, script, "shafts", display, &parts);

@@ -377,7 +377,8 @@ impl GpuShafts {
         })
     }
 
-    /// The picture, as `SamplePlanes::new(scene).render()` on the CPU: the passes
+    /// The picture, as `SamplePlanes::new(scene).render()` on the CPU with every pixel
+    /// computed (`render.adaptive = false`; the GPU has no adaptive sampling): the passes
     /// submitted, timed where the device can, and the picture read back.
     pub fn render(&self, gpu: &Gpu, method: ShaftsMethod) -> Result<Rendered, GpuError> {
         let gpu_ms = gpu.run("the light shafts", |encoder| {

@@ -61,9 +61,14 @@ pub struct ShaftsArgs {
     #[arg(long)]
     shadow_map: Option<u32>,
     /// Compute the scattered light only where the picture needs it and interpolate
-    /// between (sets render.adaptive; the CPU method: the GPU draws every pixel).
-    #[arg(long)]
+    /// between (render.adaptive = true, the default; the CPU method: the GPU draws
+    /// every pixel).
+    #[arg(long, conflicts_with = "every_pixel")]
     adaptive: bool,
+    /// Compute the scattered light at every pixel, the paper's method (render.adaptive
+    /// = false).
+    #[arg(long)]
+    every_pixel: bool,
     /// Rays per pixel along each axis (overrides camera.supersampling).
     #[arg(long)]
     supersampling: Option<u32>,
@@ -142,7 +147,9 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         )
         .collect();
     atmo::files::check_distinct(&args.output, &inputs)?;
-    scene.planes.adaptive |= args.adaptive;
+    if args.adaptive || args.every_pixel {
+        scene.planes.adaptive = args.adaptive;
+    }
     if let Some(k) = args.supersampling {
         atmo::error::check_range("--supersampling", k as f64, 1.0, 16.0)?;
         scene.camera.supersampling = k;
@@ -166,7 +173,7 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
     } else {
         args.device.open()?
     };
-    if gpu.is_some() && scene.planes.adaptive {
+    if gpu.is_some() && args.adaptive {
         eprintln!("atmo: the GPU draws the scattered light at every pixel; render.adaptive applies to the CPU method");
     }
     if args.animate {

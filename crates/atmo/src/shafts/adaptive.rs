@@ -19,7 +19,7 @@
 //! fine lines).
 //!
 //! The error this adds to the shafts' pictures is measured against the exact picture by
-//! `atmo bench shafts` (`shafts.fig6-adaptive`).
+//! `atmo bench shafts` (`shafts.fig6` and `shafts.stage`, against `-every-pixel`).
 
 use glam::Vec3;
 use rayon::prelude::*;

@@ -64,18 +64,21 @@ pub struct PlaneSettings {
     /// Texels along each side of a light's shadow map.
     pub shadow_map: u32,
     /// Whether the CPU computes the scattered light only where the picture needs it
-    /// and interpolates between ([`adaptive`]); the paper's method computes every pixel.
+    /// and interpolates between ([`adaptive`]; the default): on Fig. 6 a fifth of the
+    /// pixels, within 0.1 level RMS of every pixel. `false` is the paper's method,
+    /// every pixel computed (and what the GPU draws).
     pub adaptive: bool,
 }
 
 impl Default for PlaneSettings {
-    /// The paper's 30 planes and 6 sub-planes (shafts 5.1); a 512^2 shadow map.
+    /// The paper's 30 planes and 6 sub-planes (shafts 5.1); a 512^2 shadow map;
+    /// adaptive sampling.
     fn default() -> Self {
         PlaneSettings {
             planes: 30,
             sub_planes: 6,
             shadow_map: 512,
-            adaptive: false,
+            adaptive: true,
         }
     }
 }

@@ -11,7 +11,7 @@
 //! whose answer is known beforehand: a min-max chain over each shadow map tells a plane's
 //! slice of sixteen rays wholly lit or wholly dark, and the beam's core has profile 1
 //! (see `SamplePlanes::scattered`). The result is the same sum, to the bit; the work
-//! follows the lit part of each ray. With [`PlaneSettings::adaptive`] the CPU goes
+//! follows the lit part of each ray. With [`PlaneSettings::adaptive`] (the default) the CPU goes
 //! further than the paper: the scattered light is computed where the picture changes
 //! and interpolated between ([`super::adaptive`]).
 //!
@@ -348,50 +348,71 @@ impl<'a> SamplePlanes<'a> {
     }
 
     /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`, all of
-    /// it computed: rows in parallel, each [`LANES`] pixels at a time.
+    /// it computed: rows in parallel.
     fn add_every_pixel(&self, ray: &(impl Fn(u32) -> Vec3 + Sync), pixels: &mut [Vec3]) {
         let width = self.scene.camera.width;
         pixels
             .par_chunks_mut(width as usize)
             .enumerate()
-            .for_each(|(y, row)| {
-                let first = y as u32 * width;
-                for (k, out) in row.chunks_mut(LANES).enumerate() {
-                    let start = first + (k * LANES) as u32;
-                    let (rays, offsets) = lanes_of(start..start + out.len() as u32, ray, width);
-                    let mut ends = [0.0f32; LANES];
-                    for l in 0..out.len() {
-                        let (surface, end) = self.surface(rays[l]);
-                        (out[l], ends[l]) = (out[l] + surface, end);
-                    }
-                    let count = out.len();
-                    self.scattered_rays(&rays[..count], &offsets[..count], &ends, out);
-                }
-            });
+            .for_each(|(y, row)| self.add_row(ray, y as u32 * width, row, |_, _| {}, &|_| true));
     }
 
-    /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`, the
-    /// surfaces computed at every pixel, the scattered light by [`adaptive::refine`].
+    /// Adds to `row`, the pixels from `first` on, the light of the surfaces their rays
+    /// `ray(p)` meet and the light scattered toward them from the lights `pick` takes,
+    /// [`LANES`] pixels at a time; gives each ray's end (m) to `end(x, m)`.
+    fn add_row(
+        &self,
+        ray: &impl Fn(u32) -> Vec3,
+        first: u32,
+        row: &mut [Vec3],
+        mut end: impl FnMut(usize, f32),
+        pick: &impl Fn(&Spotlight) -> bool,
+    ) {
+        let width = self.scene.camera.width;
+        for (k, out) in row.chunks_mut(LANES).enumerate() {
+            let start = first + (k * LANES) as u32;
+            let (rays, offsets) = lanes_of(start..start + out.len() as u32, ray, width);
+            let mut ends = [0.0f32; LANES];
+            for l in 0..out.len() {
+                let surface;
+                (surface, ends[l]) = self.surface(rays[l]);
+                out[l] += surface;
+                end(k * LANES + l, ends[l]);
+            }
+            let count = out.len();
+            self.scattered_rays(&rays[..count], &offsets[..count], &ends, out, pick);
+        }
+    }
+
+    /// Adds the light along the rays `ray(p)` of every pixel `p` to `pixels`: the
+    /// surfaces and the light of lamps with a gobo computed at every pixel (a gobo's
+    /// dots and lines are finer than a cell and may fall between all of its samples: on
+    /// the stage its beam interpolated was up to 26 levels off), the other lamps'
+    /// scattered light by [`adaptive::refine`] (its counts; every pixel computed if
+    /// every lamp has a gobo).
     fn add_adaptive(
         &self,
         ray: &(impl Fn(u32) -> Vec3 + Sync),
         pixels: &mut [Vec3],
     ) -> adaptive::Counts {
         let width = self.scene.camera.width;
-        // The surfaces' light added, and where each ray ends, m.
+        let patterned = |light: &Spotlight| light.gobo.is_some();
+        let plain = |light: &Spotlight| light.gobo.is_none();
+        // The surfaces' and the patterned lamps' light added, and where each ray ends, m.
         let mut ends = vec![0.0f32; pixels.len()];
         pixels
             .par_chunks_mut(width as usize)
             .zip(ends.par_chunks_mut(width as usize))
             .enumerate()
             .for_each(|(y, (row, ends))| {
-                let first = y as u32 * width;
-                for (x, (pixel, end)) in row.iter_mut().zip(ends).enumerate() {
-                    let surface;
-                    (surface, *end) = self.surface(ray(first + x as u32));
-                    *pixel += surface;
-                }
+                self.add_row(ray, y as u32 * width, row, |x, m| ends[x] = m, &patterned)
             });
+        if !self.scene.lights.iter().any(plain) {
+            return adaptive::Counts {
+                computed: pixels.len(),
+                interpolated: 0,
+            };
+        }
         let compute = |list: &[u32], out: &mut [Vec3]| {
             list.par_chunks(LANES)
                 .zip(out.par_chunks_mut(LANES))
@@ -404,21 +425,23 @@ impl<'a> SamplePlanes<'a> {
                     }
                     let count = list.len();
                     out.fill(Vec3::ZERO);
-                    self.scattered_rays(&rays[..count], &offsets[..count], &lane_ends, out);
+                    let (rays, offsets) = (&rays[..count], &offsets[..count]);
+                    self.scattered_rays(rays, offsets, &lane_ends, out, &plain);
                 });
         };
         self.scattered_adaptive(&ends, compute, pixels)
     }
 
-    /// Adds the scattered light of every pixel to `out` by [`adaptive::refine`] (and
-    /// gives its counts), computing with `compute`. The guard lets a pixel take its
-    /// corners' interpolation only where its ray ends (on a surface or at the far
-    /// plane, `ends`, m) where interpolating the corners' ends puts it, within the
-    /// tolerance or one sub-sample spacing (an object's silhouette cuts the haze in
-    /// front of it short, and a thin one, a truss or a stand, passes between corners),
-    /// and not near a lamp's image: within [`LAMP_REACH`] pixels, where `1/s^2` peaks
-    /// inside one pixel, and as far again as the beam is narrower than a cell (a beam
-    /// seen across opens by `tan(field / 2)` a pixel of distance from its apex).
+    /// Adds the scattered light of the lamps without a gobo at every pixel to `out` by
+    /// [`adaptive::refine`] (and gives its counts), computing with `compute`. The guard
+    /// lets a pixel take its corners' interpolation only where its ray ends (on a
+    /// surface or at the far plane, `ends`, m) where interpolating the corners' ends
+    /// puts it, within the tolerance or one sub-sample spacing (an object's silhouette
+    /// cuts the haze in front of it short, and a thin one, a truss or a stand, passes
+    /// between corners), and not near a lamp's image: within [`LAMP_REACH`] pixels,
+    /// where `1/s^2` peaks inside one pixel, and as far again as the beam is narrower
+    /// than a cell (a beam seen across opens by `tan(field / 2)` a pixel of distance
+    /// from its apex).
     fn scattered_adaptive(
         &self,
         ends: &[f32],
@@ -436,6 +459,7 @@ impl<'a> SamplePlanes<'a> {
         let lamps: Vec<(f32, f32, f32)> = scene
             .lights
             .iter()
+            .filter(|light| light.gobo.is_none())
             .filter_map(|light| {
                 let (x, y) = camera.pixel_of(light.position)?;
                 Some((
@@ -477,7 +501,7 @@ impl<'a> SamplePlanes<'a> {
     pub fn radiance(&self, ray: Vec3, offset: f32) -> Vec3 {
         let (surface, end) = self.surface(ray);
         let mut out = [Vec3::ZERO];
-        self.scattered_rays(&[ray], &[offset], &[end; LANES], &mut out);
+        self.scattered_rays(&[ray], &[offset], &[end; LANES], &mut out, &|_| true);
         surface + out[0]
     }
 
@@ -502,14 +526,15 @@ impl<'a> SamplePlanes<'a> {
     }
 
     /// Adds the light scattered toward the eye along `rays` (at most [`LANES`]; with
-    /// their sub-sample `offsets` and `ends`, m) to `out`, light by light: those whose
-    /// lit volume some ray may meet ([`LightPlanes::view`]).
+    /// their sub-sample `offsets` and `ends`, m) to `out`, light by light: those `pick`
+    /// takes whose lit volume some ray may meet ([`LightPlanes::view`]).
     fn scattered_rays(
         &self,
         rays: &[Vec3],
         offsets: &[f32],
         ends: &[f32; LANES],
         out: &mut [Vec3],
+        pick: &impl Fn(&Spotlight) -> bool,
     ) {
         let mut at = [(0.0f32, 0.0f32); LANES];
         for (at, ray) in at.iter_mut().zip(rays) {
@@ -517,7 +542,7 @@ impl<'a> SamplePlanes<'a> {
         }
         let at = &at[..rays.len()];
         for (light, planes) in self.scene.lights.iter().zip(&self.lights) {
-            if !at.iter().any(|&p| planes.view.holds(p)) {
+            if !pick(light) || !at.iter().any(|&p| planes.view.holds(p)) {
                 continue;
             }
             let lanes = Lanes::new(self, light, planes, rays, offsets, ends);

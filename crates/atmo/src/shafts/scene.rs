@@ -306,7 +306,7 @@ struct RenderSpec {
     sub_planes: u32,
     #[serde(default = "default_shadow_map")]
     shadow_map: u32,
-    #[serde(default)]
+    #[serde(default = "default_adaptive")]
     adaptive: bool,
 }
 
@@ -319,6 +319,9 @@ fn default_sub_planes() -> u32 {
 fn default_shadow_map() -> u32 {
     PlaneSettings::default().shadow_map
 }
+fn default_adaptive() -> bool {
+    PlaneSettings::default().adaptive
+}
 
 impl Default for RenderSpec {
     fn default() -> Self {
@@ -326,7 +329,7 @@ impl Default for RenderSpec {
             planes: default_planes(),
             sub_planes: default_sub_planes(),
             shadow_map: default_shadow_map(),
-            adaptive: false,
+            adaptive: default_adaptive(),
         }
     }
 }
