@@ -11,9 +11,9 @@
 //! whose answer is known beforehand: a min-max chain over each shadow map tells a plane's
 //! slice of sixteen rays wholly lit or wholly dark, and the beam's core has profile 1
 //! (see `SamplePlanes::scattered`). The result is the same sum, to the bit; the work
-//! follows the lit part of each ray. With [`PlaneSettings::adaptive`] (the default) the CPU goes
-//! further than the paper: the scattered light is computed where the picture changes
-//! and interpolated between ([`super::adaptive`]).
+//! follows the lit part of each ray. With [`PlaneSettings::adaptive`] (the default) the
+//! CPU goes further than the paper: the scattered light is computed where the picture
+//! changes and interpolated between ([`super::adaptive`]).
 //!
 //! One departure from the paper, on the CPU and the GPU alike: a slab between two
 //! planes that passes near the lamp, where `1 / s^2` and the phase change within it
@@ -212,6 +212,13 @@ fn adaptive_tolerance(exposure: f32) -> adaptive::Tolerance {
     }
 }
 
+/// Whether [`PlaneSettings::adaptive`] refines and interpolates the light of `light`:
+/// not of a lamp with a gobo, whose dots and lines are finer than a cell (its light is
+/// computed at every pixel).
+fn refined(light: &Spotlight) -> bool {
+    light.gobo.is_none()
+}
+
 /// How near a lamp's image (pixels, in x and in y) [`PlaneSettings::adaptive`]
 /// computes every pixel.
 const LAMP_REACH: f32 = 2.5;
@@ -396,8 +403,7 @@ impl<'a> SamplePlanes<'a> {
         pixels: &mut [Vec3],
     ) -> adaptive::Counts {
         let width = self.scene.camera.width;
-        let patterned = |light: &Spotlight| light.gobo.is_some();
-        let plain = |light: &Spotlight| light.gobo.is_none();
+        let patterned = |light: &Spotlight| !refined(light);
         // The surfaces' and the patterned lamps' light added, and where each ray ends, m.
         let mut ends = vec![0.0f32; pixels.len()];
         pixels
@@ -407,7 +413,7 @@ impl<'a> SamplePlanes<'a> {
             .for_each(|(y, (row, ends))| {
                 self.add_row(ray, y as u32 * width, row, |x, m| ends[x] = m, &patterned)
             });
-        if !self.scene.lights.iter().any(plain) {
+        if !self.scene.lights.iter().any(refined) {
             return adaptive::Counts {
                 computed: pixels.len(),
                 interpolated: 0,
@@ -426,7 +432,7 @@ impl<'a> SamplePlanes<'a> {
                     let count = list.len();
                     out.fill(Vec3::ZERO);
                     let (rays, offsets) = (&rays[..count], &offsets[..count]);
-                    self.scattered_rays(rays, offsets, &lane_ends, out, &plain);
+                    self.scattered_rays(rays, offsets, &lane_ends, out, &refined);
                 });
         };
         self.scattered_adaptive(&ends, compute, pixels)
@@ -459,7 +465,7 @@ impl<'a> SamplePlanes<'a> {
         let lamps: Vec<(f32, f32, f32)> = scene
             .lights
             .iter()
-            .filter(|light| light.gobo.is_none())
+            .filter(|light| refined(light))
             .filter_map(|light| {
                 let (x, y) = camera.pixel_of(light.position)?;
                 Some((
