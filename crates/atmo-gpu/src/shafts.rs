@@ -687,12 +687,13 @@ impl Geometry {
                     None => (GOBO_NONE, 0, 0, 0),
                     Some(g) => {
                         let at = values.len() as u32;
-                        values.extend((0..g.srgb.len()).map(|k| v4(g.texel(k), 0.0)));
+                        values.extend((0..g.srgb().len()).map(|k| v4(g.texel(k), 0.0)));
                         let sampling = match g.sampling {
                             Sampling::Nearest => GOBO_NEAREST,
                             Sampling::Bilinear => GOBO_BILINEAR,
                         };
-                        (sampling, at, g.width as u32, g.height as u32)
+                        let (w, h) = g.size();
+                        (sampling, at, w as u32, h as u32)
                     }
                 };
                 let map = &light.light_map;

@@ -85,9 +85,9 @@ fn the_example_scenes_load_with_their_gobo_and_mesh() {
         .gobo
         .as_ref()
         .expect("the first light has the dotted gobo");
-    assert_eq!((gobo.width, gobo.height), (256, 256));
+    assert_eq!(gobo.size(), (256, 256));
     // Kept compact: the file's 8-bit sRGB values, 3 bytes a texel, decoded on lookup.
-    assert_eq!(std::mem::size_of_val(gobo.srgb.as_slice()), 3 * 256 * 256);
+    assert_eq!(std::mem::size_of_val(gobo.srgb()), 3 * 256 * 256);
     let file = image::open(scenes().join("gobos/dots.png"))
         .unwrap()
         .to_rgb8();

@@ -499,7 +499,7 @@ mod reading {
         assert_eq!(f.zoom_range_deg, Some([8.0, 36.0]));
         // The wheel's two images (the open slot has none), as the PNGs in the zip.
         assert_eq!(f.wheel.len(), 2);
-        assert_eq!((f.wheel[0].width, f.wheel[0].height), (256, 256));
+        assert_eq!(f.wheel[0].size(), (256, 256));
         // The prism wheel's three facets, 8 deg off the beam toward 90, 210 and 330 deg.
         let prism = f
             .prism

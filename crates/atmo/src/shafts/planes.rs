@@ -622,29 +622,29 @@ impl<'a> SamplePlanes<'a> {
                     active[l] = ((k as u32 >= lanes.k_first[l]) & ((k as u32) < lanes.k_last[l]))
                         as u8 as f32;
                 }
-                let mut weights = active;
-                match lookups {
-                    Lookups::None | Lookups::Core => {}
-                    Lookups::Profile => {
-                        for l in 0..lanes.count {
-                            weights[l] *= light.light_map.get(u[l], v[l]);
+                if let Some(gobo) = &light.gobo {
+                    // The gobo first: over most of a pattern's beam it is dark and costs
+                    // one lookup ([`Gobo::sample_turned`]); the maps where it is not.
+                    for l in 0..lanes.count {
+                        if active[l] == 0.0 {
+                            continue;
+                        }
+                        let through = gobo.sample_turned(u[l], v[l], turn);
+                        if through != Vec3::ZERO {
+                            j_sums[l] +=
+                                lookups.weight(light, shadow, [u[l], v[l], z[l]]) * through;
                         }
                     }
-                    Lookups::Both => {
-                        for l in 0..lanes.count {
-                            let lit = shadow.lit_at(u[l], v[l], z[l]) as u8 as f32;
-                            weights[l] *= lit * light.light_map.get(u[l], v[l]);
-                        }
+                    continue;
+                }
+                let mut weights = active;
+                if !matches!(lookups, Lookups::None | Lookups::Core) {
+                    for l in 0..lanes.count {
+                        weights[l] *= lookups.weight(light, shadow, [u[l], v[l], z[l]]);
                     }
                 }
-                for (l, weight) in weights.into_iter().enumerate().take(lanes.count) {
-                    match &light.gobo {
-                        None => j_sums[l].x += weight,
-                        Some(gobo) if weight > 0.0 => {
-                            j_sums[l] += weight * gobo.sample_turned(u[l], v[l], turn)
-                        }
-                        Some(_) => {}
-                    }
+                for l in 0..lanes.count {
+                    j_sums[l].x += weights[l];
                 }
             }
             self.add_plane(light, planes, lanes, plane, &mut j_sums, &mut sum);
@@ -1080,6 +1080,17 @@ enum Lookups {
 }
 
 impl Lookups {
+    /// `H I_l` without the gobo at a sub-sample projecting to `(u, v)` at light-space
+    /// depth `z`, as the slice's lookups need it.
+    #[inline(always)]
+    fn weight(self, light: &Spotlight, shadow: &ShadowMap, [u, v, z]: [f32; 3]) -> f32 {
+        match self {
+            Lookups::None | Lookups::Core => 1.0,
+            Lookups::Profile => light.light_map.get(u, v),
+            Lookups::Both => shadow.lit_at(u, v, z) as u8 as f32 * light.light_map.get(u, v),
+        }
+    }
+
     /// What the lanes' lit sub-samples among `slice` (one plane's) need: the first and
     /// last of each lane's bound its stretch (a straight piece of its ray, which
     /// projects onto the segment between their projections, with its depth between

@@ -1280,13 +1280,12 @@ pub fn gobo_from_image(bytes: &[u8], origin: &str, sampling: Sampling) -> Result
     let image = image::DynamicImage::from_decoder(decoder)
         .map_err(bad)?
         .to_rgb8();
-    Ok(Gobo {
-        width: image.width() as usize,
-        height: image.height() as usize,
-        srgb: image.pixels().map(|p| p.0).collect(),
+    Ok(Gobo::new(
+        image.width() as usize,
+        image.height() as usize,
+        image.pixels().map(|p| p.0).collect(),
         sampling,
-        rotation: 0.0,
-    })
+    ))
 }
 
 impl ObjectSpec {

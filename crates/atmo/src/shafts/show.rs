@@ -370,10 +370,11 @@ impl Fixture {
         let field_half = (beam_half * self.field_ratio).min(85f32.to_radians());
         let gobo = match state.gobo {
             0 => None,
-            k => Some(Gobo {
-                rotation: gobo_deg.to_radians(),
-                ..self.wheel[k - 1].clone()
-            }),
+            k => {
+                let mut gobo = self.wheel[k - 1].clone();
+                gobo.rotation = gobo_deg.to_radians();
+                Some(gobo)
+            }
         };
         Spotlight::new(
             self.position,

@@ -52,21 +52,70 @@ pub enum Sampling {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Gobo {
     /// Width in texels.
-    pub width: usize,
+    width: usize,
     /// Height in texels.
-    pub height: usize,
+    height: usize,
     /// Row-major texels, top row first, as the image's 8-bit sRGB values: 3 bytes a
     /// texel (a 4096^2 gobo holds 50 MB, where linear f32 took 200 MB); [`Gobo::texel`]
-    /// is the linear transmittance.
-    pub srgb: Vec<[u8; 3]>,
+    /// is the linear transmittance. Private, with the size, so that [`Gobo::dark`]
+    /// always describes them.
+    srgb: Vec<[u8; 3]>,
     /// Lookup.
     pub sampling: Sampling,
     /// How far the gobo is turned in its holder, radians, counterclockwise seen from
     /// behind the lamp (a rotating gobo of a moving head).
     pub rotation: f32,
+    /// Per block of [`Gobo::BLOCK`]^2 texels, row-major: whether every texel a lookup
+    /// in the block reads (the block and one texel around it) is black, so that
+    /// [`Gobo::sample_turned`] gives 0 there without reading four texels. A gobo is
+    /// mostly metal: the stage's dots leave two thirds of the beam dark.
+    dark: Arc<[bool]>,
 }
 
 impl Gobo {
+    /// The side of [`Gobo::dark`]'s blocks, texels.
+    const BLOCK: usize = 4;
+
+    /// A gobo of `width x height` texels, row-major from the top, as 8-bit sRGB,
+    /// unturned.
+    pub fn new(width: usize, height: usize, srgb: Vec<[u8; 3]>, sampling: Sampling) -> Gobo {
+        assert_eq!(srgb.len(), width * height, "a {width} x {height} gobo");
+        let b = Self::BLOCK;
+        let (bw, bh) = (width.div_ceil(b), height.div_ceil(b));
+        // A block's texels and one around it, clipped to the image: a lookup clamps to
+        // the edge, so a point beyond it reads the edge's texels, which are in its block.
+        let dark = (0..bw * bh)
+            .map(|k| {
+                let (bx, by) = (k % bw, k / bw);
+                let cols = (bx * b).saturating_sub(1)..((bx + 1) * b + 1).min(width);
+                let rows = (by * b).saturating_sub(1)..((by + 1) * b + 1).min(height);
+                rows.into_iter().all(|y| {
+                    srgb[y * width + cols.start..y * width + cols.end]
+                        .iter()
+                        .all(|t| *t == [0; 3])
+                })
+            })
+            .collect();
+        Gobo {
+            width,
+            height,
+            srgb,
+            sampling,
+            rotation: 0.0,
+            dark,
+        }
+    }
+
+    /// Width and height in texels.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// The texels, row-major from the top, as the image's 8-bit sRGB values.
+    pub fn srgb(&self) -> &[[u8; 3]] {
+        &self.srgb
+    }
+
     /// The linear transmittance of texel `k` (row-major).
     #[inline]
     pub fn texel(&self, k: usize) -> Vec3 {
@@ -102,6 +151,16 @@ impl Gobo {
         let x = (0.5 * (u + 1.0)) * self.width as f32;
         let y = (0.5 * (1.0 - v)) * self.height as f32;
         let (w, h) = (self.width as isize, self.height as isize);
+        // Every texel either lookup reads lies within one of the texel under the point
+        // (clamped to the image), so within that texel's block or one texel around it.
+        let b = Self::BLOCK as isize;
+        let (bx, by) = (
+            (x as isize).clamp(0, w - 1) / b,
+            (y as isize).clamp(0, h - 1) / b,
+        );
+        if self.dark[(by * self.width.div_ceil(Self::BLOCK) as isize + bx) as usize] {
+            return Vec3::ZERO;
+        }
         // The decoding table once a lookup, not once a channel (a per-sample hot path).
         let table = crate::image::srgb8_table();
         let at = |i: isize, j: isize| {
@@ -433,12 +492,13 @@ mod tests {
     #[test]
     fn gobo_sampling_orients_the_image_as_seen_from_behind_the_lamp() {
         // 2 x 2: top-left red, top-right green, bottom-left blue, bottom-right white.
-        let gobo = |sampling| Gobo {
-            width: 2,
-            height: 2,
-            srgb: vec![[255, 0, 0], [0, 255, 0], [0, 0, 255], [255; 3]],
-            sampling,
-            rotation: 0.0,
+        let gobo = |sampling| {
+            Gobo::new(
+                2,
+                2,
+                vec![[255, 0, 0], [0, 255, 0], [0, 0, 255], [255; 3]],
+                sampling,
+            )
         };
         let g = gobo(Sampling::Nearest);
         assert_eq!(g.sample(-0.5, 0.5), Vec3::X);
@@ -454,5 +514,45 @@ mod tests {
         };
         assert_eq!(turned.sample(-0.5, 0.5), Vec3::Y);
         assert_eq!(turned.sample(0.5, 0.5), Vec3::ONE);
+    }
+
+    /// Skipping the dark blocks changes no lookup: sparse lit texels (on blocks' edges
+    /// and corners too) in an image whose sides are not a whole number of blocks,
+    /// looked up over and beyond the image, turned and not, both ways.
+    #[test]
+    fn dark_blocks_give_what_their_texels_give() {
+        let (w, h) = (37, 23);
+        let srgb = (0..w * h)
+            .map(|k: usize| {
+                let lit = (k * 2_654_435_761) % 97 < 2;
+                if lit {
+                    [(k % 251) as u8 | 1, 200, 0]
+                } else {
+                    [0; 3]
+                }
+            })
+            .collect::<Vec<_>>();
+        for sampling in [Sampling::Nearest, Sampling::Bilinear] {
+            let gobo = Gobo::new(w, h, srgb.clone(), sampling);
+            let dark = gobo.dark.iter().filter(|&&d| d).count();
+            assert!(dark > gobo.dark.len() / 4, "{dark} of {}", gobo.dark.len());
+            let plain = Gobo {
+                dark: vec![false; gobo.dark.len()].into(),
+                ..gobo.clone()
+            };
+            let mut lit = 0;
+            for rotation in [0.0f32, 0.7, -2.0] {
+                let turn = rotation.sin_cos();
+                for j in 0..=300 {
+                    for i in 0..=300 {
+                        let (u, v) = (-1.3 + i as f32 * 0.0087, -1.3 + j as f32 * 0.0087);
+                        let want = plain.sample_turned(u, v, turn);
+                        assert_eq!(gobo.sample_turned(u, v, turn), want, "({u}, {v}) {turn:?}");
+                        lit += (want != Vec3::ZERO) as usize;
+                    }
+                }
+            }
+            assert!(lit > 2_000, "{lit} lit lookups");
+        }
     }
 }
