@@ -21,7 +21,8 @@ fuzz_target!(|data: &[u8]| {
             assert!(lo <= hi);
         }
         for g in &f.wheel {
-            assert_eq!(g.srgb.len(), g.width * g.height);
+            let (width, height) = g.size();
+            assert_eq!(g.srgb().len(), width * height);
         }
         if let Some(prism) = &f.prism {
             // Facets are unit beams; a circular prism's numbers are in atmo's ranges.

@@ -12,7 +12,8 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let side = atmo::shafts::scene::GOBO_MAX_SIDE as usize;
-    assert!(gobo.width.max(gobo.height) <= side);
-    assert_eq!(gobo.srgb.len(), gobo.width * gobo.height);
+    let (width, height) = gobo.size();
+    assert!(width.max(height) <= side);
+    assert_eq!(gobo.srgb().len(), width * height);
     assert!(gobo.sample(0.3, -0.2).is_finite());
 });

@@ -77,7 +77,7 @@ impl Gobo {
     const BLOCK: usize = 4;
 
     /// A gobo of `width x height` texels, row-major from the top, as 8-bit sRGB,
-    /// unturned.
+    /// unturned. Panics unless `srgb` holds `width * height` texels.
     pub fn new(width: usize, height: usize, srgb: Vec<[u8; 3]>, sampling: Sampling) -> Gobo {
         assert_eq!(srgb.len(), width * height, "a {width} x {height} gobo");
         let b = Self::BLOCK;
@@ -151,8 +151,8 @@ impl Gobo {
         let x = (0.5 * (u + 1.0)) * self.width as f32;
         let y = (0.5 * (1.0 - v)) * self.height as f32;
         let (w, h) = (self.width as isize, self.height as isize);
-        // Every texel either lookup reads lies within one of the texel under the point
-        // (clamped to the image), so within that texel's block or one texel around it.
+        // Every texel either lookup reads is the texel under the point (clamped to the
+        // image) or a neighbour of it: in that texel's block or the ring around it.
         let b = Self::BLOCK as isize;
         let (bx, by) = (
             (x as isize).clamp(0, w - 1) / b,
