@@ -740,7 +740,7 @@ impl<'a> SamplePlanes<'a> {
         let z = local.z.max(1e-6);
         let scale = 1.0 / (light.tan_field() * z);
         let (u, v) = (local.x * scale, local.y * scale);
-        let weight = planes.shadow.lit_at(u, v, z) as u8 as f32 * light.light_map.get(u, v);
+        let weight = Lookups::Both.weight(light, &planes.shadow, [u, v, z]);
         match &light.gobo {
             Some(gobo) if weight > 0.0 => weight * gobo.sample_turned(u, v, gobo.turn()),
             _ => Vec3::splat(weight),
