@@ -22,6 +22,7 @@ fn bench_lines_report_their_peak_memory() {
         "\"scattering\":\"multiple\"",
         "\"vs_path_traced\":",
         "\"blocks_within_15\":",
+        "\"block_medians_within_15\":",
         "\"ratio\":",
     ] {
         assert!(multiple.contains(field), "{field} in {multiple}");
