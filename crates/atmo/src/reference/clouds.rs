@@ -516,7 +516,9 @@ pub struct Agreement {
     pub blocks: usize,
     /// Of the same blocks, those whose medians (over their covered pixels, the picture's
     /// and the reference's each) are within 15 % of each other: the issue's own wording
-    /// of the measure, which a few bright pixels of a noisy reference sway less.
+    /// of the measure. A path-traced reference needs more paths for it than for the
+    /// means: with few paths a pixel its pixels' noise is skewed (most paths bring little
+    /// light, a few much), and their median lies below their mean.
     pub medians_within_15: usize,
 }
 
