@@ -8,8 +8,10 @@ struct GpuParticle {
     // Extinction coefficient at the centre, 1/m.
     density: f32,
     albedo: f32,
-    pad0: f32,
-    pad1: f32,
+    // The optical depth above the centre and the cloud's whole depth on that vertical
+    // (atmo::clouds::sky_light::vertical_depths; 0 until the sky's light needs them).
+    sky_depth: f32,
+    sky_column: f32,
 }
 
 // Mirrors atmo_gpu::clouds::BufferFrame: world to buffer axes (rows x, y along the

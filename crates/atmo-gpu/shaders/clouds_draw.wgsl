@@ -21,6 +21,10 @@ struct DrawParams {
     // The sky's light the droplets scatter toward the eye: nine spherical harmonics,
     // RGB (atmo::clouds::SkyLight, its order).
     sky: array<vec4<f32>, 9>,
+    // The sky's light inside the cloud from above and below against outside
+    // (atmo::clouds::SkyDimming), RGB; sky_above.w: the extrapolation length.
+    sky_above: vec4<f32>,
+    sky_below: vec4<f32>,
     // The air between the eye and the cloud: transmittance and in-scattered light, RGB.
     haze_transmittance: vec4<f32>,
     haze_inscatter: vec4<f32>,
@@ -50,6 +54,8 @@ struct Billboard {
     @location(1) @interpolate(flat) sun: vec3<f32>,
     @location(2) @interpolate(flat) albedo: f32,
     @location(3) @interpolate(flat) density: f32,
+    // The sky's light at the particle against outside the cloud, RGB.
+    @location(4) @interpolate(flat) sky_inside: vec3<f32>,
 }
 
 struct Colours {
@@ -112,6 +118,10 @@ fn vertex(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> Bil
     out.sun = p.albedo * params.sun.xyz;
     out.albedo = p.albedo;
     out.density = p.density;
+    // SkyDimming::top_share and SkyDimming::at: the two-stream profile down the vertical.
+    let e = params.sky_above.w;
+    let top = clamp((p.sky_column - p.sky_depth + e) / (p.sky_column + 2.0 * e), 0.0, 1.0);
+    out.sky_inside = params.sky_below.xyz + (params.sky_above.xyz - params.sky_below.xyz) * top;
     return out;
 }
 
@@ -272,7 +282,7 @@ fn fragment(b: Billboard) -> Colours {
     // behind (summed over the particles, the CPU's haze exactly).
     let haze = params.haze_transmittance.xyz;
     var out: Colours;
-    let sky = b.albedo * sky_along(r * inv_length);
+    let sky = b.albedo * b.sky_inside * sky_along(r * inv_length);
     out.picture = vec4<f32>(haze * (single * b.sun + alpha * sky)
         + alpha * params.haze_inscatter.xyz, alpha);
     out.higher = vec4<f32>(haze * higher * b.sun, alpha);

@@ -8,12 +8,13 @@
 //! [`GpuClouds::prepare`] records the draw into the caller's encoder and a
 //! [`CloudsPass`] puts the cloud over the caller's own target, with no read-back.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::Lighting;
 use atmo::clouds::shadow::CloudShadow;
+use atmo::clouds::sky_light::vertical_depths;
 use atmo::image::Frame;
 use atmo::view::Camera;
 use glam::Vec3;
@@ -29,8 +30,11 @@ gpu_struct! {
         /// Extinction coefficient at the centre, 1/m.
         density: f32,
         albedo: f32,
-        pad0: f32,
-        pad1: f32,
+        /// The optical depth above the centre and the cloud's whole depth on that
+        /// vertical (`atmo::clouds::sky_light::vertical_depths`), for the sky's light
+        /// inside the cloud; 0 until a draw with that light needs them.
+        sky_depth: f32,
+        sky_column: f32,
     }
 }
 
@@ -65,6 +69,10 @@ gpu_struct! {
         /// The sky's light the droplets scatter toward the eye, as nine harmonics
         /// (atmo::clouds::SkyLight::scattered), RGB.
         sky: [[f32; 4]; 9],
+        /// The sky's light inside the cloud from above and below against outside
+        /// (atmo::clouds::SkyDimming), RGB; `sky_above`'s w: the extrapolation length.
+        sky_above: [f32; 4],
+        sky_below: [f32; 4],
         haze_transmittance: [f32; 4],
         haze_inscatter: [f32; 4],
         /// The octaves' attenuation, contribution, eccentricity and depth scale.
@@ -90,6 +98,8 @@ pub struct GpuClouds {
     cells: wgpu::Buffer,
     /// The light pass's frame, once it has run.
     frame: Option<BufferFrame>,
+    /// Whether the particles' records hold their depths for the sky's light.
+    sky_depths: Cell<bool>,
     splat: wgpu::ComputePipeline,
     prefix: wgpu::ComputePipeline,
     draw: wgpu::RenderPipeline,
@@ -122,7 +132,7 @@ impl GpuClouds {
         }
         let particle_buffer = gpu.storage(
             "the particles",
-            bytemuck::cast_slice(&records(particles)),
+            bytemuck::cast_slice(&records(particles, None)),
             "the particle count",
         )?;
         let cells = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -144,6 +154,7 @@ impl GpuClouds {
             resolution: resolution as u32,
             cells,
             frame: None,
+            sky_depths: Cell::new(false),
             splat: gpu.compute_pipeline(&light, "main", None)?,
             prefix: gpu.compute_pipeline(&prefix, "main", None)?,
             // Premultiplied "over": E_k = S_k + T_k E_{k-1}; into the picture and into
@@ -175,10 +186,11 @@ impl GpuClouds {
         gpu.queue.write_buffer(
             &self.particle_buffer,
             0,
-            bytemuck::cast_slice(&records(particles)),
+            bytemuck::cast_slice(&records(particles, None)),
         );
         self.particles.copy_from_slice(particles);
         self.frame = None;
+        self.sky_depths.set(false);
         Ok(())
     }
 
@@ -379,6 +391,19 @@ impl GpuClouds {
         let focal = 0.5 * h as f32 / tan_half_height;
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
         let sky = light.ambient.scattered(light.phase, &octaves);
+        // The sky's light inside the cloud needs each particle's depths (made on the
+        // CPU, from a coarse buffer lit from the zenith, once for particles where they
+        // are).
+        let dimming = light.ambient.dimming(&octaves);
+        if !dimming.is_flat() && !self.sky_depths.get() {
+            let depths = vertical_depths(&self.particles)?;
+            gpu.queue.write_buffer(
+                &self.particle_buffer,
+                0,
+                bytemuck::cast_slice(&records(&self.particles, Some(&depths))),
+            );
+            self.sky_depths.set(true);
+        }
         // The phase function's code and parameter (functions.wgsl's phase_function).
         let (kind, g) = light.phase.code();
         let params = DrawParams {
@@ -389,6 +414,8 @@ impl GpuClouds {
             to_sun: v4(light.to_sun, kind as f32),
             sun: v4(light.sun, g as f32),
             sky: sky.harmonics.map(|h| v4(h, 0.0)),
+            sky_above: v4(dimming.above, dimming.extrapolation),
+            sky_below: v4(dimming.below, 0.0),
             haze_transmittance: v4(light.haze.transmittance, 0.0),
             haze_inscatter: v4(light.haze.inscatter, 0.0),
             octaves: [
@@ -535,15 +562,19 @@ impl CloudsPass {
 }
 
 /// The particles as the shaders read them.
-fn records(particles: &[Particle]) -> Vec<GpuParticle> {
+fn records(particles: &[Particle], sky_depths: Option<&[[f32; 2]]>) -> Vec<GpuParticle> {
     particles
         .iter()
-        .map(|p| GpuParticle {
-            position_radius: [p.position.x, p.position.y, p.position.z, p.radius],
-            density: p.density,
-            albedo: p.albedo,
-            pad0: 0.0,
-            pad1: 0.0,
+        .enumerate()
+        .map(|(k, p)| {
+            let [sky_depth, sky_column] = sky_depths.map_or([0.0; 2], |d| d[k]);
+            GpuParticle {
+                position_radius: [p.position.x, p.position.y, p.position.z, p.radius],
+                density: p.density,
+                albedo: p.albedo,
+                sky_depth,
+                sky_column,
+            }
         })
         .collect()
 }

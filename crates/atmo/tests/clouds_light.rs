@@ -30,11 +30,16 @@ fn centre(particles: &[Particle]) -> Vec3 {
 
 /// The camera 2.2 cloud widths away at 2.4 km, 26 deg, `w` x `h`.
 fn camera(particles: &[Particle], w: u32, h: u32) -> Camera {
+    camera_at(particles, 2400.0, w, h)
+}
+
+/// The same at `height` m (the cloud's middle is at about 1.2 km).
+fn camera_at(particles: &[Particle], height: f32, w: u32, h: u32) -> Camera {
     let centre = centre(particles);
     let a = 200f32.to_radians();
     let eye = Vec3::new(
         centre.x + a.sin() * 2640.0,
-        2400.0,
+        height,
         centre.z - a.cos() * 2640.0,
     );
     Camera::look_at(eye, centre, Vec3::Y, Fov::Vertical(26.0), (w, h)).unwrap()
@@ -281,76 +286,92 @@ fn the_shadow_on_the_ground_matches_the_path_tracer() {
 fn the_sky_light_matches_the_path_tracer_in_the_mean() {
     // A sky of radiance 1 over the upper hemisphere and none below, its light alone
     // (the path tracer with and without the sky, the same paths), against the
-    // billboards lit by its harmonics and against the sphere's mean (0.5) scattered
-    // as if from everywhere, atmo's term before: by thirds of the picture's rows.
+    // billboards lit by its harmonics and dimmed inside the cloud by the profile down
+    // the vertical (atmo::clouds::SkyDimming), and against the sphere's mean (0.5)
+    // scattered as if from everywhere, atmo's term before: seen from above (2.4 km),
+    // level (1.2 km) and below (300 m), in the mean and by thirds of the rows.
     let particles = cloud();
-    let camera = camera(&particles, 48, 28);
     let to_sun = Sun::from_degrees(25.0, 200.0).unwrap().toward();
-    let traced = |sky: f64| {
-        let light = ReferenceLight {
-            to_sun: to_sun.as_dvec3(),
-            phase: PhaseFunction::CloudMie,
-            sky,
-        };
-        let settings = PathSettings {
-            paths: 32,
-            orders: usize::MAX,
-            seed: 3,
-        };
-        ReferenceCloud::new(&particles, light).path_traced_picture(&camera, &settings)
-    };
-    let (lit, dark) = (traced(1.0), traced(0.0));
-    let sky: Vec<f64> = lit.iter().zip(&dark).map(|(a, b)| a.0 - b.0).collect();
     let buffer = IntensityBuffer::new(&particles, to_sun, 128, 0.0, Splat::Pieces).unwrap();
     let above = {
         let mut map = Frame::new(64, 32);
         map.pixels[..64 * 16].fill(Vec3::ONE);
         SkyLight::from_harmonics(&project_equirect(&map))
     };
-    let billboards = |ambient: SkyLight| -> Vec<f64> {
-        let light = Lighting {
-            to_sun,
-            sun: Vec3::ZERO,
-            ambient,
-            phase: PhaseFunction::CloudMie,
-            haze: Haze::CLEAR,
-            scattering: Octaves::MULTIPLE,
-        };
-        let frame = render(&particles, &buffer, &camera, &light, None).unwrap();
-        frame.pixels.iter().map(|p| p.x as f64).collect()
-    };
     let cloud = reference(&particles, to_sun);
-    let covered = cloud.covered(&camera);
-    // billboards / path tracer over the covered pixels of rows `rows`.
-    let ratio = |fast: &[f64], rows: std::ops::Range<usize>| {
-        let k = rows.flat_map(|y| (0..48).map(move |x| y * 48 + x));
-        let (f, t) = k
-            .filter(|&k| covered[k])
-            .fold((0.0, 0.0), |(f, t), k| (f + fast[k], t + sky[k]));
-        f / t
-    };
-    let (harmonics, isotropic) = (
-        billboards(above),
-        billboards(SkyLight::uniform(Vec3::splat(0.5))),
-    );
-    for (name, fast) in [("harmonics", &harmonics), ("isotropic", &isotropic)] {
-        eprintln!(
-            "sky light alone, {name}: billboards / path tracer {:.3}; top, middle, bottom thirds {:.3} {:.3} {:.3}",
-            ratio(fast, 0..28),
-            ratio(fast, 0..9),
-            ratio(fast, 9..19),
-            ratio(fast, 19..28)
+    for height in [2400.0, 1200.0, 300.0] {
+        let camera = camera_at(&particles, height, 48, 28);
+        let traced = |sky: f64| {
+            let light = ReferenceLight {
+                to_sun: to_sun.as_dvec3(),
+                phase: PhaseFunction::CloudMie,
+                sky,
+            };
+            let settings = PathSettings {
+                paths: 32,
+                orders: usize::MAX,
+                seed: 3,
+            };
+            ReferenceCloud::new(&particles, light).path_traced_picture(&camera, &settings)
+        };
+        let (lit, dark) = (traced(1.0), traced(0.0));
+        let sky: Vec<f64> = lit.iter().zip(&dark).map(|(a, b)| a.0 - b.0).collect();
+        let billboards = |ambient: SkyLight| -> Vec<f64> {
+            let light = Lighting {
+                to_sun,
+                sun: Vec3::ZERO,
+                ambient,
+                phase: PhaseFunction::CloudMie,
+                haze: Haze::CLEAR,
+                scattering: Octaves::MULTIPLE,
+            };
+            let frame = render(&particles, &buffer, &camera, &light, None).unwrap();
+            frame.pixels.iter().map(|p| p.x as f64).collect()
+        };
+        let covered = cloud.covered(&camera);
+        // billboards / path tracer over the covered pixels of rows `rows`.
+        let ratio = |fast: &[f64], rows: std::ops::Range<usize>| {
+            let k = rows.flat_map(|y| (0..48).map(move |x| y * 48 + x));
+            let (f, t) = k
+                .filter(|&k| covered[k])
+                .fold((0.0, 0.0), |(f, t), k| (f + fast[k], t + sky[k]));
+            f / t
+        };
+        let (harmonics, isotropic) = (
+            billboards(above),
+            billboards(SkyLight::uniform(Vec3::splat(0.5))),
         );
+        let thirds = |fast: &[f64]| [0..9, 9..19, 19..28].map(|rows| ratio(fast, rows));
+        for (name, fast) in [("harmonics", &harmonics), ("isotropic", &isotropic)] {
+            eprintln!(
+                "sky light alone from {height} m, {name}: billboards / path tracer {:.3}; top, middle, bottom thirds {:.3?}",
+                ratio(fast, 0..28),
+                thirds(fast),
+            );
+        }
+        // Measured: 1.06 (thirds 1.15, 0.97, 1.35) from above, 1.09 (1.13, 1.10, 0.96)
+        // level, 1.08 (1.16, 1.11, 0.87) from below; not dimmed inside the cloud, 0.97
+        // (0.83, 0.92, 1.48), 1.10 (0.86, 1.16, 1.23) and 1.18 (1.01, 1.26, 1.03); the
+        // isotropic term from above 1.09 (0.86, 1.03, 1.78). From above, the rows at the
+        // bottom are the cloud's lower flanks, where the droplets' forward lobe looks at
+        // the dark below.
+        let whole = ratio(&harmonics, 0..28);
+        assert!(
+            (whole - 1.0).abs() < 0.12,
+            "from {height} m, the mean: {whole}"
+        );
+        for third in thirds(&harmonics) {
+            assert!(
+                third > 0.8 && third < 1.4,
+                "from {height} m, a third: {third}"
+            );
+        }
+        if height == 2400.0 {
+            let (base, base_before) = (ratio(&harmonics, 19..28), ratio(&isotropic, 19..28));
+            assert!(
+                base < base_before - 0.3,
+                "the base: {base} against {base_before}"
+            );
+        }
     }
-    // Measured: 0.97 in the mean, thirds 0.83, 0.92, 1.48 (the isotropic term 1.09;
-    // 0.86, 1.03, 1.78): the rows at the bottom are the cloud's base seen from above,
-    // where the droplets' forward lobe looks at the dark below. What is left there is
-    // the sky's light not dimmed inside the cloud (docs/clouds.md).
-    let whole = ratio(&harmonics, 0..28);
-    assert!((whole - 1.0).abs() < 0.06, "the mean: {whole}");
-    let (base, base_before) = (ratio(&harmonics, 19..28), ratio(&isotropic, 19..28));
-    assert!(
-        base < base_before - 0.15 && base > 1.0,
-        "the base: {base} against {base_before}"
-    );
 }

@@ -125,8 +125,9 @@ pub struct CloudStill {
     forward: f32,
     /// Light from the sky scattered by the droplets: `none`, `sky` (the sky module's
     /// radiance all around the cloud, the ground's below; the droplets scatter toward
-    /// the eye the part behind them most; needs --sky) or an RGB radiance `R,G,B` from
-    /// every direction alike. Default:
+    /// the eye the part behind them most, dimmed inside the cloud with every order as
+    /// the light from above and below diffuses down the vertical; needs --sky) or an
+    /// RGB radiance `R,G,B` from every direction alike (not dimmed). Default:
     /// `sky` with --sky, else `none` (a cloud on black has no other light than the
     /// sun's).
     #[arg(long, value_name = "none|sky|R,G,B")]

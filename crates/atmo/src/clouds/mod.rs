@@ -25,7 +25,7 @@ pub use octaves::Octaves;
 pub use particles::Particle;
 pub use render::{render, Haze, Lighting};
 pub use shadow::CloudShadow;
-pub use sky_light::SkyLight;
+pub use sky_light::{SkyDimming, SkyLight};
 
 /// Eight values of the drawing's per-pixel quantities, one per pixel of a billboard's
 /// row: the hot loop of [`render`](mod@render) takes a row eight pixels at a time, its

@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use super::buffer::IntensityBuffer;
 use super::octaves::{Emission, Octaves};
 use super::particles::{tabulated_emission_nodes_lanes, Particle};
-use super::sky_light::SkyLight;
+use super::sky_light::{vertical_depths, SkyLight};
 use super::{Lanes, LANES};
 use crate::atmosphere::phase::PhaseFunction;
 use crate::error::Result;
@@ -124,8 +124,18 @@ pub fn render(
             .map(|k| light.phase.eval_f32(light.to_sun.dot(ray(k)))),
     );
     phases.extend([0.0f32; LANES]);
-    // The sky's light the droplets scatter along a ray, taken where a blob was drawn.
+    // The sky's light the droplets scatter along a ray, taken where a blob was drawn,
+    // and how much of it reaches each particle inside the cloud from above and below.
     let sky = light.ambient.scattered(light.phase, &light.scattering);
+    let dimming = light.ambient.dimming(&light.scattering);
+    let top_shares: Vec<f32> = if dimming.is_flat() {
+        vec![0.0; particles.len()]
+    } else {
+        vertical_depths(particles)?
+            .into_iter()
+            .map(|d| dimming.top_share(d))
+            .collect()
+    };
     let octaves = light.scattering.terms();
     let mut frame = Frame::new(camera.width, camera.height);
     frame
@@ -138,11 +148,12 @@ pub fn render(
             // through from behind; the single-scattered and the higher octaves' light
             // per unit sunlight (the higher kept apart until the pixel's depth is
             // known); the share of the sky's light the blobs scatter (albedo times what
-            // each takes out of the pixel's ray), to be times the ray's sky light.
+            // each takes out of the pixel's ray), to be times the ray's sky light, and
+            // the same times each blob's share of that light from above.
             let padded = pixels.len() + LANES;
             let mut through = vec![1.0f32; padded];
             let (mut single, mut higher) = (vec![0.0f32; padded], vec![0.0f32; padded]);
-            let mut skylit = vec![0.0f32; padded];
+            let (mut skylit, mut skytop) = (vec![0.0f32; padded], vec![0.0f32; padded]);
             // Blocks of BLOCK columns across the band: whether one of their pixels still
             // lets light through, kept up to date lazily (`dirty` after a particle).
             let blocks = w.div_ceil(BLOCK);
@@ -175,6 +186,7 @@ pub fn render(
                 let p = &particles[k];
                 let s = p.sigma();
                 let albedo = Lanes::splat(p.albedo);
+                let top = Lanes::splat(top_shares[k]);
                 // The centre from the eye; its dot with a pixel's ray, affine in the pixel.
                 let d = p.position - camera.position;
                 let (d2, d0, dx, dy) = (d.length_squared(), d.dot(r0), d.dot(rx), d.dot(ry));
@@ -240,21 +252,25 @@ pub fn render(
                         };
                         add(&mut single, blob.single);
                         add(&mut higher, blob.higher);
-                        add(&mut skylit, Lanes::ONE - blob.transmitted);
+                        let absorbed = Lanes::ONE - blob.transmitted;
+                        add(&mut skylit, absorbed);
+                        add(&mut skytop, absorbed * top);
                         let kept = live.select(t_through * blob.transmitted, t_through);
                         through[i..i + LANES].copy_from_slice(kept.as_array());
                     }
                 }
             }
             // The sunlight by every order (the higher octaves by the cloud's depth on
-            // the ray), the sky's light, the haze in front of the cloud, then what shows
-            // through it.
+            // the ray), the sky's light dimmed inside the cloud, the haze in front of the
+            // cloud, then what shows through it.
             let haze = light.haze;
             for (j, e) in pixels.iter_mut().enumerate() {
                 let t = through[j];
                 *e = light.sun * (single[j] + light.scattering.higher_share(t) * higher[j]);
                 if skylit[j] > 0.0 {
-                    *e += skylit[j] * sky.along(ray(band * BAND * w + j));
+                    let inside =
+                        dimming.below * skylit[j] + (dimming.above - dimming.below) * skytop[j];
+                    *e += inside * sky.along(ray(band * BAND * w + j));
                 }
                 *e = haze.transmittance * *e + (1.0 - t) * haze.inscatter;
             }
