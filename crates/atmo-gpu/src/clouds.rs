@@ -173,7 +173,9 @@ impl GpuClouds {
     }
 
     /// Moves the particles (the same number of them, e.g. carried by the wind): the
-    /// next light pass and draw see them where they are now.
+    /// next light pass and draw see them where they are now. Particles where they already
+    /// are change nothing: the light pass and the sky's depths made for them stay (a
+    /// caller that passes the particles with every moved sun does not pay for them).
     pub fn move_particles(&mut self, gpu: &Gpu, particles: &[Particle]) -> Result<(), GpuError> {
         if particles.len() != self.particles.len() {
             return Err(atmo::Error::Invalid(format!(
@@ -182,6 +184,9 @@ impl GpuClouds {
                 self.particles.len()
             ))
             .into());
+        }
+        if particles == self.particles.as_slice() {
+            return Ok(());
         }
         gpu.queue.write_buffer(
             &self.particle_buffer,

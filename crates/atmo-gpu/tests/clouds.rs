@@ -214,6 +214,17 @@ fn drawing_before_the_light_pass_and_oversized_buffers_are_refused() {
     };
     let err = clouds.render(&gpu, &camera, &light, None).err().unwrap();
     assert!(err.to_string().contains("light pass"), "{err}");
+    // The light pass stays for particles where they were, and is asked for again once
+    // they have moved.
+    let mut clouds = clouds;
+    clouds.light(&gpu, to_sun(), 0.0, Splat::Pieces).unwrap();
+    clouds.move_particles(&gpu, &particles).unwrap();
+    assert!(clouds.render(&gpu, &camera, &light, None).is_ok());
+    let mut moved = particles.clone();
+    moved[0].position.x += 10.0;
+    clouds.move_particles(&gpu, &moved).unwrap();
+    let err = clouds.render(&gpu, &camera, &light, None).err().unwrap();
+    assert!(err.to_string().contains("light pass"), "{err}");
     let err = GpuClouds::new(&gpu, &particles, 1024).err().unwrap();
     assert!(err.to_string().contains("resolution"), "{err}");
 }
