@@ -125,30 +125,6 @@ fn vertex(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> Bil
     return out;
 }
 
-fn cell(x: u32, z: u32, y: u32) -> f32 {
-    let n = frame.resolution;
-    return log_gamma[(x * n + z) * n + y];
-}
-
-// ln Gamma at grid coordinates g (voxel centres at integers), trilinear, clamped to
-// the grid, 0 on the sun's side of it: IntensityBuffer::sample_log_grid.
-fn log_gamma_at(g: vec3<f32>) -> f32 {
-    if g.y < -0.5 {
-        return 0.0;
-    }
-    let n = frame.resolution;
-    let last = f32(n - 1u);
-    let c = clamp(g, vec3<f32>(0.0), vec3<f32>(last));
-    let top = n - 2u;
-    let i = min(vec3<u32>(c), vec3<u32>(top));
-    let f = c - vec3<f32>(i);
-    let a = mix(cell(i.x, i.z, i.y), cell(i.x, i.z, i.y + 1u), f.y);
-    let b = mix(cell(i.x + 1u, i.z, i.y), cell(i.x + 1u, i.z, i.y + 1u), f.y);
-    let c0 = mix(cell(i.x, i.z + 1u, i.y), cell(i.x, i.z + 1u, i.y + 1u), f.y);
-    let d = mix(cell(i.x + 1u, i.z + 1u, i.y), cell(i.x + 1u, i.z + 1u, i.y + 1u), f.y);
-    return mix(mix(a, b, f.x), mix(c0, d, f.x), f.z);
-}
-
 // Particle::faded_column: the column at squared distance b2 from the centre, faded to
 // zero at the cut.
 fn faded_column(b2: f32, s: f32, density: f32) -> f32 {
@@ -271,7 +247,7 @@ fn fragment(b: Billboard) -> Colours {
     // OctaveTerms::light: the slab's diffuse light, the cloud's whole depth along the
     // sun's ray through the nearer node (IntensityBuffer::column_depth_grid).
     if params.diffuse.x > 0.0 {
-        let t = -log_gamma_at(vec3<f32>(near.x, f32(frame.resolution - 1u), near.z));
+        let t = column_depth_at(near);
         let e = params.diffuse.y;
         let profile = max((vec2<f32>(t) + l + vec2<f32>(e)) / (t + 2.0 * e), vec2<f32>(0.0));
         higher += params.diffuse.x * 0.5 * (profile.x + profile.y) * (1.0 - exp(-t)) * alpha

@@ -14,7 +14,7 @@ use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::Lighting;
 use atmo::clouds::shadow::CloudShadow;
-use atmo::clouds::sky_light::vertical_depths;
+use atmo::clouds::sky_light::{SkyDimming, VERTICAL_RESOLUTION};
 use atmo::image::Frame;
 use atmo::view::Camera;
 use glam::Vec3;
@@ -31,8 +31,8 @@ gpu_struct! {
         density: f32,
         albedo: f32,
         /// The optical depth above the centre and the cloud's whole depth on that
-        /// vertical (`atmo::clouds::sky_light::vertical_depths`), for the sky's light
-        /// inside the cloud; 0 until a draw with that light needs them.
+        /// vertical (`atmo::clouds::sky_light::vertical_depths`, made on the GPU), for
+        /// the sky's light inside the cloud; 0 until a draw with that light needs them.
         sky_depth: f32,
         sky_column: f32,
     }
@@ -59,7 +59,7 @@ gpu_struct! {
 
 gpu_struct! {
     /// The draw's camera and lighting (see clouds_draw.wgsl).
-    pub struct DrawParams in "clouds_common.wgsl clouds_draw.wgsl" {
+    pub struct DrawParams in "clouds_common.wgsl clouds_lookup.wgsl clouds_draw.wgsl" {
         position: [f32; 4],
         forward: [f32; 4],
         right: [f32; 4],
@@ -98,10 +98,13 @@ pub struct GpuClouds {
     cells: wgpu::Buffer,
     /// The light pass's frame, once it has run.
     frame: Option<BufferFrame>,
-    /// Whether the particles' records hold their depths for the sky's light.
+    /// The buffer lit from the zenith ([`VERTICAL_RESOLUTION`]^3) the particles' depths
+    /// for the sky's light are read from, and whether their records hold them.
+    sky_cells: wgpu::Buffer,
     sky_depths: Cell<bool>,
     splat: wgpu::ComputePipeline,
     prefix: wgpu::ComputePipeline,
+    sky_pass: wgpu::ComputePipeline,
     draw: wgpu::RenderPipeline,
     /// [`GpuClouds::render`]'s composite, into an RGBA f32 picture (a cell: `render`
     /// reads the cloud while it prepares the pass).
@@ -132,7 +135,7 @@ impl GpuClouds {
         }
         let particle_buffer = gpu.storage(
             "the particles",
-            bytemuck::cast_slice(&records(particles, None)),
+            bytemuck::cast_slice(&records(particles)),
             "the particle count",
         )?;
         let cells = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -143,10 +146,18 @@ impl GpuClouds {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let sky_cells = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("the buffer lit from the zenith"),
+            size: (VERTICAL_RESOLUTION as u64).pow(3) * 4,
+            // Cleared before each of its light passes.
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let module = |pass: &str| wgsl::module(gpu, &format!("clouds_common.wgsl {pass}"));
         let light = module("clouds_light.wgsl")?;
         let prefix = module("clouds_prefix.wgsl")?;
-        let draw = module("clouds_draw.wgsl")?;
+        let draw = module("clouds_lookup.wgsl clouds_draw.wgsl")?;
+        let sky_pass = module("clouds_lookup.wgsl clouds_sky_depths.wgsl")?;
         Ok(GpuClouds {
             composite: RefCell::new(CloudsPass::new(gpu, wgpu::TextureFormat::Rgba32Float)?),
             particles: particles.to_vec(),
@@ -154,9 +165,11 @@ impl GpuClouds {
             resolution: resolution as u32,
             cells,
             frame: None,
+            sky_cells,
             sky_depths: Cell::new(false),
             splat: gpu.compute_pipeline(&light, "main", None)?,
             prefix: gpu.compute_pipeline(&prefix, "main", None)?,
+            sky_pass: gpu.compute_pipeline(&sky_pass, "main", None)?,
             // Premultiplied "over": E_k = S_k + T_k E_{k-1}; into the picture and into
             // the higher octaves' target.
             draw: gpu.blended_pipeline(
@@ -191,7 +204,7 @@ impl GpuClouds {
         gpu.queue.write_buffer(
             &self.particle_buffer,
             0,
-            bytemuck::cast_slice(&records(particles, None)),
+            bytemuck::cast_slice(&records(particles)),
         );
         self.particles.copy_from_slice(particles);
         self.frame = None;
@@ -208,53 +221,99 @@ impl GpuClouds {
         forward: f32,
         splat: Splat,
     ) -> Result<Option<f64>, GpuError> {
+        let frame = self.buffer_frame(to_sun, forward, splat, self.resolution)?;
+        let time = gpu.run("the clouds' light pass", |encoder| {
+            self.record_light(gpu, encoder, &frame, &self.cells)
+        })?;
+        self.frame = Some(frame);
+        Ok(time)
+    }
+
+    /// The frame of a light pass of the particles lit from `to_sun` into a
+    /// `resolution`^3 grid.
+    fn buffer_frame(
+        &self,
+        to_sun: Vec3,
+        forward: f32,
+        splat: Splat,
+        resolution: u32,
+    ) -> Result<BufferFrame, GpuError> {
         let light = LightFrame::new(&self.particles, to_sun, forward)?;
-        let voxel = (light.max - light.min) / self.resolution as f32;
+        let voxel = (light.max - light.min) / resolution as f32;
         let row = |v: Vec3| [v.x, v.y, v.z, 0.0];
         let m = light.from_world;
-        let frame = BufferFrame {
+        Ok(BufferFrame {
             x_axis: row(m.row(0)),
             y_axis: row(m.row(1)),
             z_axis: row(m.row(2)),
             min: row(light.min),
             voxel: row(voxel),
-            resolution: self.resolution,
+            resolution,
             particles: self.particles.len() as u32,
             pieces: (splat == Splat::Pieces) as u32,
             forward_bits: forward.to_bits(),
-        };
-        let params = gpu.uniform("the buffer frame", &frame);
+        })
+    }
+
+    /// Records a light pass of `frame` into `cells` (sized for its grid).
+    fn record_light(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &BufferFrame,
+        cells: &wgpu::Buffer,
+    ) {
+        let params = gpu.uniform("the buffer frame", frame);
         let splat_group = gpu.bind_group(
             &self.splat.get_bind_group_layout(0),
             &[
                 params.as_entire_binding(),
                 self.particle_buffer.as_entire_binding(),
-                self.cells.as_entire_binding(),
+                cells.as_entire_binding(),
             ],
         );
         let prefix_group = gpu.bind_group(
             &self.prefix.get_bind_group_layout(0),
-            &[params.as_entire_binding(), self.cells.as_entire_binding()],
+            &[params.as_entire_binding(), cells.as_entire_binding()],
         );
-        let groups = |count: u32| {
-            let max = gpu.limits().max_compute_workgroups_per_dimension;
-            (count.min(max), count.div_ceil(max))
-        };
-        let time = gpu.run("the clouds' light pass", |encoder| {
-            encoder.clear_buffer(&self.cells, 0, None);
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.splat);
-            pass.set_bind_group(0, &splat_group, &[]);
-            // One workgroup a particle.
-            let (x, y) = groups(frame.particles);
-            pass.dispatch_workgroups(x, y, 1);
-            pass.set_pipeline(&self.prefix);
-            pass.set_bind_group(0, &prefix_group, &[]);
-            let (x, y) = groups((self.resolution * self.resolution).div_ceil(GROUP));
-            pass.dispatch_workgroups(x, y, 1);
-        })?;
-        self.frame = Some(frame);
-        Ok(time)
+        encoder.clear_buffer(cells, 0, None);
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&self.splat);
+        pass.set_bind_group(0, &splat_group, &[]);
+        // One workgroup a particle.
+        let (x, y) = groups(gpu, frame.particles);
+        pass.dispatch_workgroups(x, y, 1);
+        pass.set_pipeline(&self.prefix);
+        pass.set_bind_group(0, &prefix_group, &[]);
+        let (x, y) = groups(gpu, (frame.resolution * frame.resolution).div_ceil(GROUP));
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// Records what puts each particle's depths for the sky's light into its record
+    /// (`atmo::clouds::sky_light::vertical_depths`, on the GPU): a light pass from the
+    /// zenith into [`VERTICAL_RESOLUTION`]^3, read at the particles' centres.
+    fn record_sky_depths(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError> {
+        let frame = self.buffer_frame(Vec3::Y, 0.0, Splat::Pieces, VERTICAL_RESOLUTION as u32)?;
+        self.record_light(gpu, encoder, &frame, &self.sky_cells);
+        let params = gpu.uniform("the zenith's buffer frame", &frame);
+        let group = gpu.bind_group(
+            &self.sky_pass.get_bind_group_layout(0),
+            &[
+                params.as_entire_binding(),
+                self.particle_buffer.as_entire_binding(),
+                self.sky_cells.as_entire_binding(),
+            ],
+        );
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&self.sky_pass);
+        pass.set_bind_group(0, &group, &[]);
+        let (x, y) = groups(gpu, frame.particles.div_ceil(GROUP));
+        pass.dispatch_workgroups(x, y, 1);
+        Ok(())
     }
 
     /// The buffer's `ln Gamma`, `[x][z][y]`, as `IntensityBuffer::log_gamma`.
@@ -313,7 +372,14 @@ impl GpuClouds {
         camera: &Camera,
         light: &Lighting,
     ) -> Result<(), GpuError> {
-        let billboards = self.billboards(gpu, camera, light)?;
+        let dimming = light.ambient.dimming(&light.scattering);
+        let billboards = self.billboards(gpu, camera, light, &dimming)?;
+        // The sky's light inside the cloud needs each particle's depths: made once for
+        // particles where they are.
+        if !dimming.is_flat() && !self.sky_depths.get() {
+            self.record_sky_depths(gpu, encoder)?;
+            self.sky_depths.set(true);
+        }
         let size = (camera.width, camera.height);
         let [picture, higher] = match pass.targets.take() {
             Some((s, targets)) if s == size => targets,
@@ -364,6 +430,7 @@ impl GpuClouds {
         gpu: &Gpu,
         camera: &Camera,
         light: &Lighting,
+        dimming: &SkyDimming,
     ) -> Result<Billboards, GpuError> {
         let frame = self.frame.ok_or_else(|| {
             atmo::Error::Invalid("the clouds need a light pass before they are drawn".into())
@@ -396,19 +463,6 @@ impl GpuClouds {
         let focal = 0.5 * h as f32 / tan_half_height;
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
         let sky = light.ambient.scattered(light.phase, &octaves);
-        // The sky's light inside the cloud needs each particle's depths (made on the
-        // CPU, from a coarse buffer lit from the zenith, once for particles where they
-        // are).
-        let dimming = light.ambient.dimming(&octaves);
-        if !dimming.is_flat() && !self.sky_depths.get() {
-            let depths = vertical_depths(&self.particles)?;
-            gpu.queue.write_buffer(
-                &self.particle_buffer,
-                0,
-                bytemuck::cast_slice(&records(&self.particles, Some(&depths))),
-            );
-            self.sky_depths.set(true);
-        }
         // The phase function's code and parameter (functions.wgsl's phase_function).
         let (kind, g) = light.phase.code();
         let params = DrawParams {
@@ -567,21 +621,23 @@ impl CloudsPass {
 }
 
 /// The particles as the shaders read them.
-fn records(particles: &[Particle], sky_depths: Option<&[[f32; 2]]>) -> Vec<GpuParticle> {
+fn records(particles: &[Particle]) -> Vec<GpuParticle> {
     particles
         .iter()
-        .enumerate()
-        .map(|(k, p)| {
-            let [sky_depth, sky_column] = sky_depths.map_or([0.0; 2], |d| d[k]);
-            GpuParticle {
-                position_radius: [p.position.x, p.position.y, p.position.z, p.radius],
-                density: p.density,
-                albedo: p.albedo,
-                sky_depth,
-                sky_column,
-            }
+        .map(|p| GpuParticle {
+            position_radius: [p.position.x, p.position.y, p.position.z, p.radius],
+            density: p.density,
+            albedo: p.albedo,
+            sky_depth: 0.0,
+            sky_column: 0.0,
         })
         .collect()
+}
+
+/// A dispatch of `count` workgroups as (x, y), within the device's limit a dimension.
+fn groups(gpu: &Gpu, count: u32) -> (u32, u32) {
+    let max = gpu.limits().max_compute_workgroups_per_dimension;
+    (count.min(max), count.div_ceil(max))
 }
 
 /// An RGBA f32 render target of `w` x `h`, holding `background` (or black), that a

@@ -76,6 +76,14 @@ const FILES: &[(&str, &str)] = &[
         include_str!("../shaders/clouds_light.wgsl"),
     ),
     (
+        "clouds_lookup.wgsl",
+        include_str!("../shaders/clouds_lookup.wgsl"),
+    ),
+    (
+        "clouds_sky_depths.wgsl",
+        include_str!("../shaders/clouds_sky_depths.wgsl"),
+    ),
+    (
         "clouds_prefix.wgsl",
         include_str!("../shaders/clouds_prefix.wgsl"),
     ),
