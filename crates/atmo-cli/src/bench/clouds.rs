@@ -22,7 +22,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::{emit, median, report, time_gpu, time_ms, Case};
+use super::{alternated, emit, median, report, time_gpu, time_ms, Case};
 use crate::backend::gpu_error;
 
 /// Unit vector toward a sun at `elevation_deg` and `azimuth_deg` (valid values).
@@ -50,25 +50,22 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
         }
         .generate();
         for &n in sizes {
-            // The baseline at the same lateral resolution, and the buffer updated in place.
-            let harris_ms = median(
-                (0..runs.min(3))
-                    .map(|_| time_ms(|| drop(light_per_particle(&particles, to_sun, n, forward))))
-                    .collect(),
-            );
+            // The buffer updated in place for a sun a little moved each round, timed in
+            // alternation with the baseline at the same lateral resolution.
             let mut buffer = IntensityBuffer::new(&particles, to_sun, n, forward, Splat::Pieces)?;
-            let ms = median(
-                (0..runs)
-                    .map(|k| {
-                        let sun = toward_sun(20.0 + 0.01 * k as f32, 40.0);
-                        time_ms(|| {
-                            buffer
-                                .update(&particles, sun, forward, Splat::Pieces)
-                                .expect("validated")
-                        })
-                    })
-                    .collect(),
+            let mut k = 0;
+            let timing = alternated(
+                runs,
+                || {
+                    k += 1;
+                    let sun = toward_sun(20.0 + 0.01 * k as f32, 40.0);
+                    buffer
+                        .update(&particles, sun, forward, Splat::Pieces)
+                        .expect("validated")
+                },
+                || drop(light_per_particle(&particles, to_sun, n, forward)),
             );
+            let (ms, harris_ms) = (timing.case_ms, timing.baseline_ms);
             buffer.update(&particles, to_sun, 0.0, Splat::Pieces)?;
             let (pieces_err, whole_err) = if n == 128 || !quick {
                 let whole = IntensityBuffer::new(&particles, to_sun, n, 0.0, Splat::Whole)?;
@@ -82,11 +79,11 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
             emit(
                 json,
                 json!({"bench": "clouds.light-pass", "params": {"particles": count, "resolution": n, "splat": "pieces", "forward": forward},
-                       "median_ms": ms, "baseline": "clouds.harris", "baseline_median_ms": harris_ms, "ratio": harris_ms / ms,
+                       "median_ms": ms, "baseline": "clouds.harris", "baseline_median_ms": harris_ms, "ratio": timing.ratio,
                        "error": {"mean_rel": pieces_err, "mean_rel_whole_particles": whole_err}}),
                 format!(
                     "clouds.light-pass {count:>6} particles {n:>3}^3: {ms:>8.1} ms   harris {harris_ms:>8.1} ms   ratio {:>5.2}   mean error {:.2e} (paper's whole particles: {:.3})",
-                    harris_ms / ms,
+                    timing.ratio,
                     pieces_err,
                     whole_err
                 ),

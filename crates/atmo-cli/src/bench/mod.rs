@@ -125,6 +125,46 @@ pub fn time_ms(f: impl FnOnce()) -> f64 {
     start.elapsed().as_secs_f64() * 1e3
 }
 
+/// A case and its baseline timed in alternation ([`alternated`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Alternated {
+    /// The medians of the case's and the baseline's times, ms.
+    pub case_ms: f64,
+    pub baseline_ms: f64,
+    /// The median of the rounds' `baseline / case`.
+    pub ratio: f64,
+}
+
+/// Times `case` and `baseline` one after the other, `rounds` times: their medians and
+/// the median of each round's ratio. A round's two times see the same host, so on a
+/// shared one whose speed drifts within a run the ratio holds where two medians taken
+/// minutes apart do not (2026-12-04: the stage against the ray marcher timed a minute
+/// apart, 0.28 and 0.37 of its time in two runs seven minutes apart).
+pub fn alternated(rounds: usize, case: impl FnMut(), baseline: impl FnMut()) -> Alternated {
+    alternated_by(rounds, case, baseline, |f| time_ms(f))
+}
+
+/// [`alternated`] with the clock `time` (ms taken by the function it is given).
+fn alternated_by(
+    rounds: usize,
+    mut case: impl FnMut(),
+    mut baseline: impl FnMut(),
+    mut time: impl FnMut(&mut dyn FnMut()) -> f64,
+) -> Alternated {
+    let (mut cases, mut baselines, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..rounds.max(1) {
+        let (c, b) = (time(&mut case), time(&mut baseline));
+        cases.push(c);
+        baselines.push(b);
+        ratios.push(b / c);
+    }
+    Alternated {
+        case_ms: median(cases),
+        baseline_ms: median(baselines),
+        ratio: median(ratios),
+    }
+}
+
 /// Medians of `runs` GPU runs after a warm-up: (wall ms, GPU ms if timed) and the last
 /// result.
 pub(crate) fn time_gpu<T>(
@@ -202,4 +242,32 @@ pub fn emit(json: bool, mut line: Value, text: String) {
         println!("{text}");
     }
     atmo::budget::reset_peak_rss();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn alternated_rounds_pair_the_case_with_its_baseline() {
+        // A clock that reads out given times: the host slows down in the second round
+        // and is in between in the third. Each round's ratio is 3, 3 and 4 (median 3),
+        // where the two medians, 20 and 80 ms, would say 4.
+        let times = [10.0, 30.0, 40.0, 120.0, 20.0, 80.0];
+        let order = std::cell::RefCell::new(Vec::new());
+        let mut next = 0;
+        let timing = alternated_by(
+            3,
+            || order.borrow_mut().push("case"),
+            || order.borrow_mut().push("baseline"),
+            |f| {
+                f();
+                next += 1;
+                times[next - 1]
+            },
+        );
+        assert_eq!(timing.ratio, 3.0);
+        assert_eq!((timing.case_ms, timing.baseline_ms), (20.0, 80.0));
+        assert_eq!(order.into_inner(), ["case", "baseline"].repeat(3));
+    }
 }
