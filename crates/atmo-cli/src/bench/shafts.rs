@@ -15,7 +15,7 @@ use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};
 use atmo_gpu::{Gpu, Rendered};
 use serde_json::json;
 
-use super::{alternated, emit, median, report, time_gpu, time_ms, Case};
+use super::{alternated, emit, median, report, time_gpu, time_ms, Alternated, Case};
 use crate::backend::gpu_error;
 
 /// Median time of `runs` renders by the plane method after one warm-up, and the last
@@ -35,6 +35,22 @@ fn time_planes_counted(scene: &Scene, runs: usize) -> (f64, Frame, f64) {
             .collect(),
     );
     (ms, last.0, last.1.computed_share())
+}
+
+/// [`time_planes_counted`] with each render timed in turn with `baseline` (after one
+/// warm-up): the timings, the last frame and its share of computed pixels.
+fn time_planes_against(
+    scene: &Scene,
+    runs: usize,
+    baseline: impl FnMut(),
+) -> (Alternated, Frame, f64) {
+    let mut last = SamplePlanes::new(scene).render_counted();
+    let timing = alternated(
+        runs,
+        || last = SamplePlanes::new(scene).render_counted(),
+        baseline,
+    );
+    (timing, last.0, last.1.computed_share())
 }
 
 pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Result<()> {
@@ -59,16 +75,13 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
     // The scene as it loads: the scattered light computed where the picture needs it
     // (`render.adaptive`), timed in alternation with the paper's ray marcher (each after
     // a warm-up); and the paper's method, every pixel computed.
+    // The ray marcher is deterministic: its warm-up's frame is the one it draws each
+    // round.
     let baseline = RayMarcher::baseline(&fig6);
-    let mut baseline_frame = baseline.render(&fig6);
-    let mut last = SamplePlanes::new(&fig6).render_counted();
-    let fig6_timing = alternated(
-        runs,
-        || last = SamplePlanes::new(&fig6).render_counted(),
-        || baseline_frame = baseline.render(&fig6),
-    );
+    let baseline_frame = baseline.render(&fig6);
+    let ray_march = || drop(baseline.render(&fig6));
+    let (fig6_timing, frame, computed) = time_planes_against(&fig6, runs, ray_march);
     let (ms, baseline_ms) = (fig6_timing.case_ms, fig6_timing.baseline_ms);
-    let (frame, computed) = (last.0, last.1.computed_share());
     let (every_ms, every_frame) = time_planes(&every_pixel(&fig6), runs);
     let against_every = frame.level_errors(&every_frame, fig6.display)?;
     let error = frame.level_errors(&reference, fig6.display)?;
@@ -187,14 +200,8 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
 
     // The stage, timed in alternation with Fig. 6's ray marcher: its speed target is a
     // share of that baseline's time.
-    let mut last = SamplePlanes::new(&stage).render_counted();
-    let stage_timing = alternated(
-        runs,
-        || last = SamplePlanes::new(&stage).render_counted(),
-        || drop(baseline.render(&fig6)),
-    );
-    let (stage_ms, stage_frame, stage_computed) =
-        (stage_timing.case_ms, last.0, last.1.computed_share());
+    let (stage_timing, stage_frame, stage_computed) = time_planes_against(&stage, runs, ray_march);
+    let stage_ms = stage_timing.case_ms;
     let (stage_every_ms, stage_every_frame) = time_planes(&every_pixel(&stage), runs);
     let stage_against = stage_frame.level_errors(&stage_every_frame, stage.display)?;
     emit(
@@ -241,7 +248,7 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
             rebuilt += maps.rebuilt;
             k += 1;
         },
-        || drop(baseline.render(&fig6)),
+        ray_march,
     );
     let show_ms = show_timing.case_ms;
     emit(
