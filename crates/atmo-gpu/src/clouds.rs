@@ -222,8 +222,9 @@ impl GpuClouds {
         splat: Splat,
     ) -> Result<Option<f64>, GpuError> {
         let frame = self.buffer_frame(to_sun, forward, splat, self.resolution)?;
+        let params = gpu.uniform("the buffer frame", &frame);
         let time = gpu.run("the clouds' light pass", |encoder| {
-            self.record_light(gpu, encoder, &frame, &self.cells)
+            self.record_light(gpu, encoder, &frame, &params, &self.cells)
         })?;
         self.frame = Some(frame);
         Ok(time)
@@ -255,15 +256,16 @@ impl GpuClouds {
         })
     }
 
-    /// Records a light pass of `frame` into `cells` (sized for its grid).
+    /// Records a light pass of `frame` (uploaded as `params`) into `cells` (sized for
+    /// its grid).
     fn record_light(
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         frame: &BufferFrame,
+        params: &wgpu::Buffer,
         cells: &wgpu::Buffer,
     ) {
-        let params = gpu.uniform("the buffer frame", frame);
         let splat_group = gpu.bind_group(
             &self.splat.get_bind_group_layout(0),
             &[
@@ -298,8 +300,8 @@ impl GpuClouds {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         let frame = self.buffer_frame(Vec3::Y, 0.0, Splat::Pieces, VERTICAL_RESOLUTION as u32)?;
-        self.record_light(gpu, encoder, &frame, &self.sky_cells);
         let params = gpu.uniform("the zenith's buffer frame", &frame);
+        self.record_light(gpu, encoder, &frame, &params, &self.sky_cells);
         let group = gpu.bind_group(
             &self.sky_pass.get_bind_group_layout(0),
             &[
