@@ -268,8 +268,9 @@ pub fn render(
                 let t = through[j];
                 *e = light.sun * (single[j] + light.scattering.higher_share(t) * higher[j]);
                 if skylit[j] > 0.0 {
-                    let inside =
-                        dimming.below * skylit[j] + (dimming.above - dimming.below) * skytop[j];
+                    // The blobs' mean share of the light from above, weighted as
+                    // their sky light is.
+                    let inside = skylit[j] * dimming.at(skytop[j] / skylit[j]);
                     *e += inside * sky.along(ray(band * BAND * w + j));
                 }
                 *e = haze.transmittance * *e + (1.0 - t) * haze.inscatter;
