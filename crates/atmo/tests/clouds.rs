@@ -389,3 +389,60 @@ fn billboards_drawn_eight_pixels_at_a_time_keep_each_pixel_its_own() {
     }
     assert!(cut.pixels[32 * 65 + 64].x > 0.1 * brightest);
 }
+
+/// Each billboard is drawn row by row over the row's chord of its silhouette (an
+/// ellipse on the screen), not over a square around it: a blob seen near the corner of
+/// a wide view, where perspective stretches it most, still lights every pixel whose ray
+/// passes within its reach, and none whose ray passes clear of it.
+#[test]
+fn a_billboard_lights_every_pixel_within_its_reach_and_no_other() {
+    use atmo::atmosphere::PhaseFunction;
+    use atmo::clouds::render::{render, Haze, Lighting};
+    use atmo::view::{Camera, Lens};
+    // 113 deg across, 90 deg high.
+    let camera = Camera {
+        lens: Lens::Pinhole {
+            tan_half_width: 1.5,
+            tan_half_height: 1.0,
+        },
+        width: 96,
+        height: 64,
+        ..axis_camera()
+    };
+    let light = Lighting {
+        to_sun: Vec3::Y,
+        sun: Vec3::ZERO,
+        ambient: atmo::clouds::SkyLight::uniform(Vec3::ONE),
+        phase: PhaseFunction::CloudMie,
+        haze: Haze::CLEAR,
+        scattering: atmo::clouds::Octaves::SINGLE,
+    };
+    for centre in [Vec3::new(1.3, -0.85, -1.0), Vec3::new(-0.4, 0.9, -1.0)] {
+        let particles = [Particle {
+            position: 60.0 * centre,
+            radius: 12.0,
+            density: 0.05,
+            albedo: 0.9,
+        }];
+        let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.0, Splat::Pieces).unwrap();
+        let frame = render(&particles, &buffer, &camera, &light, None).unwrap();
+        let reach = particles[0].reach();
+        let mut inside = 0;
+        for y in 0..64 {
+            for x in 0..96 {
+                let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5).normalize();
+                let d = particles[0].position;
+                // The ray's distance from the centre, within or clear of the reach by 2 %.
+                let b = (d.length_squared() - d.dot(ray).powi(2)).max(0.0).sqrt();
+                let lit = frame.pixels[y * 96 + x].x > 0.0;
+                if b < 0.98 * reach {
+                    inside += 1;
+                    assert!(lit, "({x}, {y}) within the reach of {centre} and dark");
+                } else if b > 1.02 * reach {
+                    assert!(!lit, "({x}, {y}) clear of {centre} and lit");
+                }
+            }
+        }
+        assert!(inside > 100, "{inside} pixels within the reach");
+    }
+}

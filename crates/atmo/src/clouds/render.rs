@@ -192,12 +192,21 @@ pub fn render(
                 let (d2, d0, dx, dy) = (d.length_squared(), d.dot(r0), d.dot(rx), d.dot(ry));
                 let rows = ((sy - sr).floor().max(y0 as f32) as usize)
                     ..((sy + sr).ceil().min(y1) as usize);
-                let cols = ((sx - sr).floor().max(0.0) as usize)
-                    ..((sx + sr).ceil().min(w as f32) as usize);
+                let cut = d2 as f64 - (p.reach() as f64).powi(2);
                 for y in rows {
                     let yf = y as f32;
                     // What is affine in the pixel, at the row's start; per lane below.
                     let (r_y, t_y, g_y) = (r0 + yf * ry, d0 + yf * dy, g0 + yf * gy);
+                    let Some(cols) = row_span(
+                        r_y,
+                        rx,
+                        t_y,
+                        dx,
+                        cut,
+                        (sx - sr, (sx + sr).min(w as f32 - 1.0)),
+                    ) else {
+                        continue;
+                    };
                     for x in cols.clone().step_by(LANES) {
                         let i = (y - band * BAND) * w + x;
                         let xf = Lanes::splat(x as f32) + LANE_OFFSETS;
@@ -283,6 +292,44 @@ pub fn render(
             }
         });
     Ok(frame)
+}
+
+/// The pixels of a row whose rays pass within a blob's reach, of the columns `bounds`
+/// (its footprint's, continuous): the rays `r_y + x rx` (pixel `x`'s centre at `x`)
+/// with `(d . r)^2 > cut |r|^2`, `d` the centre from the eye, `d . r = t_y + x dx` and
+/// `cut = |d|^2 - reach^2 > 0`. A quadratic in `x`: the row's chord of the blob's
+/// silhouette, an ellipse on the screen where the blob is within 90 degrees of the
+/// view's axis (in double precision: its terms are squares of kilometres that nearly
+/// cancel). The chord is the drawing's own test up to its rounding (the blob's column
+/// fades to 0 at the reach); `None` where the row misses it. Drawing the chord rather
+/// than the footprint's square took the bench's frame from 357 to 316-328 ms
+/// (alternated, a host about 1.6 times slower than quiet).
+#[inline]
+fn row_span(
+    r_y: Vec3,
+    rx: Vec3,
+    t_y: f32,
+    dx: f32,
+    cut: f64,
+    bounds: (f32, f32),
+) -> Option<std::ops::Range<usize>> {
+    let (r_y, rx, t_y, dx) = (r_y.as_dvec3(), rx.as_dvec3(), t_y as f64, dx as f64);
+    // a x^2 + 2 b x + c > 0, bounded along the row where a < 0.
+    let a = dx * dx - cut * rx.length_squared();
+    let b = t_y * dx - cut * r_y.dot(rx);
+    let c = t_y * t_y - cut * r_y.length_squared();
+    let (mut lo, mut hi) = (bounds.0 as f64, bounds.1 as f64);
+    if a < 0.0 {
+        let disc = b * b - a * c;
+        if disc < 0.0 {
+            return None;
+        }
+        let root = disc.sqrt();
+        lo = lo.max((-b + root) / a);
+        hi = hi.min((-b - root) / a);
+    }
+    let (start, end) = (lo.ceil().max(0.0), hi.floor() + 1.0);
+    (start < end).then_some(start as usize..end as usize)
 }
 
 /// The lanes' offsets from the first pixel of eight along a row.
