@@ -417,9 +417,20 @@ fn a_billboard_lights_every_pixel_within_its_reach_and_no_other() {
         haze: Haze::CLEAR,
         scattering: atmo::clouds::Octaves::SINGLE,
     };
-    for centre in [Vec3::new(1.3, -0.85, -1.0), Vec3::new(-0.4, 0.9, -1.0)] {
+    // Near the corner and the top, large; and small ones, a few pixels across, placed
+    // off the pixels' centres every way.
+    let mut centres = vec![
+        60.0 * Vec3::new(1.3, -0.85, -1.0),
+        60.0 * Vec3::new(-0.4, 0.9, -1.0),
+    ];
+    for k in 0..12 {
+        let (x, y) = (k as f32 * 0.137 - 0.8, 0.5 - k as f32 * 0.083);
+        centres.push(200.0 * Vec3::new(x, y, -1.0));
+    }
+    let mut small = 0;
+    for centre in centres {
         let particles = [Particle {
-            position: 60.0 * centre,
+            position: centre,
             radius: 12.0,
             density: 0.05,
             albedo: 0.9,
@@ -443,6 +454,8 @@ fn a_billboard_lights_every_pixel_within_its_reach_and_no_other() {
                 }
             }
         }
-        assert!(inside > 100, "{inside} pixels within the reach");
+        assert!(inside > 4, "{inside} pixels within the reach");
+        small += (inside < 40) as usize;
     }
+    assert_eq!(small, 12, "the far blobs are a few pixels across");
 }
