@@ -5,12 +5,17 @@
 //! view's mean of the octaves over the path tracer's (on the cloud's pixels) and its
 //! 8 x 8 blocks within 15 %; with `--search`, a grid search over the octaves' numbers,
 //! best worst view first: how `Octaves::MULTIPLE` was chosen (docs/clouds.md, "Every
-//! order: octaves").
+//! order: octaves"). With `--floor`, the same scores for a second path-traced picture
+//! (another seed) in place of the octaves: how far a perfect model would score with
+//! the path tracer's noise. With `--oracle`, the scores of the path tracer's own first
+//! two orders (another seed) plus the octaves' higher octave and slab's light, each
+//! weighted, the best weights first: what a second order computed exactly would leave.
 //!
 //! `cargo run --release -p atmo --example fit_octaves -- [--paths N] [--search]
-//! [--octaves COUNT,A,B,C,K,D,E]` (the fields of `Octaves` in order). The path-traced pictures (48 x 28, N paths a pixel,
-//! default 32: a few minutes on two cores) are kept in the system's temporary folder
-//! and reused.
+//! [--floor] [--oracle] [--octaves COUNT,A,B,C,K,D,E]` (the fields of `Octaves` in
+//! order). The path-traced pictures (48 x 28, N paths a pixel, default 32: a few
+//! minutes on two cores for each kind) are kept in the system's temporary folder and
+//! reused.
 
 use std::path::Path;
 
@@ -36,6 +41,62 @@ struct View {
     buffer: IntensityBuffer,
     traced: Vec<f64>,
     covered: Vec<bool>,
+}
+
+impl View {
+    /// The path tracer's picture of this view with `orders` and `seed` at `paths` a
+    /// pixel, from the temporary folder when an earlier run made it.
+    fn path_traced(&self, paths: usize, orders: usize, seed: u64) -> Result<Vec<f64>> {
+        let kind = match (orders, seed) {
+            (usize::MAX, 3) => String::new(),
+            (usize::MAX, _) => format!("-seed{seed}"),
+            _ => format!("-orders{orders}-seed{seed}"),
+        };
+        let file = std::env::temp_dir()
+            .join("atmo-fit-octaves")
+            .join(format!("{}{kind}-{paths}.txt", self.name));
+        traced(&file, || {
+            eprintln!("{}{kind}: path tracing {paths} paths a pixel", self.name);
+            let reference = ReferenceCloud::new(
+                &self.particles,
+                ReferenceLight {
+                    to_sun: self.to_sun.as_dvec3(),
+                    phase: PhaseFunction::CloudMie,
+                    sky: 0.0,
+                },
+            );
+            let settings = PathSettings {
+                paths,
+                orders,
+                seed,
+            };
+            reference
+                .path_traced_picture(&self.camera, &settings)
+                .iter()
+                .map(|p| p.0)
+                .collect()
+        })
+    }
+
+    /// The cloud drawn by the billboards with `octaves`, the red channel (the sun is
+    /// white).
+    fn rendered(&self, octaves: Octaves) -> Result<Vec<f64>> {
+        let light = Lighting {
+            to_sun: self.to_sun,
+            sun: Vec3::ONE,
+            ambient: SkyLight::NONE,
+            phase: PhaseFunction::CloudMie,
+            haze: Haze::CLEAR,
+            scattering: octaves,
+        };
+        let frame = render(&self.particles, &self.buffer, &self.camera, &light, None)?;
+        Ok(frame.pixels.iter().map(|p| p.x as f64).collect())
+    }
+
+    /// How `picture` agrees with this view's path-traced picture.
+    fn agreement(&self, picture: &[f64]) -> Agreement {
+        Agreement::of(picture, &self.traced, &self.covered, SIZE.0 as usize)
+    }
 }
 
 fn main() -> Result<()> {
@@ -68,6 +129,19 @@ fn main() -> Result<()> {
         );
     }
     println!("{octaves:?}: {}", summary(&scores(&views, &octaves)?));
+    if args.iter().any(|a| a == "--floor") {
+        let scores = views
+            .iter()
+            .map(|v| Ok(v.agreement(&v.path_traced(paths, usize::MAX, 5)?)))
+            .collect::<Result<Vec<_>>>()?;
+        println!(
+            "the path tracer (seed 5) for the octaves: {}",
+            summary(&scores)
+        );
+    }
+    if args.iter().any(|a| a == "--oracle") {
+        oracle(&views, &octaves, paths)?;
+    }
     if args.iter().any(|a| a == "--search") {
         // Every candidate's worst view, views within 10 % and blocks within 15 %.
         let mut found = Vec::new();
@@ -108,6 +182,76 @@ fn main() -> Result<()> {
         for (_, _, _, o) in found.iter().take(10) {
             println!("{o:?}: {}", summary(&scores(&views, o)?));
         }
+    }
+    Ok(())
+}
+
+/// Prints the best of the path tracer's first two orders (another seed) plus `x` times
+/// the octaves' first higher octave (at `octaves`' own attenuation, or its square) and
+/// `y` times the slab's light, each as the billboards draw it with `octaves`' other
+/// numbers, over a grid of `x` and `y`: what computing the second order exactly
+/// would leave to the model.
+fn oracle(views: &[View], octaves: &Octaves, paths: usize) -> Result<()> {
+    let mut parts = Vec::new();
+    for view in views {
+        // Each part drawn alone: the billboards with it less those without it.
+        let single = view.rendered(Octaves::SINGLE)?;
+        let part = |o: Octaves| -> Result<Vec<f64>> {
+            Ok(view
+                .rendered(o)?
+                .iter()
+                .zip(&single)
+                .map(|(a, b)| a - b)
+                .collect())
+        };
+        let octave = |attenuation: f32| {
+            part(Octaves {
+                count: 2,
+                attenuation,
+                contribution: 1.0,
+                diffuse: 0.0,
+                ..*octaves
+            })
+        };
+        let slab = part(Octaves {
+            count: 1,
+            diffuse: 1.0,
+            ..*octaves
+        })?;
+        let a = octaves.attenuation;
+        let two = view.path_traced(paths, 2, 11)?;
+        parts.push((two, [octave(a)?, octave(a * a)?], slab));
+    }
+    let mut found = Vec::new();
+    for (i, attenuation) in [octaves.attenuation, octaves.attenuation.powi(2)]
+        .into_iter()
+        .enumerate()
+    {
+        for x in [0.0, 0.25, 0.5, 0.75, 1.0] {
+            for y in [0.0, 0.5, 1.0, 1.5, 2.0, 3.0] {
+                let scores: Vec<Agreement> = views
+                    .iter()
+                    .zip(&parts)
+                    .map(|(view, (two, octave, slab))| {
+                        let picture: Vec<f64> = (0..two.len())
+                            .map(|k| two[k] + x * octave[i][k] + y * slab[k])
+                            .collect();
+                        view.agreement(&picture)
+                    })
+                    .collect();
+                found.push((
+                    blocks(&scores, |s| s.blocks_within_15),
+                    format!(
+                        "two orders + {x} octave (a {attenuation}) + {y} slab: {}",
+                        summary(&scores)
+                    ),
+                ));
+            }
+        }
+    }
+    found.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (_, line) in found.iter().take(8) {
+        println!("{line}");
     }
     Ok(())
 }
@@ -163,19 +307,6 @@ fn views(paths: usize) -> Result<Vec<View>> {
                         sky: 0.0,
                     },
                 );
-                let traced = traced(&folder.join(format!("{name}-{paths}.txt")), || {
-                    let settings = PathSettings {
-                        paths,
-                        orders: usize::MAX,
-                        seed: 3,
-                    };
-                    eprintln!("{name}: path tracing {paths} paths a pixel");
-                    reference
-                        .path_traced_picture(&camera, &settings)
-                        .iter()
-                        .map(|p| p.0)
-                        .collect()
-                })?;
                 let covered = reference.covered(&camera);
                 let buffer = IntensityBuffer::new(&particles, to_sun, 128, 0.0, Splat::Pieces)?;
                 views.push(View {
@@ -184,9 +315,11 @@ fn views(paths: usize) -> Result<Vec<View>> {
                     camera: camera.clone(),
                     to_sun,
                     buffer,
-                    traced,
+                    traced: Vec::new(),
                     covered,
                 });
+                let view = views.last_mut().expect("just pushed");
+                view.traced = view.path_traced(paths, usize::MAX, 3)?;
             }
         }
     }
@@ -214,24 +347,7 @@ fn traced(file: &Path, make: impl FnOnce() -> Vec<f64>) -> Result<Vec<f64>> {
 fn scores(views: &[View], octaves: &Octaves) -> Result<Vec<Agreement>> {
     views
         .iter()
-        .map(|view| {
-            let light = Lighting {
-                to_sun: view.to_sun,
-                sun: Vec3::ONE,
-                ambient: SkyLight::NONE,
-                phase: PhaseFunction::CloudMie,
-                haze: Haze::CLEAR,
-                scattering: *octaves,
-            };
-            let frame = render(&view.particles, &view.buffer, &view.camera, &light, None)?;
-            let fast: Vec<f64> = frame.pixels.iter().map(|p| p.x as f64).collect();
-            Ok(Agreement::of(
-                &fast,
-                &view.traced,
-                &view.covered,
-                SIZE.0 as usize,
-            ))
-        })
+        .map(|view| Ok(view.agreement(&view.rendered(*octaves)?)))
         .collect()
 }
 
