@@ -10,10 +10,16 @@
 //! the path tracer's noise. With `--oracle`, the scores of the path tracer's own first
 //! two orders (another seed) plus the octaves' higher octave and slab's light, each
 //! weighted, the best weights first: what a second order computed exactly would leave.
+//! With `--transfer`, a transfer table for the orders past the first (four features of
+//! a point: its optical depths toward the sun, out of the cloud and toward the eye, and
+//! the angle to the sun) fitted by least squares to the path tracer over the views,
+//! then over two clouds and scored on the third's views: the lead past the octaves
+//! (docs/clouds.md, "Every order: octaves"), measured through the exact density, not yet
+//! through the billboards. About a minute.
 //!
 //! `cargo run --release -p atmo --example fit_octaves -- [--paths N] [--search]
-//! [--floor] [--oracle] [--octaves COUNT,A,B,C,K,D,E]` (the fields of `Octaves` in
-//! order). The path-traced pictures (48 x 28, N paths a pixel, default 32: a few
+//! [--floor] [--oracle] [--transfer] [--octaves COUNT,A,B,C,K,D,E]` (the fields of
+//! `Octaves` in order). The path-traced pictures (48 x 28, N paths a pixel, default 32: a few
 //! minutes on two cores for each kind) are kept in the system's temporary folder and
 //! reused.
 
@@ -23,7 +29,9 @@ use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, SkyLight, Splat};
 use atmo::reference::clouds::{Agreement, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
-use glam::Vec3;
+use faer::linalg::solvers::Solve;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 /// atmo's errors and the file system's.
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
@@ -57,25 +65,44 @@ impl View {
             .join(format!("{}{kind}-{paths}.txt", self.name));
         traced(&file, || {
             eprintln!("{}{kind}: path tracing {paths} paths a pixel", self.name);
-            let reference = ReferenceCloud::new(
-                &self.particles,
-                ReferenceLight {
-                    to_sun: self.to_sun.as_dvec3(),
-                    phase: PhaseFunction::CloudMie,
-                    sky: 0.0,
-                },
-            );
             let settings = PathSettings {
                 paths,
                 orders,
                 seed,
             };
-            reference
+            self.reference()
                 .path_traced_picture(&self.camera, &settings)
                 .iter()
                 .map(|p| p.0)
                 .collect()
         })
+    }
+
+    /// The single-scattering quadrature's picture of this view (kept as the path
+    /// tracer's are).
+    fn single(&self) -> Result<Vec<f64>> {
+        let file = std::env::temp_dir()
+            .join("atmo-fit-octaves")
+            .join(format!("{}-single.txt", self.name));
+        traced(&file, || {
+            self.reference()
+                .single_scattering_picture(&self.camera)
+                .iter()
+                .map(|p| p.0)
+                .collect()
+        })
+    }
+
+    /// The references' cloud, lit as the billboards' is.
+    fn reference(&self) -> ReferenceCloud<'_> {
+        ReferenceCloud::new(
+            &self.particles,
+            ReferenceLight {
+                to_sun: self.to_sun.as_dvec3(),
+                phase: PhaseFunction::CloudMie,
+                sky: 0.0,
+            },
+        )
     }
 
     /// The cloud drawn by the billboards with `octaves`, the red channel (the sun is
@@ -141,6 +168,9 @@ fn main() -> Result<()> {
     }
     if args.iter().any(|a| a == "--oracle") {
         oracle(&views, &octaves, paths)?;
+    }
+    if args.iter().any(|a| a == "--transfer") {
+        transfer(&views)?;
     }
     if args.iter().any(|a| a == "--search") {
         // Every candidate's worst view, views within 10 % and blocks within 15 %.
@@ -254,6 +284,171 @@ fn oracle(views: &[View], octaves: &Octaves, paths: usize) -> Result<()> {
         println!("{line}");
     }
     Ok(())
+}
+
+/// The transfer table's axes: the optical depth toward the sun, the least optical
+/// depth out of the cloud along the six axes (how deep the point lies), the cosine
+/// between the sun's and the view's directions, and the optical depth toward the eye.
+const TRANSFER_AXES: [&[f64]; 4] = [
+    &[0.0, 0.5, 1.5, 4.0, 10.0, 30.0],
+    &[0.0, 0.5, 1.5, 4.0, 10.0],
+    &[-1.0, -0.5, 0.0, 0.5, 0.8, 1.0],
+    &[0.0, 1.0, 3.0, 8.0],
+];
+
+/// A transfer table for the orders past the first, fitted to the path tracer: each
+/// pixel is the quadrature's single scattering plus
+/// `integral T_eye sigma_s F(features) dt` along its ray through the particles' exact
+/// density (64 steps), `F` multilinear over [`TRANSFER_AXES`] and its 720 values fitted
+/// by least squares (a little ridge) to the path tracer's light less single scattering,
+/// over every view, then over the views of two clouds and scored on the third's.
+fn transfer(views: &[View]) -> Result<()> {
+    let rows: Vec<Vec<Vec<(usize, f64)>>> = views.iter().map(transfer_rows).collect();
+    let singles = views.iter().map(View::single).collect::<Result<Vec<_>>>()?;
+    let clouds = ["c200", "c2000", "c9382"];
+    for held_out in [None, Some("c2000"), Some("c200")] {
+        let trained = |v: &View| held_out.is_none_or(|c| !v.name.starts_with(&format!("{c}-")));
+        let n: usize = TRANSFER_AXES.iter().map(|a| a.len()).product();
+        let (mut ata, mut atb) = (faer::Mat::<f64>::zeros(n, n), faer::Mat::<f64>::zeros(n, 1));
+        for ((view, rows), single) in views.iter().zip(&rows).zip(&singles) {
+            if !trained(view) {
+                continue;
+            }
+            for (k, row) in rows.iter().enumerate().filter(|(k, _)| view.covered[*k]) {
+                let target = view.traced[k] - single[k];
+                for &(i, wi) in row {
+                    atb[(i, 0)] += wi * target;
+                    for &(j, wj) in row {
+                        ata[(i, j)] += wi * wj;
+                    }
+                }
+            }
+        }
+        let ridge = 1e-6 * (0..n).map(|i| ata[(i, i)]).sum::<f64>() / n as f64;
+        (0..n).for_each(|i| ata[(i, i)] += ridge);
+        let table = ata
+            .llt(faer::Side::Lower)
+            .map_err(|e| format!("{e:?}"))?
+            .solve(&atb);
+        let score = |fitted: bool| {
+            let scores: Vec<Agreement> = views
+                .iter()
+                .zip(&rows)
+                .zip(&singles)
+                .filter(|((v, _), _)| trained(v) == fitted)
+                .map(|((view, rows), single)| {
+                    let picture: Vec<f64> = rows
+                        .iter()
+                        .zip(single)
+                        .map(|(row, s)| {
+                            s + row.iter().map(|&(i, w)| w * table[(i, 0)]).sum::<f64>()
+                        })
+                        .collect();
+                    view.agreement(&picture)
+                })
+                .collect();
+            summary(&scores)
+        };
+        match held_out {
+            None => println!(
+                "transfer table fitted to all of {clouds:?}: {}",
+                score(true)
+            ),
+            Some(c) => println!(
+                "transfer table fitted without {c}: on the others {}; on {c} {}",
+                score(true),
+                score(false)
+            ),
+        }
+    }
+    Ok(())
+}
+
+/// Each pixel's row of the transfer table's least squares: the weight of each of its
+/// values in the pixel (merged, sparse).
+fn transfer_rows(view: &View) -> Vec<Vec<(usize, f64)>> {
+    let reference = view.reference();
+    let volume = &reference.volume;
+    let to_sun = view.to_sun.as_dvec3();
+    let axes = [
+        DVec3::X,
+        DVec3::NEG_X,
+        DVec3::Y,
+        DVec3::NEG_Y,
+        DVec3::Z,
+        DVec3::NEG_Z,
+    ];
+    let depth = |p: DVec3, toward: DVec3| -volume.transmittance(p, toward).max(1e-300).ln();
+    (0..(SIZE.0 * SIZE.1) as usize)
+        .into_par_iter()
+        .map(|k| {
+            let (x, y) = (
+                (k % SIZE.0 as usize) as f32 + 0.5,
+                (k / SIZE.0 as usize) as f32 + 0.5,
+            );
+            let origin = view.camera.position.as_dvec3();
+            let dir = view.camera.ray(x, y).as_dvec3().normalize();
+            let ray = volume.ray(origin, dir);
+            let mut row = std::collections::BTreeMap::<usize, f64>::new();
+            let Some((a, b)) = ray.span() else {
+                return Vec::new();
+            };
+            let h = (b - a) / 64.0;
+            let mut eye = ray.depth(0.0, a);
+            for i in 0..64 {
+                let t = a + (i as f64 + 0.5) * h;
+                let piece = ray.depth(t - 0.5 * h, t + 0.5 * h);
+                let (sigma, scattering) = ray.extinction(t);
+                if sigma > 0.0 && eye < 10.0 {
+                    // What the step scatters toward the eye, per unit F.
+                    let weight = scattering / sigma * (-eye).exp() * -(-piece).exp_m1();
+                    let p = origin + dir * t;
+                    let deepest = axes
+                        .iter()
+                        .map(|&d| depth(p, d))
+                        .fold(f64::INFINITY, f64::min);
+                    let features = [
+                        depth(p, to_sun),
+                        deepest,
+                        to_sun.dot(dir),
+                        eye + 0.5 * piece,
+                    ];
+                    let hats = features
+                        .into_iter()
+                        .zip(TRANSFER_AXES)
+                        .map(|(v, e)| hat(e, v));
+                    let hats: Vec<[(usize, f64); 2]> = hats.collect();
+                    for corner in 0..16usize {
+                        let (mut index, mut w) = (0, weight);
+                        for (axis, (hat, edges)) in hats.iter().zip(TRANSFER_AXES).enumerate() {
+                            let (i, f) = hat[(corner >> axis) & 1];
+                            index = index * edges.len() + i;
+                            w *= f;
+                        }
+                        if w > 0.0 {
+                            *row.entry(index).or_default() += w;
+                        }
+                    }
+                }
+                eye += piece;
+            }
+            row.into_iter().collect()
+        })
+        .collect()
+}
+
+/// The two nodes of `edges` around `v` and their linear weights (the end node alone
+/// outside).
+fn hat(edges: &[f64], v: f64) -> [(usize, f64); 2] {
+    let last = edges.len() - 1;
+    match edges.iter().position(|&e| v <= e) {
+        Some(0) => [(0, 1.0), (0, 0.0)],
+        Some(i) => {
+            let f = (v - edges[i - 1]) / (edges[i] - edges[i - 1]);
+            [(i - 1, 1.0 - f), (i, f)]
+        }
+        None => [(last, 1.0), (last, 0.0)],
+    }
 }
 
 /// The 36 views, each with its path-traced picture (from the temporary folder when an
