@@ -459,3 +459,55 @@ fn a_billboard_lights_every_pixel_within_its_reach_and_no_other() {
     }
     assert_eq!(small, 12, "the far blobs are a few pixels across");
 }
+
+/// The depths down the vertical given to the drawing are one per particle where the
+/// sky's light is dimmed inside the cloud (a brighter sky above than below), the same
+/// picture as `render` makes with its own; where it is not dimmed they are not read.
+#[test]
+fn depths_given_to_the_drawing_are_one_per_particle_where_the_sky_is_dimmed() {
+    use atmo::atmosphere::PhaseFunction;
+    use atmo::clouds::render::{dims_the_sky, render, render_with_depths, Haze, Lighting};
+    use atmo::clouds::{vertical_depths, Octaves, SkyLight};
+    let particles = cloud(60);
+    let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.0, Splat::Pieces).unwrap();
+    let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / 60.0;
+    let camera = atmo::view::Camera::look_at(
+        centre + Vec3::new(0.0, 200.0, -1500.0),
+        centre,
+        Vec3::Y,
+        atmo::view::Fov::Vertical(30.0),
+        (32, 18),
+    )
+    .unwrap();
+    let mut sh = [[0.0; 3]; 9];
+    sh[0] = [1.0; 3];
+    sh[1] = [0.8; 3];
+    let light = Lighting {
+        to_sun: Vec3::Y,
+        sun: Vec3::ONE,
+        ambient: SkyLight::from_harmonics(&sh),
+        phase: PhaseFunction::CloudMie,
+        haze: Haze::CLEAR,
+        scattering: Octaves::MULTIPLE,
+    };
+    assert!(dims_the_sky(&light));
+    let depths = vertical_depths(&particles).unwrap();
+    let given = render_with_depths(&particles, &depths, &buffer, &camera, &light, None).unwrap();
+    let own = render(&particles, &buffer, &camera, &light, None).unwrap();
+    assert!(own.pixels.iter().any(|p| p.x > 0.0), "the cloud in the picture");
+    assert!(given.pixels == own.pixels);
+    let message = render_with_depths(&particles, &depths[1..], &buffer, &camera, &light, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("59 vertical depths given for 60 particles"),
+        "{message}"
+    );
+    // A sky alike all round is not dimmed: no depths needed.
+    let flat = Lighting {
+        ambient: SkyLight::uniform(Vec3::ONE),
+        ..light
+    };
+    assert!(!dims_the_sky(&flat));
+    render_with_depths(&particles, &[], &buffer, &camera, &flat, None).unwrap();
+}

@@ -1,6 +1,7 @@
 //! `atmo clouds`: a particle cloud lit by the sun through the 3-D intensity buffer,
 //! drawn as billboards; still or animated (the sun moving, or the wind).
 
+use std::cell::{Ref, RefCell};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -10,9 +11,9 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::files;
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{render, Haze, Lighting};
+use atmo::clouds::render::{dims_the_sky, render_with_depths, Haze, Lighting};
 use atmo::clouds::shadow::{CloudShadow, Ground};
-use atmo::clouds::{Octaves, SkyLight};
+use atmo::clouds::{vertical_depths, Octaves, SkyLight};
 use atmo::error::check_range;
 use atmo::files::check_folder;
 use atmo::image::{Display, Frame, ImageKind};
@@ -257,10 +258,38 @@ pub const WIND_STEP_S: f32 = 4.0;
 
 /// The light pass and the drawing, on the CPU or on a GPU.
 enum Renderer {
-    /// The buffer and its resolution (none before the first light pass).
-    Cpu(Option<IntensityBuffer>, usize),
+    /// The buffer and its resolution (none before the first light pass), and the
+    /// particles' depths down the vertical for the sky's light inside the cloud.
+    Cpu(Option<IntensityBuffer>, usize, KeptDepths),
     /// The device and the cloud on it.
     Gpu(Box<(Gpu, GpuClouds)>),
+}
+
+/// The particles' depths down the vertical ([`vertical_depths`]) and the particles they
+/// were made for: they depend on the particles alone, so frames of the same particles
+/// under a moving sun or camera (`--animate sun`, the window) make them once. (The GPU
+/// keeps its own in the particles' records.)
+#[derive(Default)]
+struct KeptDepths(RefCell<Option<(Vec<Particle>, Depths)>>);
+
+/// Each particle's `[tau, T]` down the vertical.
+type Depths = Vec<[f32; 2]>;
+
+impl KeptDepths {
+    /// The depths of `particles`, made again only where they are not those last given.
+    fn of(&self, particles: &[Particle]) -> Result<Ref<'_, [[f32; 2]]>> {
+        let stale = self
+            .0
+            .borrow()
+            .as_ref()
+            .is_none_or(|(kept, _)| kept != particles);
+        if stale {
+            *self.0.borrow_mut() = Some((particles.to_vec(), vertical_depths(particles)?));
+        }
+        Ok(Ref::map(self.0.borrow(), |kept| {
+            kept.as_ref().expect("made above").1.as_slice()
+        }))
+    }
 }
 
 impl Renderer {
@@ -271,7 +300,7 @@ impl Renderer {
                 gpu.clone(),
                 GpuClouds::new(gpu, &cloud.particles, cloud.resolution).map_err(gpu_error)?,
             ))),
-            None => Renderer::Cpu(None, cloud.resolution),
+            None => Renderer::Cpu(None, cloud.resolution, KeptDepths::default()),
         })
     }
 
@@ -284,8 +313,8 @@ impl Renderer {
         splat: Splat,
     ) -> Result<()> {
         match self {
-            Renderer::Cpu(Some(buffer), _) => buffer.update(particles, to_sun, forward, splat)?,
-            Renderer::Cpu(buffer, resolution) => {
+            Renderer::Cpu(Some(buffer), ..) => buffer.update(particles, to_sun, forward, splat)?,
+            Renderer::Cpu(buffer, resolution, _) => {
                 *buffer = Some(IntensityBuffer::new(
                     particles,
                     to_sun,
@@ -313,9 +342,13 @@ impl Renderer {
         background: Option<&Frame>,
     ) -> Result<Frame> {
         Ok(match self {
-            Renderer::Cpu(buffer, _) => {
+            Renderer::Cpu(buffer, _, kept) => {
                 let buffer = buffer.as_ref().expect("a light pass comes first");
-                render(particles, buffer, camera, light, background)?
+                let depths = dims_the_sky(light)
+                    .then(|| kept.of(particles))
+                    .transpose()?;
+                let depths = depths.as_deref().unwrap_or_default();
+                render_with_depths(particles, depths, buffer, camera, light, background)?
             }
             Renderer::Gpu(on) => {
                 let (gpu, clouds) = &**on;
@@ -962,7 +995,11 @@ impl WindowClouds {
         let coarse = preview && gpu.is_none();
         if coarse && self.preview.is_none() {
             let resolution = (cloud.resolution / PREVIEW_COARSENING).max(PREVIEW_MIN_RESOLUTION);
-            let renderer = Renderer::Cpu(None, resolution.min(cloud.resolution));
+            let renderer = Renderer::Cpu(
+                None,
+                resolution.min(cloud.resolution),
+                KeptDepths::default(),
+            );
             self.preview = Some(unlit(renderer, SHADOW_RESOLUTION / PREVIEW_COARSENING));
         }
         let on_gpu = gpu.is_some();
@@ -1135,7 +1172,7 @@ mod tests {
 
     /// The buffer's resolution and the shadow map's of a renderer that was lit.
     fn resolutions(lit: &Lit) -> (usize, usize) {
-        let Renderer::Cpu(Some(buffer), _) = &lit.renderer else {
+        let Renderer::Cpu(Some(buffer), ..) = &lit.renderer else {
             panic!("a CPU renderer, lit");
         };
         let shadow = lit.shadow.as_ref().expect("a ground, so a shadow map");
@@ -1173,5 +1210,49 @@ mod tests {
                 .unwrap();
             assert!(whole.pixels == fresh.pixels, "change {change}");
         }
+    }
+
+    /// With the sky's light dimmed inside the cloud, a window on the CPU keeps the
+    /// particles' depths down the vertical while only the sun moves and makes them again
+    /// once the wind has moved the particles: each picture is a fresh window's, bit for
+    /// bit.
+    #[test]
+    fn the_sky_depths_are_kept_while_the_particles_stay() {
+        let args = "clouds --generate cumulus --particles 300 --resolution 32 --sky \
+                    --width 48 --height 27";
+        let cloud = || {
+            Cloud::new(
+                &Flags::try_parse_from(args.split_whitespace())
+                    .unwrap()
+                    .still,
+            )
+        };
+        let size = (48, 27);
+        let fresh = |p: &CloudParams| WindowClouds::new(cloud().unwrap()).draw(p, size, false);
+        let mut window = WindowClouds::new(cloud().unwrap());
+        let kept = |window: &WindowClouds| {
+            let Some((_, lit)) = &window.whole else {
+                panic!("drawn");
+            };
+            let Renderer::Cpu(_, _, kept) = &lit.renderer else {
+                panic!("on the CPU");
+            };
+            let depths = kept.0.borrow().as_ref().expect("made").1.as_ptr();
+            depths
+        };
+        let mut p = window.params();
+        window.draw(&p, size, false).unwrap();
+        let first = kept(&window);
+        p.sun_azimuth_deg += 30.0;
+        let lit = window.draw(&p, size, false).unwrap();
+        assert_eq!(
+            kept(&window),
+            first,
+            "the same depths for the same particles"
+        );
+        assert!(lit.pixels == fresh(&p).unwrap().pixels);
+        p.wind_s = 120.0;
+        let blown = window.draw(&p, size, false).unwrap();
+        assert!(blown.pixels == fresh(&p).unwrap().pixels);
     }
 }

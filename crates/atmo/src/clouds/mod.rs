@@ -23,9 +23,9 @@ pub use buffer::{IntensityBuffer, Splat};
 pub use generator::Cumulus;
 pub use octaves::Octaves;
 pub use particles::Particle;
-pub use render::{render, Haze, Lighting};
+pub use render::{dims_the_sky, render, render_with_depths, Haze, Lighting};
 pub use shadow::CloudShadow;
-pub use sky_light::{SkyDimming, SkyLight};
+pub use sky_light::{vertical_depths, SkyDimming, SkyLight};
 
 /// Eight values of the drawing's per-pixel quantities, one per pixel of a billboard's
 /// row: the hot loop of [`render`](mod@render) takes a row eight pixels at a time, its

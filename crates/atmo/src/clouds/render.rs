@@ -22,7 +22,7 @@ use super::particles::{tabulated_emission_nodes_lanes, Particle};
 use super::sky_light::{vertical_depths, SkyLight};
 use super::{Lanes, LANES};
 use crate::atmosphere::phase::PhaseFunction;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::image::Frame;
 use crate::view::Camera;
 
@@ -80,6 +80,33 @@ pub fn render(
     light: &Lighting,
     background: Option<&Frame>,
 ) -> Result<Frame> {
+    let depths = if dims_the_sky(light) {
+        vertical_depths(particles)?
+    } else {
+        Vec::new()
+    };
+    render_with_depths(particles, &depths, buffer, camera, light, background)
+}
+
+/// Whether `light` dims the sky's light inside the cloud, and so needs the particles'
+/// depths down the vertical ([`render_with_depths`]).
+pub fn dims_the_sky(light: &Lighting) -> bool {
+    !light.ambient.dimming(&light.scattering).is_flat()
+}
+
+/// [`render`] with the particles' depths down the vertical given ([`vertical_depths`],
+/// one per particle), for a caller that draws the same particles again under another
+/// sun or from another camera: they depend on the particles alone, and making them
+/// costs tens of milliseconds for 60,134 particles. Not read (and may be empty) where
+/// the sky's light is not dimmed ([`dims_the_sky`]).
+pub fn render_with_depths(
+    particles: &[Particle],
+    depths: &[[f32; 2]],
+    buffer: &IntensityBuffer,
+    camera: &Camera,
+    light: &Lighting,
+    background: Option<&Frame>,
+) -> Result<Frame> {
     let (w, h) = (camera.width as usize, camera.height as usize);
     let (_, tan_half_height) = camera.pinhole("the clouds' billboards")?;
     let focal = 0.5 * h as f32 / tan_half_height;
@@ -130,11 +157,14 @@ pub fn render(
     let dimming = light.ambient.dimming(&light.scattering);
     let top_shares: Vec<f32> = if dimming.is_flat() {
         vec![0.0; particles.len()]
+    } else if depths.len() != particles.len() {
+        return Err(Error::Invalid(format!(
+            "{} vertical depths given for {} particles",
+            depths.len(),
+            particles.len()
+        )));
     } else {
-        vertical_depths(particles)?
-            .into_iter()
-            .map(|d| dimming.top_share(d))
-            .collect()
+        depths.iter().map(|&d| dimming.top_share(d)).collect()
     };
     let octaves = light.scattering.terms();
     let mut frame = Frame::new(camera.width, camera.height);
