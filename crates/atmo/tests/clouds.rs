@@ -494,7 +494,10 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_the_sky_is_dimmed() {
     let depths = vertical_depths(&particles).unwrap();
     let given = render_with_depths(&particles, &depths, &buffer, &camera, &light, None).unwrap();
     let own = render(&particles, &buffer, &camera, &light, None).unwrap();
-    assert!(own.pixels.iter().any(|p| p.x > 0.0), "the cloud in the picture");
+    assert!(
+        own.pixels.iter().any(|p| p.x > 0.0),
+        "the cloud in the picture"
+    );
     assert!(given.pixels == own.pixels);
     let message = render_with_depths(&particles, &depths[1..], &buffer, &camera, &light, None)
         .unwrap_err()

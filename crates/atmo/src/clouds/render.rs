@@ -327,15 +327,16 @@ pub fn render_with_depths(
 }
 
 /// The pixels of a row whose rays pass within a blob's reach, of those whose centres
-/// are within `bounds` (its footprint's, continuous): the rays `r_y + x rx` (pixel `x`'s centre at `x`)
-/// with `(d . r)^2 > cut |r|^2`, `d` the centre from the eye, `d . r = t_y + x dx` and
-/// `cut = |d|^2 - reach^2 > 0`. A quadratic in `x`: the row's chord of the blob's
-/// silhouette, an ellipse on the screen where the blob is within 90 degrees of the
-/// view's axis (in double precision: its terms are squares of kilometres that nearly
-/// cancel). The chord is the drawing's own test up to its rounding (the blob's column
-/// fades to 0 at the reach); `None` where the row misses it. Drawing the chord rather
-/// than the footprint's square takes the bench's frame from 358, 387 and 363 ms to 337,
-/// 353 and 344 (alternated, a host about 1.6 times slower than quiet): 6 %.
+/// are within `bounds` (its footprint's, continuous): the rays `r_y + x rx` (pixel
+/// `x`'s centre at `x`) with `(d . r)^2 > cut |r|^2`, `d` the centre from the eye,
+/// `d . r = t_y + x dx` and `cut = |d|^2 - reach^2 > 0`. A quadratic in `x`: the row's
+/// chord of the blob's silhouette, an ellipse on the screen where the blob is within
+/// 90 degrees of the view's axis (in double precision: its terms are squares of
+/// kilometres that nearly cancel). The chord is the drawing's own test up to its
+/// rounding (the blob's column fades to 0 at the reach); `None` where the row misses
+/// it. Drawing the chord rather than the footprint's square takes the bench's frame
+/// from 358, 387 and 363 ms to 337, 353 and 344 (alternated, a host about 1.6 times
+/// slower than quiet): 6 %.
 #[inline]
 fn row_span(
     r_y: Vec3,
