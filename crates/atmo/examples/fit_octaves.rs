@@ -14,8 +14,8 @@
 //! a point: its optical depths toward the sun, out of the cloud and toward the eye, and
 //! the angle to the sun) fitted by least squares to the path tracer over the views,
 //! then over two clouds and scored on the third's views: the lead past the octaves
-//! (docs/clouds.md, "Every order: octaves"), measured through the exact density, not yet
-//! through the billboards. About a minute.
+//! (docs/clouds.md, "Every order: octaves"), measured through the exact density and
+//! through the billboards. About a minute and a half.
 //!
 //! `cargo run --release -p atmo --example fit_octaves -- [--paths N] [--search]
 //! [--floor] [--oracle] [--transfer] [--octaves COUNT,A,B,C,K,D,E]` (the fields of
@@ -26,6 +26,8 @@
 use std::path::Path;
 
 use atmo::atmosphere::PhaseFunction;
+use atmo::clouds::octaves::Emission;
+use atmo::clouds::particles::emission_nodes;
 use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, SkyLight, Splat};
 use atmo::reference::clouds::{Agreement, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
@@ -297,25 +299,54 @@ const TRANSFER_AXES: [&[f64]; 4] = [
 ];
 
 /// A transfer table for the orders past the first, fitted to the path tracer: each
-/// pixel is the quadrature's single scattering plus
-/// `integral T_eye sigma_s F(features) dt` along its ray through the particles' exact
-/// density (64 steps), `F` multilinear over [`TRANSFER_AXES`] and its 720 values fitted
-/// by least squares (a little ridge) to the path tracer's light less single scattering,
-/// over every view, then over the views of two clouds and scored on the third's.
+/// pixel is a single scattering plus the table's light, `F(features)` times what each
+/// piece of the pixel's ray scatters toward the eye, `F` multilinear over
+/// [`TRANSFER_AXES`] and its 720 values fitted by least squares (a little ridge) to the
+/// path tracer's light less that single scattering: over every view, then over the
+/// views of two clouds and scored on the third's. Two ways: through the particles'
+/// exact density (64 steps a ray, the quadrature's single scattering), and through the
+/// billboards as `render` composites them (each blob's features at its emission nodes,
+/// the billboards' own single scattering; drawn here one pixel at a time in double
+/// precision, as a fit needs each pixel's weight of every value of the table).
 fn transfer(views: &[View]) -> Result<()> {
-    let rows: Vec<Vec<Vec<(usize, f64)>>> = views.iter().map(transfer_rows).collect();
-    let singles = views.iter().map(View::single).collect::<Result<Vec<_>>>()?;
-    let clouds = ["c200", "c2000", "c9382"];
+    let exact: Vec<Transfer> = views
+        .iter()
+        .map(|v| {
+            Ok(Transfer {
+                single: v.single()?,
+                rows: transfer_rows(v),
+            })
+        })
+        .collect::<Result<_>>()?;
+    fit_transfer(views, &exact, "through the exact density")?;
+    let billboards = views
+        .iter()
+        .map(billboard_rows)
+        .collect::<Result<Vec<_>>>()?;
+    fit_transfer(views, &billboards, "through the billboards")
+}
+
+/// One view's pictures for a transfer table: single scattering, and each pixel's weight
+/// of every value of the table (merged, sparse).
+struct Transfer {
+    single: Vec<f64>,
+    rows: Vec<Vec<(usize, f64)>>,
+}
+
+/// Fits the table to `pictures` (one per view) and prints its scores.
+fn fit_transfer(views: &[View], pictures: &[Transfer], how: &str) -> Result<()> {
+    let n: usize = TRANSFER_AXES.iter().map(|a| a.len()).product();
     for held_out in [None, Some("c2000"), Some("c200")] {
         let trained = |v: &View| held_out.is_none_or(|c| !v.name.starts_with(&format!("{c}-")));
-        let n: usize = TRANSFER_AXES.iter().map(|a| a.len()).product();
         let (mut ata, mut atb) = (faer::Mat::<f64>::zeros(n, n), faer::Mat::<f64>::zeros(n, 1));
-        for ((view, rows), single) in views.iter().zip(&rows).zip(&singles) {
-            if !trained(view) {
-                continue;
-            }
-            for (k, row) in rows.iter().enumerate().filter(|(k, _)| view.covered[*k]) {
-                let target = view.traced[k] - single[k];
+        for (view, picture) in views.iter().zip(pictures).filter(|(v, _)| trained(v)) {
+            for (k, row) in picture
+                .rows
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| view.covered[*k])
+            {
+                let target = view.traced[k] - picture.single[k];
                 for &(i, wi) in row {
                     atb[(i, 0)] += wi * target;
                     for &(j, wj) in row {
@@ -333,29 +364,29 @@ fn transfer(views: &[View]) -> Result<()> {
         let score = |fitted: bool| {
             let scores: Vec<Agreement> = views
                 .iter()
-                .zip(&rows)
-                .zip(&singles)
-                .filter(|((v, _), _)| trained(v) == fitted)
-                .map(|((view, rows), single)| {
-                    let picture: Vec<f64> = rows
+                .zip(pictures)
+                .filter(|(v, _)| trained(v) == fitted)
+                .map(|(view, picture)| {
+                    let drawn: Vec<f64> = picture
+                        .rows
                         .iter()
-                        .zip(single)
+                        .zip(&picture.single)
                         .map(|(row, s)| {
                             s + row.iter().map(|&(i, w)| w * table[(i, 0)]).sum::<f64>()
                         })
                         .collect();
-                    view.agreement(&picture)
+                    view.agreement(&drawn)
                 })
                 .collect();
             summary(&scores)
         };
         match held_out {
             None => println!(
-                "transfer table fitted to all of {clouds:?}: {}",
+                "transfer table {how}, fitted to every view: {}",
                 score(true)
             ),
             Some(c) => println!(
-                "transfer table fitted without {c}: on the others {}; on {c} {}",
+                "transfer table {how}, fitted without {c}: on the others {}; on {c} {}",
                 score(true),
                 score(false)
             ),
@@ -364,20 +395,116 @@ fn transfer(views: &[View]) -> Result<()> {
     Ok(())
 }
 
-/// Each pixel's row of the transfer table's least squares: the weight of each of its
-/// values in the pixel (merged, sparse).
+/// Adds `weight` times the table's multilinear weights at `features` to `row`.
+fn add_to_row(row: &mut std::collections::BTreeMap<usize, f64>, features: [f64; 4], weight: f64) {
+    let hats = features
+        .into_iter()
+        .zip(TRANSFER_AXES)
+        .map(|(v, e)| hat(e, v));
+    let hats: Vec<[(usize, f64); 2]> = hats.collect();
+    for corner in 0..16usize {
+        let (mut index, mut w) = (0, weight);
+        for (axis, (hat, edges)) in hats.iter().zip(TRANSFER_AXES).enumerate() {
+            let (i, f) = hat[(corner >> axis) & 1];
+            index = index * edges.len() + i;
+            w *= f;
+        }
+        if w > 0.0 {
+            *row.entry(index).or_default() += w;
+        }
+    }
+}
+
+/// The six axes along which the depth out of the cloud is taken.
+const AXES_OUT: [Vec3; 6] = [
+    Vec3::X,
+    Vec3::NEG_X,
+    Vec3::Y,
+    Vec3::NEG_Y,
+    Vec3::Z,
+    Vec3::NEG_Z,
+];
+
+/// [`Transfer`] through the billboards: front to back as `render` draws them, each
+/// blob's single scattering by `Octaves::SINGLE` at its emission nodes and its weight
+/// of the table, `albedo (1 - e^-tau)` times what gets through in front, at the nodes'
+/// mean depth toward the sun, its particle's least depth out of the cloud (at its
+/// centre, from intensity buffers lit along the six axes at 64^3), the pixel's angle to
+/// the sun and the depth in front of it and half its own.
+fn billboard_rows(view: &View) -> Result<Transfer> {
+    let particles = &view.particles;
+    let mut deepest = vec![f32::INFINITY; particles.len()];
+    for axis in AXES_OUT {
+        let buffer = IntensityBuffer::new(particles, axis, 64, 0.0, Splat::Pieces)?;
+        for (d, p) in deepest.iter_mut().zip(particles) {
+            *d = d.min(-buffer.sample_log_grid(buffer.grid_coordinates(p.position)));
+        }
+    }
+    let camera = &view.camera;
+    let depth = |k: usize| camera.depth(particles[k].position);
+    let mut order: Vec<usize> = (0..particles.len())
+        .filter(|&k| depth(k) > particles[k].reach())
+        .collect();
+    order.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)));
+    let (single, rows) = (0..(SIZE.0 * SIZE.1) as usize)
+        .into_par_iter()
+        .map(|k| {
+            let (x, y) = (
+                (k % SIZE.0 as usize) as f32 + 0.5,
+                (k / SIZE.0 as usize) as f32 + 0.5,
+            );
+            let ray = camera.ray(x, y).normalize();
+            let cos = view.to_sun.dot(ray);
+            let phase = PhaseFunction::CloudMie.eval_f32(cos);
+            let (mut through, mut single) = (1.0f64, 0.0f64);
+            let mut row = std::collections::BTreeMap::new();
+            for &i in &order {
+                let p = &particles[i];
+                let d = p.position - camera.position;
+                let t = d.dot(ray);
+                let tau = p.faded_column((d.length_squared() - t * t).max(0.0));
+                if tau <= 0.0 {
+                    continue;
+                }
+                let [(u0, l0), (u1, l1)] = emission_nodes(tau);
+                let at = |l: f32| {
+                    let point = camera.position + ray * (t + l * p.sigma());
+                    view.buffer
+                        .sample_log_grid(view.buffer.grid_coordinates(point))
+                };
+                let log_gamma = [at(l0), at(l1)];
+                let emission = Emission {
+                    tau,
+                    u: [u0, u1],
+                    log_gamma,
+                    slab: 0.0,
+                };
+                let lit = through * p.albedo as f64;
+                single += lit * Octaves::SINGLE.light(phase, &emission).single as f64;
+                let tau = tau as f64;
+                let features = [
+                    -0.5 * (log_gamma[0] + log_gamma[1]) as f64,
+                    deepest[i] as f64,
+                    cos as f64,
+                    -through.ln() + 0.5 * tau,
+                ];
+                add_to_row(&mut row, features, lit * -(-tau).exp_m1());
+                through *= (-tau).exp();
+                if through < 1e-3 {
+                    break;
+                }
+            }
+            (single, row.into_iter().collect())
+        })
+        .unzip();
+    Ok(Transfer { single, rows })
+}
+
+/// [`Transfer::rows`] through the particles' exact density, 64 steps a ray.
 fn transfer_rows(view: &View) -> Vec<Vec<(usize, f64)>> {
     let reference = view.reference();
     let volume = &reference.volume;
     let to_sun = view.to_sun.as_dvec3();
-    let axes = [
-        DVec3::X,
-        DVec3::NEG_X,
-        DVec3::Y,
-        DVec3::NEG_Y,
-        DVec3::Z,
-        DVec3::NEG_Z,
-    ];
     let depth = |p: DVec3, toward: DVec3| -volume.transmittance(p, toward).max(1e-300).ln();
     (0..(SIZE.0 * SIZE.1) as usize)
         .into_par_iter()
@@ -389,7 +516,7 @@ fn transfer_rows(view: &View) -> Vec<Vec<(usize, f64)>> {
             let origin = view.camera.position.as_dvec3();
             let dir = view.camera.ray(x, y).as_dvec3().normalize();
             let ray = volume.ray(origin, dir);
-            let mut row = std::collections::BTreeMap::<usize, f64>::new();
+            let mut row = std::collections::BTreeMap::new();
             let Some((a, b)) = ray.span() else {
                 return Vec::new();
             };
@@ -403,9 +530,9 @@ fn transfer_rows(view: &View) -> Vec<Vec<(usize, f64)>> {
                     // What the step scatters toward the eye, per unit F.
                     let weight = scattering / sigma * (-eye).exp() * -(-piece).exp_m1();
                     let p = origin + dir * t;
-                    let deepest = axes
+                    let deepest = AXES_OUT
                         .iter()
-                        .map(|&d| depth(p, d))
+                        .map(|&d| depth(p, d.as_dvec3()))
                         .fold(f64::INFINITY, f64::min);
                     let features = [
                         depth(p, to_sun),
@@ -413,22 +540,7 @@ fn transfer_rows(view: &View) -> Vec<Vec<(usize, f64)>> {
                         to_sun.dot(dir),
                         eye + 0.5 * piece,
                     ];
-                    let hats = features
-                        .into_iter()
-                        .zip(TRANSFER_AXES)
-                        .map(|(v, e)| hat(e, v));
-                    let hats: Vec<[(usize, f64); 2]> = hats.collect();
-                    for corner in 0..16usize {
-                        let (mut index, mut w) = (0, weight);
-                        for (axis, (hat, edges)) in hats.iter().zip(TRANSFER_AXES).enumerate() {
-                            let (i, f) = hat[(corner >> axis) & 1];
-                            index = index * edges.len() + i;
-                            w *= f;
-                        }
-                        if w > 0.0 {
-                            *row.entry(index).or_default() += w;
-                        }
-                    }
+                    add_to_row(&mut row, features, weight);
                 }
                 eye += piece;
             }
