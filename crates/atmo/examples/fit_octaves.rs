@@ -27,7 +27,7 @@ use std::path::Path;
 
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::octaves::Emission;
-use atmo::clouds::particles::emission_nodes;
+use atmo::clouds::particles::{emission_nodes, Particle};
 use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, SkyLight, Splat};
 use atmo::reference::clouds::{Agreement, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
@@ -319,10 +319,13 @@ fn transfer(views: &[View]) -> Result<()> {
         })
         .collect::<Result<_>>()?;
     fit_transfer(views, &exact, "through the exact density")?;
-    let billboards = views
-        .iter()
-        .map(billboard_rows)
-        .collect::<Result<Vec<_>>>()?;
+    let mut billboards = Vec::new();
+    for cloud in views.chunk_by(|a, b| a.particles == b.particles) {
+        let deepest = deepest(&cloud[0].particles)?;
+        for view in cloud {
+            billboards.push(billboard_rows(view, &deepest));
+        }
+    }
     fit_transfer(views, &billboards, "through the billboards")
 }
 
@@ -425,14 +428,9 @@ const AXES_OUT: [Vec3; 6] = [
     Vec3::NEG_Z,
 ];
 
-/// [`Transfer`] through the billboards: front to back as `render` draws them, each
-/// blob's single scattering by `Octaves::SINGLE` at its emission nodes and its weight
-/// of the table, `albedo (1 - e^-tau)` times what gets through in front, at the nodes'
-/// mean depth toward the sun, its particle's least depth out of the cloud (at its
-/// centre, from intensity buffers lit along the six axes at 64^3), the pixel's angle to
-/// the sun and the depth in front of it and half its own.
-fn billboard_rows(view: &View) -> Result<Transfer> {
-    let particles = &view.particles;
+/// Each particle's least optical depth out of the cloud along [`AXES_OUT`], at its
+/// centre, from intensity buffers lit along them at 64^3.
+fn deepest(particles: &[Particle]) -> Result<Vec<f32>> {
     let mut deepest = vec![f32::INFINITY; particles.len()];
     for axis in AXES_OUT {
         let buffer = IntensityBuffer::new(particles, axis, 64, 0.0, Splat::Pieces)?;
@@ -440,20 +438,26 @@ fn billboard_rows(view: &View) -> Result<Transfer> {
             *d = d.min(-buffer.sample_log_grid(buffer.grid_coordinates(p.position)));
         }
     }
+    Ok(deepest)
+}
+
+/// [`Transfer`] through the billboards: front to back as `render` draws them, each
+/// blob's single scattering by `Octaves::SINGLE` at its emission nodes and its weight
+/// of the table, `albedo (1 - e^-tau)` times what gets through in front, at the nodes'
+/// mean depth toward the sun, its particle's least depth out of the cloud (`deepest`,
+/// one per particle), the pixel's angle to the sun and the depth in front of it and
+/// half its own.
+fn billboard_rows(view: &View, deepest: &[f32]) -> Transfer {
+    let particles = &view.particles;
     let camera = &view.camera;
     let depth = |k: usize| camera.depth(particles[k].position);
     let mut order: Vec<usize> = (0..particles.len())
         .filter(|&k| depth(k) > particles[k].reach())
         .collect();
     order.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)));
-    let (single, rows) = (0..(SIZE.0 * SIZE.1) as usize)
+    let (single, rows) = pixel_rays(camera)
         .into_par_iter()
-        .map(|k| {
-            let (x, y) = (
-                (k % SIZE.0 as usize) as f32 + 0.5,
-                (k / SIZE.0 as usize) as f32 + 0.5,
-            );
-            let ray = camera.ray(x, y).normalize();
+        .map(|ray| {
             let cos = view.to_sun.dot(ray);
             let phase = PhaseFunction::CloudMie.eval_f32(cos);
             let (mut through, mut single) = (1.0f64, 0.0f64);
@@ -497,7 +501,18 @@ fn billboard_rows(view: &View) -> Result<Transfer> {
             (single, row.into_iter().collect())
         })
         .unzip();
-    Ok(Transfer { single, rows })
+    Transfer { single, rows }
+}
+
+/// The unit ray through each pixel centre of `camera`, row by row (the references'
+/// order).
+fn pixel_rays(camera: &Camera) -> Vec<Vec3> {
+    (0..camera.width * camera.height)
+        .map(|k| {
+            let (x, y) = (k % camera.width, k / camera.width);
+            camera.ray(x as f32 + 0.5, y as f32 + 0.5).normalize()
+        })
+        .collect()
 }
 
 /// [`Transfer::rows`] through the particles' exact density, 64 steps a ray.
@@ -506,15 +521,11 @@ fn transfer_rows(view: &View) -> Vec<Vec<(usize, f64)>> {
     let volume = &reference.volume;
     let to_sun = view.to_sun.as_dvec3();
     let depth = |p: DVec3, toward: DVec3| -volume.transmittance(p, toward).max(1e-300).ln();
-    (0..(SIZE.0 * SIZE.1) as usize)
+    let origin = view.camera.position.as_dvec3();
+    pixel_rays(&view.camera)
         .into_par_iter()
-        .map(|k| {
-            let (x, y) = (
-                (k % SIZE.0 as usize) as f32 + 0.5,
-                (k / SIZE.0 as usize) as f32 + 0.5,
-            );
-            let origin = view.camera.position.as_dvec3();
-            let dir = view.camera.ray(x, y).as_dvec3().normalize();
+        .map(|ray| {
+            let dir = ray.as_dvec3().normalize();
             let ray = volume.ray(origin, dir);
             let mut row = std::collections::BTreeMap::new();
             let Some((a, b)) = ray.span() else {
@@ -605,27 +616,18 @@ fn views(paths: usize) -> Result<Vec<View>> {
             let camera = Camera::look_at(position, centre, Vec3::Y, Fov::Vertical(30.0), SIZE)?;
             for (sun, elevation, azimuth) in suns {
                 let to_sun = Sun::from_degrees(elevation, azimuth)?.toward();
-                let name = format!("{cloud}-{eye}-{sun}");
-                let reference = ReferenceCloud::new(
-                    &particles,
-                    ReferenceLight {
-                        to_sun: to_sun.as_dvec3(),
-                        phase: PhaseFunction::CloudMie,
-                        sky: 0.0,
-                    },
-                );
-                let covered = reference.covered(&camera);
                 let buffer = IntensityBuffer::new(&particles, to_sun, 128, 0.0, Splat::Pieces)?;
                 views.push(View {
-                    name,
+                    name: format!("{cloud}-{eye}-{sun}"),
                     particles: particles.clone(),
                     camera: camera.clone(),
                     to_sun,
                     buffer,
                     traced: Vec::new(),
-                    covered,
+                    covered: Vec::new(),
                 });
                 let view = views.last_mut().expect("just pushed");
+                view.covered = view.reference().covered(&view.camera);
                 view.traced = view.path_traced(paths, usize::MAX, 3)?;
             }
         }
