@@ -11,8 +11,9 @@
 use std::cell::{Cell, RefCell};
 
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
+use atmo::clouds::octaves::Octaves;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::Lighting;
+use atmo::clouds::render::{Lighting, Scattering};
 use atmo::clouds::shadow::CloudShadow;
 use atmo::clouds::sky_light::{SkyDimming, VERTICAL_RESOLUTION};
 use atmo::image::Frame;
@@ -374,7 +375,8 @@ impl GpuClouds {
         camera: &Camera,
         light: &Lighting,
     ) -> Result<(), GpuError> {
-        let dimming = light.ambient.dimming(&light.scattering);
+        let octaves = drawn_octaves(light)?;
+        let dimming = light.ambient.dimming(&octaves);
         let billboards = self.billboards(gpu, camera, light, &dimming)?;
         // The sky's light inside the cloud needs each particle's depths: made once for
         // particles where they are.
@@ -397,7 +399,6 @@ impl GpuClouds {
             ));
         }
         self.record(encoder, &billboards, &views);
-        let octaves = light.scattering;
         let params = CompositeParams {
             corner: pass.corner.map(|c| c as f32),
             exposure: pass.exposure,
@@ -460,8 +461,7 @@ impl GpuClouds {
             "the particle count",
         )?;
         let (tan_half_width, tan_half_height) = camera.pinhole("the clouds' billboards")?;
-        let octaves = light.scattering;
-        octaves.validate()?;
+        let octaves = drawn_octaves(light)?;
         let focal = 0.5 * h as f32 / tan_half_height;
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
         let sky = light.ambient.scattered(light.phase, &octaves);
@@ -690,4 +690,23 @@ pub(crate) fn target_texture(
 pub fn shadow_texture(gpu: &Gpu, shadow: &CloudShadow) -> wgpu::Texture {
     let n = shadow.resolution as u32;
     gpu.float_texture("the cloud's shadow", &shadow.depth, n, n)
+}
+
+/// The octaves the GPU's billboards draw every order by. The transfer table
+/// ([`Scattering::Transfer`], the CPU's default for every order) reads the optical depth
+/// in front of each blob on its pixel, which billboards blended in hardware do not know:
+/// an error naming the field.
+fn drawn_octaves(light: &Lighting) -> Result<Octaves, GpuError> {
+    match light.scattering {
+        Scattering::Octaves(octaves) => {
+            octaves.validate()?;
+            Ok(octaves)
+        }
+        Scattering::Transfer(_) => Err(atmo::Error::Invalid(
+            "scattering: the GPU draws every order by octaves (Scattering::Octaves, e.g. \
+             Octaves::MULTIPLE); the transfer table is drawn on the CPU"
+                .into(),
+        )
+        .into()),
+    }
 }

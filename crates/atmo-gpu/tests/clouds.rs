@@ -7,7 +7,7 @@ use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{render, Haze, Lighting};
+use atmo::clouds::render::{render, Haze, Lighting, Scattering};
 use atmo::clouds::{Octaves, SkyLight};
 use atmo::image::Frame;
 use atmo::view::{Camera, Fov};
@@ -88,7 +88,7 @@ fn lighting(phase: PhaseFunction, scattering: Octaves) -> Lighting {
             transmittance: Vec3::new(0.8, 0.85, 0.9),
             inscatter: Vec3::new(0.01, 0.02, 0.04),
         },
-        scattering,
+        scattering: Scattering::Octaves(scattering),
     }
 }
 
@@ -121,6 +121,17 @@ fn the_drawn_cloud_matches_the_cpu_picture() {
         );
         assert_close(&out, &cpu, 4.0, &format!("{phase:?}"));
     }
+    // The transfer table is the CPU's: the GPU says so rather than draw something else.
+    let table = Lighting {
+        scattering: Scattering::MULTIPLE,
+        ..lighting(PhaseFunction::CloudMie, Octaves::MULTIPLE)
+    };
+    let message = clouds
+        .render(&gpu, &camera, &table, None)
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(message.contains("scattering"), "{message}");
 }
 
 #[test]
@@ -210,7 +221,7 @@ fn drawing_before_the_light_pass_and_oversized_buffers_are_refused() {
         ambient: SkyLight::NONE,
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
-        scattering: Octaves::SINGLE,
+        scattering: Scattering::SINGLE,
     };
     let err = clouds.render(&gpu, &camera, &light, None).err().unwrap();
     assert!(err.to_string().contains("light pass"), "{err}");

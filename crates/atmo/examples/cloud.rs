@@ -5,7 +5,7 @@
 //! `cargo run --release -p atmo --example cloud -- cloud.png`
 
 use atmo::atmosphere::PhaseFunction;
-use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, SkyLight, Splat};
+use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Scattering, SkyLight, Splat};
 use atmo::sky::{Daylight, SkySettings};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
@@ -36,8 +36,8 @@ fn main() -> atmo::Result<()> {
         ambient: SkyLight::from_harmonics(&daylight.skylight(sun)),
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
-        // Every order of scattering (Octaves::SINGLE: the paper's single scattering).
-        scattering: Octaves::MULTIPLE,
+        // Every order of scattering (Scattering::SINGLE: the paper's single scattering).
+        scattering: Scattering::MULTIPLE,
     };
     let eye = centre + Vec3::new(-1500.0, -300.0, 2500.0);
     let camera = Camera::look_at(eye, centre, Vec3::Y, Fov::Vertical(40.0), (960, 540))?;

@@ -1,38 +1,42 @@
-//! The octaves of every order (`atmo::clouds::Octaves`) against the volumetric path
-//! tracer over 36 views: three cumulus clouds (200 and 2,000 particles of density
-//! 0.006, 9,382 of the generator's 0.04), each seen from above, level and below, the
-//! sun 25 deg high from the front, the side and behind and 60 deg high. Prints each
-//! view's mean of the octaves over the path tracer's (on the cloud's pixels) and its
-//! 8 x 8 blocks within 15 %; with `--search`, a grid search over the octaves' numbers,
-//! best worst view first: how `Octaves::MULTIPLE` was chosen (docs/clouds.md, "Every
-//! order: octaves"). With `--floor`, the same scores for a second path-traced picture
-//! (another seed) in place of the octaves: how far a perfect model would score with
-//! the path tracer's noise. With `--oracle`, the scores of the path tracer's own first
-//! two orders (another seed) plus the octaves' higher octave and slab's light, each
-//! weighted, the best weights first: what a second order computed exactly would leave.
-//! With `--transfer`, a transfer table for the orders past the first (four features of
-//! a point: its optical depths toward the sun, out of the cloud and toward the eye, and
-//! the angle to the sun) fitted by least squares to the path tracer over the views,
-//! then over two clouds and scored on the third's views: the lead past the octaves
-//! (docs/clouds.md, "Every order: octaves"), measured through the exact density and
-//! through the billboards. About a minute and a half.
+//! Every order of the clouds' light against the volumetric path tracer over 84 views:
+//! seven cumulus clouds (200 and 2,000 particles of density 0.006, 9,382 of the
+//! generator's 0.04, 500 of 0.04, 1,000 of 0.002, 4,000 of 0.015 and 20,000 of 0.04:
+//! optical depth about 3 to 55 through the middle, blobs large and small), each seen
+//! from above, level and below, the sun 25 deg high from the front, the side and behind
+//! and 60 deg high. Prints each view's mean of the octaves (`atmo::clouds::Octaves`)
+//! over the path tracer's (on the cloud's pixels) and its 8 x 8 blocks within 15 %.
+//! `--clouds c200,c2000,c9382` keeps the views of the clouds named: those three are the
+//! 36 views the octaves were fitted to. With `--search`, a grid search over the
+//! octaves' numbers, best worst view first: how `Octaves::MULTIPLE` was chosen
+//! (docs/clouds.md, "Every order: octaves"). With `--floor`, the same scores for a
+//! second path-traced picture (another seed) in place of the octaves: how far a perfect
+//! model would score with the path tracer's noise. With `--oracle`, the scores of the
+//! path tracer's own first two orders (another seed) plus the octaves' higher octave
+//! and slab's light, each weighted, the best weights first: what a second order
+//! computed exactly would leave. With `--transfer`, the transfer table
+//! (`atmo::clouds::TransferTable`) fitted to the path tracer over the views, then over
+//! all clouds but one and scored on that one's views (`--smooth S` weighs the penalty on
+//! neighbouring values' differences, default 1e-4); `--write` writes the table fitted
+//! to every view into the library (`src/clouds/transfer_fitted.rs`). About two minutes.
 //!
-//! `cargo run --release -p atmo --example fit_octaves -- [--paths N] [--search]
-//! [--floor] [--oracle] [--transfer] [--octaves COUNT,A,B,C,K,D,E]` (the fields of
-//! `Octaves` in order). The path-traced pictures (48 x 28, N paths a pixel, default 32: a few
-//! minutes on two cores for each kind) are kept in the system's temporary folder and
-//! reused.
+//! `cargo run --release -p atmo --example fit_octaves -- [--paths N] [--clouds A,B]
+//! [--search] [--floor] [--oracle] [--transfer [--smooth S] [--write]] [--octaves
+//! COUNT,A,B,C,K,D,E]` (the fields of `Octaves` in order). The path-traced pictures
+//! (48 x 28, N paths a pixel, default 32: about 25 minutes on two cores for the 84
+//! views) are kept in the system's temporary folder and reused.
 
 use std::path::Path;
 
 use atmo::atmosphere::PhaseFunction;
-use atmo::clouds::octaves::Emission;
-use atmo::clouds::particles::{emission_nodes, Particle};
-use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, SkyLight, Splat};
+use atmo::clouds::transfer::{self, CloudDepths, TransferTable};
+use atmo::clouds::{
+    render_with_depths, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, Scattering, SkyLight,
+    Splat,
+};
 use atmo::reference::clouds::{Agreement, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
 use faer::linalg::solvers::Solve;
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 /// atmo's errors and the file system's.
@@ -49,6 +53,7 @@ struct View {
     camera: Camera,
     to_sun: Vec3,
     buffer: IntensityBuffer,
+    depths: CloudDepths,
     traced: Vec<f64>,
     covered: Vec<bool>,
 }
@@ -80,21 +85,6 @@ impl View {
         })
     }
 
-    /// The single-scattering quadrature's picture of this view (kept as the path
-    /// tracer's are).
-    fn single(&self) -> Result<Vec<f64>> {
-        let file = std::env::temp_dir()
-            .join("atmo-fit-octaves")
-            .join(format!("{}-single.txt", self.name));
-        traced(&file, || {
-            self.reference()
-                .single_scattering_picture(&self.camera)
-                .iter()
-                .map(|p| p.0)
-                .collect()
-        })
-    }
-
     /// The references' cloud, lit as the billboards' is.
     fn reference(&self) -> ReferenceCloud<'_> {
         ReferenceCloud::new(
@@ -109,16 +99,23 @@ impl View {
 
     /// The cloud drawn by the billboards with `octaves`, the red channel (the sun is
     /// white).
-    fn rendered(&self, octaves: Octaves) -> Result<Vec<f64>> {
+    fn rendered(&self, scattering: Scattering) -> atmo::error::Result<Vec<f64>> {
         let light = Lighting {
             to_sun: self.to_sun,
             sun: Vec3::ONE,
             ambient: SkyLight::NONE,
             phase: PhaseFunction::CloudMie,
             haze: Haze::CLEAR,
-            scattering: octaves,
+            scattering,
         };
-        let frame = render(&self.particles, &self.buffer, &self.camera, &light, None)?;
+        let frame = render_with_depths(
+            &self.particles,
+            &self.depths,
+            &self.buffer,
+            &self.camera,
+            &light,
+            None,
+        )?;
         Ok(frame.pixels.iter().map(|p| p.x as f64).collect())
     }
 
@@ -150,7 +147,13 @@ fn main() -> Result<()> {
         }
     });
     octaves.validate()?;
-    let views = views(paths)?;
+    let views: Vec<View> = views(paths)?
+        .into_iter()
+        .filter(|v| {
+            value("--clouds")
+                .is_none_or(|c| c.split(',').any(|c| v.name.starts_with(&format!("{c}-"))))
+        })
+        .collect();
     for (view, score) in views.iter().zip(scores(&views, &octaves)?) {
         println!(
             "{:<22} octaves / path tracer {:.3}   blocks within 15 %: {} of {} by their means, {} by their medians",
@@ -172,7 +175,16 @@ fn main() -> Result<()> {
         oracle(&views, &octaves, paths)?;
     }
     if args.iter().any(|a| a == "--transfer") {
-        transfer(&views)?;
+        let smooth = value("--smooth").map_or(1e-4, |v| v.parse().expect("--smooth S"));
+        let table = transfer(&views, smooth)?;
+        if args.iter().any(|a| a == "--write") {
+            let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/clouds/transfer_fitted.rs");
+            let how = format!(
+                "cargo run --release -p atmo --example fit_octaves -- --paths {paths} --transfer --smooth {smooth} --write"
+            );
+            write_table(&table, &file, &how)?;
+            println!("written to {}", file.display());
+        }
     }
     if args.iter().any(|a| a == "--search") {
         // Every candidate's worst view, views within 10 % and blocks within 15 %.
@@ -227,10 +239,10 @@ fn oracle(views: &[View], octaves: &Octaves, paths: usize) -> Result<()> {
     let mut parts = Vec::new();
     for view in views {
         // Each part drawn alone: the billboards with it less those without it.
-        let single = view.rendered(Octaves::SINGLE)?;
+        let single = view.rendered(Scattering::SINGLE)?;
         let part = |o: Octaves| -> Result<Vec<f64>> {
             Ok(view
-                .rendered(o)?
+                .rendered(Scattering::Octaves(o))?
                 .iter()
                 .zip(&single)
                 .map(|(a, b)| a - b)
@@ -288,290 +300,192 @@ fn oracle(views: &[View], octaves: &Octaves, paths: usize) -> Result<()> {
     Ok(())
 }
 
-/// The transfer table's axes: the optical depth toward the sun, the least optical
-/// depth out of the cloud along the six axes (how deep the point lies), the cosine
-/// between the sun's and the view's directions, and the optical depth toward the eye.
-const TRANSFER_AXES: [&[f64]; 4] = [
-    &[0.0, 0.5, 1.5, 4.0, 10.0, 30.0],
-    &[0.0, 0.5, 1.5, 4.0, 10.0],
-    &[-1.0, -0.5, 0.0, 0.5, 0.8, 1.0],
-    &[0.0, 1.0, 3.0, 8.0],
-];
-
-/// A transfer table for the orders past the first, fitted to the path tracer: each
-/// pixel is a single scattering plus the table's light, `F(features)` times what each
-/// piece of the pixel's ray scatters toward the eye, `F` multilinear over
-/// [`TRANSFER_AXES`] and its 720 values fitted by least squares (a little ridge) to the
-/// path tracer's light less that single scattering: over every view, then over the
-/// views of two clouds and scored on the third's. Two ways: through the particles'
-/// exact density (64 steps a ray, the quadrature's single scattering), and through the
-/// billboards as `render` composites them (each blob's features at its emission nodes,
-/// the billboards' own single scattering; drawn here one pixel at a time in double
-/// precision, as a fit needs each pixel's weight of every value of the table).
-fn transfer(views: &[View]) -> Result<()> {
-    let exact: Vec<Transfer> = views
-        .iter()
-        .map(|v| {
-            Ok(Transfer {
-                single: v.single()?,
-                rows: transfer_rows(v),
-            })
+/// The transfer table ([`TransferTable`]) fitted by least squares to the path tracer's
+/// light less the billboards' single scattering, over the covered pixels of `views`:
+/// over all, and over all but one cloud scored on that cloud's views. The pictures are
+/// the renderer's own: it is linear in the table's values, so the design's column for
+/// a value is the picture drawn with that value 1 and the rest 0, less single
+/// scattering. The fit is the least squares with every value at least 0 (light is not
+/// negative; clamping an unconstrained fit's negative values at 0 took the blocks within
+/// 15 % from 76 % to 26 %) and a small penalty on the differences of neighbouring values
+/// along each axis (`smooth` times the design's mean diagonal), which fills the values
+/// no pixel sees from their neighbours. Returns the table fitted to every view.
+fn transfer(views: &[View], smooth: f64) -> Result<TransferTable> {
+    let n = transfer::VALUES;
+    // Each basis table is leaked once: the renderer takes a table that lives as long
+    // as the program.
+    let basis: Vec<&'static TransferTable> = (0..n)
+        .map(|i| {
+            let mut values = [0.0; transfer::VALUES];
+            values[i] = 1.0;
+            &*Box::leak(Box::new(TransferTable { values }))
         })
-        .collect::<Result<_>>()?;
-    fit_transfer(views, &exact, "through the exact density")?;
-    let mut billboards = Vec::new();
-    for cloud in views.chunk_by(|a, b| a.particles == b.particles) {
-        let deepest = deepest(&cloud[0].particles)?;
-        for view in cloud {
-            billboards.push(billboard_rows(view, &deepest));
-        }
-    }
-    fit_transfer(views, &billboards, "through the billboards")
-}
-
-/// One view's pictures for a transfer table: single scattering, and each pixel's weight
-/// of every value of the table (merged, sparse).
-struct Transfer {
-    single: Vec<f64>,
-    rows: Vec<Vec<(usize, f64)>>,
-}
-
-/// Fits the table to `pictures` (one per view) and prints its scores.
-fn fit_transfer(views: &[View], pictures: &[Transfer], how: &str) -> Result<()> {
-    let n: usize = TRANSFER_AXES.iter().map(|a| a.len()).product();
-    for held_out in [None, Some("c2000"), Some("c200")] {
-        let trained = |v: &View| held_out.is_none_or(|c| !v.name.starts_with(&format!("{c}-")));
-        let (mut ata, mut atb) = (faer::Mat::<f64>::zeros(n, n), faer::Mat::<f64>::zeros(n, 1));
-        for (view, picture) in views.iter().zip(pictures).filter(|(v, _)| trained(v)) {
-            for (k, row) in picture
-                .rows
-                .iter()
-                .enumerate()
-                .filter(|(k, _)| view.covered[*k])
-            {
-                let target = view.traced[k] - picture.single[k];
-                for &(i, wi) in row {
-                    atb[(i, 0)] += wi * target;
-                    for &(j, wj) in row {
-                        ata[(i, j)] += wi * wj;
-                    }
-                }
-            }
-        }
-        let ridge = 1e-6 * (0..n).map(|i| ata[(i, i)]).sum::<f64>() / n as f64;
-        (0..n).for_each(|i| ata[(i, i)] += ridge);
-        let table = ata
-            .llt(faer::Side::Lower)
-            .map_err(|e| format!("{e:?}"))?
-            .solve(&atb);
-        let score = |fitted: bool| {
-            let scores: Vec<Agreement> = views
-                .iter()
-                .zip(pictures)
-                .filter(|(v, _)| trained(v) == fitted)
-                .map(|(view, picture)| {
-                    let drawn: Vec<f64> = picture
-                        .rows
-                        .iter()
-                        .zip(&picture.single)
-                        .map(|(row, s)| {
-                            s + row.iter().map(|&(i, w)| w * table[(i, 0)]).sum::<f64>()
-                        })
-                        .collect();
-                    view.agreement(&drawn)
-                })
-                .collect();
-            summary(&scores)
-        };
-        match held_out {
-            None => println!(
-                "transfer table {how}, fitted to every view: {}",
-                score(true)
-            ),
-            Some(c) => println!(
-                "transfer table {how}, fitted without {c}: on the others {}; on {c} {}",
-                score(true),
-                score(false)
-            ),
-        }
-    }
-    Ok(())
-}
-
-/// Adds `weight` times the table's multilinear weights at `features` to `row`.
-fn add_to_row(row: &mut std::collections::BTreeMap<usize, f64>, features: [f64; 4], weight: f64) {
-    let hats = features
-        .into_iter()
-        .zip(TRANSFER_AXES)
-        .map(|(v, e)| hat(e, v));
-    let hats: Vec<[(usize, f64); 2]> = hats.collect();
-    for corner in 0..16usize {
-        let (mut index, mut w) = (0, weight);
-        for (axis, (hat, edges)) in hats.iter().zip(TRANSFER_AXES).enumerate() {
-            let (i, f) = hat[(corner >> axis) & 1];
-            index = index * edges.len() + i;
-            w *= f;
-        }
-        if w > 0.0 {
-            *row.entry(index).or_default() += w;
-        }
-    }
-}
-
-/// The six axes along which the depth out of the cloud is taken.
-const AXES_OUT: [Vec3; 6] = [
-    Vec3::X,
-    Vec3::NEG_X,
-    Vec3::Y,
-    Vec3::NEG_Y,
-    Vec3::Z,
-    Vec3::NEG_Z,
-];
-
-/// Each particle's least optical depth out of the cloud along [`AXES_OUT`], at its
-/// centre, from intensity buffers lit along them at 64^3.
-fn deepest(particles: &[Particle]) -> Result<Vec<f32>> {
-    let mut deepest = vec![f32::INFINITY; particles.len()];
-    for axis in AXES_OUT {
-        let buffer = IntensityBuffer::new(particles, axis, 64, 0.0, Splat::Pieces)?;
-        for (d, p) in deepest.iter_mut().zip(particles) {
-            *d = d.min(-buffer.sample_log_grid(buffer.grid_coordinates(p.position)));
-        }
-    }
-    Ok(deepest)
-}
-
-/// [`Transfer`] through the billboards: front to back as `render` draws them, each
-/// blob's single scattering by `Octaves::SINGLE` at its emission nodes and its weight
-/// of the table, `albedo (1 - e^-tau)` times what gets through in front, at the nodes'
-/// mean depth toward the sun, its particle's least depth out of the cloud (`deepest`,
-/// one per particle), the pixel's angle to the sun and the depth in front of it and
-/// half its own.
-fn billboard_rows(view: &View, deepest: &[f32]) -> Transfer {
-    let particles = &view.particles;
-    let camera = &view.camera;
-    let depth = |k: usize| camera.depth(particles[k].position);
-    let mut order: Vec<usize> = (0..particles.len())
-        .filter(|&k| depth(k) > particles[k].reach())
         .collect();
-    order.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)));
-    let (single, rows) = pixel_rays(camera)
-        .into_par_iter()
-        .map(|ray| {
-            let cos = view.to_sun.dot(ray);
-            let phase = PhaseFunction::CloudMie.eval_f32(cos);
-            let (mut through, mut single) = (1.0f64, 0.0f64);
-            let mut row = std::collections::BTreeMap::new();
-            for &i in &order {
-                let p = &particles[i];
-                let d = p.position - camera.position;
-                let t = d.dot(ray);
-                let tau = p.faded_column((d.length_squared() - t * t).max(0.0));
-                if tau <= 0.0 {
-                    continue;
-                }
-                let [(u0, l0), (u1, l1)] = emission_nodes(tau);
-                let at = |l: f32| {
-                    let point = camera.position + ray * (t + l * p.sigma());
-                    view.buffer
-                        .sample_log_grid(view.buffer.grid_coordinates(point))
-                };
-                let log_gamma = [at(l0), at(l1)];
-                let emission = Emission {
-                    tau,
-                    u: [u0, u1],
-                    log_gamma,
-                    slab: 0.0,
-                };
-                let lit = through * p.albedo as f64;
-                single += lit * Octaves::SINGLE.light(phase, &emission).single as f64;
-                let tau = tau as f64;
-                let features = [
-                    -0.5 * (log_gamma[0] + log_gamma[1]) as f64,
-                    deepest[i] as f64,
-                    cos as f64,
-                    -through.ln() + 0.5 * tau,
-                ];
-                add_to_row(&mut row, features, lit * -(-tau).exp_m1());
-                through *= (-tau).exp();
-                if through < 1e-3 {
-                    break;
-                }
+    // Per cloud, the normal equations of its views' covered pixels.
+    let mut normal: Vec<(String, faer::Mat<f64>, faer::Mat<f64>)> = Vec::new();
+    for view in views {
+        let single = view.rendered(Scattering::SINGLE)?;
+        let covered: Vec<usize> = (0..single.len()).filter(|&k| view.covered[k]).collect();
+        let mut design = faer::Mat::<f64>::zeros(covered.len(), n);
+        let columns: Vec<Vec<f64>> = basis
+            .par_iter()
+            .map(|table| view.rendered(Scattering::Transfer(table)))
+            .collect::<atmo::error::Result<_>>()?;
+        for (j, column) in columns.iter().enumerate() {
+            for (r, &k) in covered.iter().enumerate() {
+                design[(r, j)] = column[k] - single[k];
             }
-            (single, row.into_iter().collect())
-        })
-        .unzip();
-    Transfer { single, rows }
-}
-
-/// The unit ray through each pixel centre of `camera`, row by row (the references'
-/// order).
-fn pixel_rays(camera: &Camera) -> Vec<Vec3> {
-    (0..camera.width * camera.height)
-        .map(|k| {
-            let (x, y) = (k % camera.width, k / camera.width);
-            camera.ray(x as f32 + 0.5, y as f32 + 0.5).normalize()
-        })
-        .collect()
-}
-
-/// [`Transfer::rows`] through the particles' exact density, 64 steps a ray.
-fn transfer_rows(view: &View) -> Vec<Vec<(usize, f64)>> {
-    let reference = view.reference();
-    let volume = &reference.volume;
-    let to_sun = view.to_sun.as_dvec3();
-    let depth = |p: DVec3, toward: DVec3| -volume.transmittance(p, toward).max(1e-300).ln();
-    let origin = view.camera.position.as_dvec3();
-    pixel_rays(&view.camera)
-        .into_par_iter()
-        .map(|ray| {
-            let dir = ray.as_dvec3().normalize();
-            let ray = volume.ray(origin, dir);
-            let mut row = std::collections::BTreeMap::new();
-            let Some((a, b)) = ray.span() else {
-                return Vec::new();
-            };
-            let h = (b - a) / 64.0;
-            let mut eye = ray.depth(0.0, a);
-            for i in 0..64 {
-                let t = a + (i as f64 + 0.5) * h;
-                let piece = ray.depth(t - 0.5 * h, t + 0.5 * h);
-                let (sigma, scattering) = ray.extinction(t);
-                if sigma > 0.0 && eye < 10.0 {
-                    // What the step scatters toward the eye, per unit F.
-                    let weight = scattering / sigma * (-eye).exp() * -(-piece).exp_m1();
-                    let p = origin + dir * t;
-                    let deepest = AXES_OUT
-                        .iter()
-                        .map(|&d| depth(p, d.as_dvec3()))
-                        .fold(f64::INFINITY, f64::min);
-                    let features = [
-                        depth(p, to_sun),
-                        deepest,
-                        to_sun.dot(dir),
-                        eye + 0.5 * piece,
-                    ];
-                    add_to_row(&mut row, features, weight);
-                }
-                eye += piece;
-            }
-            row.into_iter().collect()
-        })
-        .collect()
-}
-
-/// The two nodes of `edges` around `v` and their linear weights (the end node alone
-/// outside).
-fn hat(edges: &[f64], v: f64) -> [(usize, f64); 2] {
-    let last = edges.len() - 1;
-    match edges.iter().position(|&e| v <= e) {
-        Some(0) => [(0, 1.0), (0, 0.0)],
-        Some(i) => {
-            let f = (v - edges[i - 1]) / (edges[i] - edges[i - 1]);
-            [(i - 1, 1.0 - f), (i, f)]
         }
-        None => [(last, 1.0), (last, 0.0)],
+        let target = faer::Mat::<f64>::from_fn(covered.len(), 1, |r, _| {
+            view.traced[covered[r]] - single[covered[r]]
+        });
+        let cloud = view.name.split('-').next().unwrap_or_default().to_string();
+        let ata = design.transpose() * &design;
+        let atb = design.transpose() * &target;
+        match normal.iter_mut().find(|(c, ..)| *c == cloud) {
+            Some((_, a, b)) => {
+                *a += &ata;
+                *b += &atb;
+            }
+            None => normal.push((cloud, ata, atb)),
+        }
     }
+    let fit = |held_out: Option<&str>| -> Result<TransferTable> {
+        let (mut ata, mut atb) = (faer::Mat::<f64>::zeros(n, n), faer::Mat::<f64>::zeros(n, 1));
+        for (cloud, a, b) in &normal {
+            if held_out != Some(cloud.as_str()) {
+                ata += a;
+                atb += b;
+            }
+        }
+        let scale = (0..n).map(|i| ata[(i, i)]).sum::<f64>() / n as f64;
+        for (i, j) in neighbours() {
+            let w = smooth * scale;
+            ata[(i, i)] += w;
+            ata[(j, j)] += w;
+            ata[(i, j)] -= w;
+            ata[(j, i)] -= w;
+        }
+        (0..n).for_each(|i| ata[(i, i)] += 1e-6 * scale);
+        let solved = non_negative(&ata, &atb);
+        let mut values = [0.0; transfer::VALUES];
+        for (v, x) in values.iter_mut().zip(solved) {
+            *v = x as f32;
+        }
+        Ok(TransferTable { values })
+    };
+    let score = |table: TransferTable, on: &dyn Fn(&View) -> bool| -> Result<String> {
+        let table: &'static TransferTable = Box::leak(Box::new(table));
+        let scores = views
+            .iter()
+            .filter(|v| on(v))
+            .map(|v| Ok(v.agreement(&v.rendered(Scattering::Transfer(table))?)))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(summary(&scores))
+    };
+    let all = fit(None)?;
+    println!(
+        "transfer table (smooth {smooth}) fitted to every view: {}",
+        score(all.clone(), &|_| true)?
+    );
+    for (cloud, ..) in &normal {
+        let table = fit(Some(cloud))?;
+        let of = |v: &View| v.name.starts_with(&format!("{cloud}-"));
+        println!(
+            "  fitted without {cloud}: on {cloud} {}",
+            score(table, &of)?
+        );
+    }
+    Ok(all)
+}
+
+/// The least squares with every value at least 0: `x >= 0` minimising
+/// `x' A x / 2 - b' x` for the normal equations `A`, `b`, by coordinate descent
+/// (each value in turn set to its best at least 0 given the others, the gradient kept
+/// up to date), from the unconstrained solution clamped at 0, until a sweep moves the
+/// objective by less than a millionth.
+fn non_negative(a: &faer::Mat<f64>, b: &faer::Mat<f64>) -> Vec<f64> {
+    let n = a.nrows();
+    let mut x: Vec<f64> = match a.llt(faer::Side::Lower) {
+        Ok(llt) => {
+            let solved = llt.solve(b);
+            (0..n).map(|i| solved[(i, 0)].max(0.0)).collect()
+        }
+        Err(_) => vec![0.0; n],
+    };
+    // g = A x - b.
+    let mut g: Vec<f64> = (0..n)
+        .map(|i| (0..n).map(|j| a[(i, j)] * x[j]).sum::<f64>() - b[(i, 0)])
+        .collect();
+    let objective = |x: &[f64], g: &[f64]| {
+        // x' A x / 2 - b' x = x' (g + b) / 2 - b' x = (x' g - b' x) / 2.
+        (0..n).map(|i| x[i] * g[i] - x[i] * b[(i, 0)]).sum::<f64>() / 2.0
+    };
+    let mut last = objective(&x, &g);
+    for _ in 0..5000 {
+        for i in 0..n {
+            let step = ((x[i] - g[i] / a[(i, i)]).max(0.0)) - x[i];
+            if step != 0.0 {
+                x[i] += step;
+                for (j, gj) in g.iter_mut().enumerate() {
+                    *gj += a[(j, i)] * step;
+                }
+            }
+        }
+        let now = objective(&x, &g);
+        if (last - now).abs() <= 1e-6 * now.abs() {
+            break;
+        }
+        last = now;
+    }
+    x
+}
+
+/// The pairs of the table's values next to each other along one axis.
+fn neighbours() -> Vec<(usize, usize)> {
+    let sizes = [
+        transfer::SUN.len(),
+        transfer::OUT.len(),
+        transfer::COSINE.len(),
+        transfer::EYE.len(),
+    ];
+    let mut pairs = Vec::new();
+    for i in 0..transfer::VALUES {
+        let mut stride = 1;
+        let mut rest = i;
+        for axis in (0..4).rev() {
+            if rest % sizes[axis] + 1 < sizes[axis] {
+                pairs.push((i, i + stride));
+            }
+            rest /= sizes[axis];
+            stride *= sizes[axis];
+        }
+    }
+    pairs
+}
+
+/// Writes `table` as the Rust source the library includes (`transfer_fitted.rs`).
+fn write_table(table: &TransferTable, file: &Path, how: &str) -> Result<()> {
+    let mut text = format!(
+        "//! The transfer table fitted to the path tracer ([`super::transfer`]), written by\n\
+         //! `{how}`:\n\
+         //! `[sun][out][cosine][eye]`, 1/sr per unit sun irradiance.\n\n\
+         /// The fitted values.\n\
+         #[rustfmt::skip]\n\
+         pub(super) const VALUES: [f32; super::transfer::VALUES] = [\n"
+    );
+    for row in table
+        .values
+        .chunks(transfer::EYE.len() * transfer::COSINE.len())
+    {
+        let row: Vec<String> = row.iter().map(|v| format!("{v:e}")).collect();
+        text += &format!("    {},\n", row.join(", "));
+    }
+    text += "];\n";
+    let temporary = file.with_extension("rs.tmp");
+    std::fs::write(&temporary, text)?;
+    std::fs::rename(&temporary, file)?;
+    Ok(())
 }
 
 /// The 36 views, each with its path-traced picture (from the temporary folder when an
@@ -581,6 +495,10 @@ fn views(paths: usize) -> Result<Vec<View>> {
         ("c200", 200, 0.006),
         ("c2000", 2000, 0.006),
         ("c9382", 9382, 0.04),
+        ("c500", 500, 0.04),
+        ("c1000", 1000, 0.002),
+        ("c4000", 4000, 0.015),
+        ("c20000", 20000, 0.04),
     ];
     // Eye height (None: level with the cloud's middle) and horizontal distance, m.
     let eyes = [
@@ -605,6 +523,7 @@ fn views(paths: usize) -> Result<Vec<View>> {
         }
         .generate();
         let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / count as f32;
+        let depths = CloudDepths::of(&particles)?;
         for (eye, height, distance) in eyes {
             // The camera south-west of the cloud, looking at its middle.
             let a = 200f32.to_radians();
@@ -623,6 +542,7 @@ fn views(paths: usize) -> Result<Vec<View>> {
                     camera: camera.clone(),
                     to_sun,
                     buffer,
+                    depths: depths.clone(),
                     traced: Vec::new(),
                     covered: Vec::new(),
                 });
@@ -656,7 +576,7 @@ fn traced(file: &Path, make: impl FnOnce() -> Vec<f64>) -> Result<Vec<f64>> {
 fn scores(views: &[View], octaves: &Octaves) -> Result<Vec<Agreement>> {
     views
         .iter()
-        .map(|view| Ok(view.agreement(&view.rendered(*octaves)?)))
+        .map(|view| Ok(view.agreement(&view.rendered(Scattering::Octaves(*octaves))?)))
         .collect()
 }
 

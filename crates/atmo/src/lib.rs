@@ -47,7 +47,7 @@
 //!
 //! ```
 //! use atmo::atmosphere::PhaseFunction;
-//! use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, SkyLight, Splat};
+//! use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Scattering, SkyLight, Splat};
 //! use atmo::view::{Camera, Fov, Sun};
 //! use glam::Vec3;
 //!
@@ -57,7 +57,7 @@
 //! let light = Lighting { to_sun: sun.toward(), sun: Vec3::ONE,
 //!                        ambient: SkyLight::uniform(Vec3::splat(0.05)),
 //!                        phase: PhaseFunction::CloudMie, haze: Haze::CLEAR,
-//!                        scattering: Octaves::MULTIPLE };
+//!                        scattering: Scattering::MULTIPLE };
 //! let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
 //! let camera = Camera::look_at(centre + Vec3::new(0.0, 0.0, 4000.0), centre, Vec3::Y,
 //!                              Fov::Vertical(40.0), (48, 32))?;

@@ -307,7 +307,7 @@ fn billboards_composite_as_clouds_five_each_blob_taking_its_absorbed_share() {
         ambient: atmo::clouds::SkyLight::uniform(sky),
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
-        scattering: atmo::clouds::Octaves::SINGLE,
+        scattering: atmo::clouds::Scattering::SINGLE,
     };
     let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.5, Splat::Pieces).unwrap();
     let mut background = Frame::new(65, 65);
@@ -352,7 +352,7 @@ fn billboards_drawn_eight_pixels_at_a_time_keep_each_pixel_its_own() {
         ambient: atmo::clouds::SkyLight::NONE,
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
-        scattering: atmo::clouds::Octaves::MULTIPLE,
+        scattering: atmo::clouds::Scattering::MULTIPLE,
     };
     let draw = |x: f32| {
         let particles = [Particle {
@@ -415,7 +415,7 @@ fn a_billboard_lights_every_pixel_within_its_reach_and_no_other() {
         ambient: atmo::clouds::SkyLight::uniform(Vec3::ONE),
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
-        scattering: atmo::clouds::Octaves::SINGLE,
+        scattering: atmo::clouds::Scattering::SINGLE,
     };
     // Near the corner and the top, large; and small ones, a few pixels across, placed
     // off the pixels' centres every way.
@@ -460,14 +460,17 @@ fn a_billboard_lights_every_pixel_within_its_reach_and_no_other() {
     assert_eq!(small, 12, "the far blobs are a few pixels across");
 }
 
-/// The depths down the vertical given to the drawing are one per particle where the
-/// sky's light is dimmed inside the cloud (a brighter sky above than below), the same
-/// picture as `render` makes with its own; where it is not dimmed they are not read.
+/// The depths given to the drawing are one per particle where it reads them: down the
+/// vertical where the sky's light is dimmed inside the cloud (a brighter sky above than
+/// below), out of the cloud where the transfer table draws every order; the same picture
+/// as `render` makes with its own; where neither, they are not read.
 #[test]
-fn depths_given_to_the_drawing_are_one_per_particle_where_the_sky_is_dimmed() {
+fn depths_given_to_the_drawing_are_one_per_particle_where_they_are_read() {
     use atmo::atmosphere::PhaseFunction;
-    use atmo::clouds::render::{dims_the_sky, render, render_with_depths, Haze, Lighting};
-    use atmo::clouds::{vertical_depths, Octaves, SkyLight};
+    use atmo::clouds::render::{
+        dims_the_sky, needs_depths, render, render_with_depths, Haze, Lighting, Scattering,
+    };
+    use atmo::clouds::{CloudDepths, Octaves, SkyLight};
     let particles = cloud(60);
     let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.0, Splat::Pieces).unwrap();
     let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / 60.0;
@@ -488,10 +491,10 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_the_sky_is_dimmed() {
         ambient: SkyLight::from_harmonics(&sh),
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
-        scattering: Octaves::MULTIPLE,
+        scattering: Scattering::MULTIPLE,
     };
     assert!(dims_the_sky(&light));
-    let depths = vertical_depths(&particles).unwrap();
+    let depths = CloudDepths::of(&particles).unwrap();
     let given = render_with_depths(&particles, &depths, &buffer, &camera, &light, None).unwrap();
     let own = render(&particles, &buffer, &camera, &light, None).unwrap();
     assert!(
@@ -499,18 +502,41 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_the_sky_is_dimmed() {
         "the cloud in the picture"
     );
     assert!(given.pixels == own.pixels);
-    let message = render_with_depths(&particles, &depths[1..], &buffer, &camera, &light, None)
-        .unwrap_err()
-        .to_string();
-    assert!(
-        message.contains("59 vertical depths given for 60 particles"),
-        "{message}"
-    );
-    // A sky alike all round is not dimmed: no depths needed.
+    let short = |vertical: usize, out: usize| CloudDepths {
+        vertical: depths.vertical[..vertical].to_vec(),
+        out: depths.out[..out].to_vec(),
+    };
+    for (shorter, counted) in [
+        (short(59, 60), "59 vertical depths given for 60 particles"),
+        (
+            short(60, 59),
+            "59 depths out of the cloud given for 60 particles",
+        ),
+    ] {
+        let message = render_with_depths(&particles, &shorter, &buffer, &camera, &light, None)
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains(counted), "{message}");
+    }
+    // A sky alike all round is not dimmed: the table alone reads the depths out.
     let flat = Lighting {
         ambient: SkyLight::uniform(Vec3::ONE),
         ..light
     };
-    assert!(!dims_the_sky(&flat));
-    render_with_depths(&particles, &[], &buffer, &camera, &flat, None).unwrap();
+    assert!(!dims_the_sky(&flat) && needs_depths(&flat));
+    render_with_depths(&particles, &short(0, 60), &buffer, &camera, &flat, None).unwrap();
+    let octaves = Lighting {
+        scattering: Scattering::Octaves(Octaves::MULTIPLE),
+        ..flat
+    };
+    assert!(!needs_depths(&octaves));
+    render_with_depths(
+        &particles,
+        &CloudDepths::default(),
+        &buffer,
+        &camera,
+        &octaves,
+        None,
+    )
+    .unwrap();
 }

@@ -6,7 +6,7 @@
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::render::{render, Haze, Lighting};
-use atmo::clouds::{CloudShadow, Cumulus, Octaves, Particle, SkyLight};
+use atmo::clouds::{CloudShadow, Cumulus, Octaves, Particle, Scattering, SkyLight};
 use atmo::image::Frame;
 use atmo::reference::clouds::{Agreement, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::sky::lighting::project_equirect;
@@ -69,7 +69,7 @@ fn reference(particles: &[Particle], to_sun: Vec3) -> ReferenceCloud<'_> {
 
 /// The billboards' picture with `scattering`, the buffer holding the sun's
 /// transmittance, unit sunlight, no ambient light.
-fn fast(particles: &[Particle], camera: &Camera, to_sun: Vec3, scattering: Octaves) -> Vec<f64> {
+fn fast(particles: &[Particle], camera: &Camera, to_sun: Vec3, scattering: Scattering) -> Vec<f64> {
     let buffer = IntensityBuffer::new(particles, to_sun, 128, 0.0, Splat::Pieces).unwrap();
     let light = Lighting {
         to_sun,
@@ -159,7 +159,7 @@ fn single_scattering_pictures_match_the_quadrature() {
             .map(|p| p.0)
             .collect();
         assert!(reference.iter().all(|v| *v >= 0.0 && v.is_finite()));
-        let fast = fast(&particles, &camera, to_sun, Octaves::SINGLE);
+        let fast = fast(&particles, &camera, to_sun, Scattering::SINGLE);
         let ratio = mean_ratio(&camera, &cloud.covered(&camera), &fast, &reference);
         eprintln!("{name}: single scattering, billboards / quadrature {ratio:.3}");
         assert!((ratio - 1.0).abs() < 0.08, "{name}: {ratio}");
@@ -167,8 +167,9 @@ fn single_scattering_pictures_match_the_quadrature() {
 }
 
 /// The mean of every order over the cloud's pixels against the path tracer's (24
-/// paths a pixel); the path tracer's against single scattering's.
-fn every_order(particles: &[Particle], camera: &Camera, to_sun: Vec3) -> (f64, f64) {
+/// paths a pixel), by the transfer table and by the octaves; the path tracer's against
+/// single scattering's.
+fn every_order(particles: &[Particle], camera: &Camera, to_sun: Vec3) -> ([f64; 2], f64) {
     let cloud = reference(particles, to_sun);
     let settings = PathSettings {
         paths: 24,
@@ -180,29 +181,33 @@ fn every_order(particles: &[Particle], camera: &Camera, to_sun: Vec3) -> (f64, f
         .iter()
         .map(|p| p.0)
         .collect();
-    let single = fast(particles, camera, to_sun, Octaves::SINGLE);
-    let multiple = fast(particles, camera, to_sun, Octaves::MULTIPLE);
+    let single = fast(particles, camera, to_sun, Scattering::SINGLE);
     let covered = cloud.covered(camera);
-    (
-        mean_ratio(camera, &covered, &multiple, &traced),
-        mean_ratio(camera, &covered, &traced, &single),
-    )
+    let every = [Scattering::MULTIPLE, Scattering::Octaves(Octaves::MULTIPLE)].map(|s| {
+        mean_ratio(
+            camera,
+            &covered,
+            &fast(particles, camera, to_sun, s),
+            &traced,
+        )
+    });
+    (every, mean_ratio(camera, &covered, &traced, &single))
 }
 
 #[test]
 fn every_order_matches_the_path_tracer() {
-    // Measured at 48 x 28: 1.06 (front), 1.12 (side), 0.83 (behind) in the mean;
-    // every order is 3 to 5.5 times single scattering here. The octaves and the slab's
-    // light are fitted to 36 views of three clouds (docs/clouds.md), which costs this
-    // thin cloud some of what it had (0.95, 1.05, 0.92 with three octaves fitted to the
-    // thin clouds alone, whose worst view was 2.1).
+    // Measured at 48 x 28: the transfer table 1.10 (front), 1.11 (side), 1.01 (behind)
+    // of the path tracer in the mean, the octaves 1.06, 1.12 and 0.83; every order is 3
+    // to 5.5 times single scattering here. Both are fitted to many views of several
+    // clouds (docs/clouds.md), this one's among them.
     let particles = cloud();
     let camera = camera(&particles, 48, 28);
     for (name, to_sun, _) in lit(&particles) {
-        let (ratio, gain) = every_order(&particles, &camera, to_sun);
-        eprintln!("{name}: every order, billboards / path tracer {ratio:.3}; path tracer / single {gain:.2}");
+        let ([table, octaves], gain) = every_order(&particles, &camera, to_sun);
+        eprintln!("{name}: every order, billboards / path tracer {table:.3} (octaves {octaves:.3}); path tracer / single {gain:.2}");
         assert!(gain > 2.5, "{name}: higher orders add light: {gain}");
-        assert!((ratio - 1.0).abs() < 0.2, "{name}: {ratio}");
+        assert!((table - 1.0).abs() < 0.12, "{name}: {table}");
+        assert!((octaves - 1.0).abs() < 0.2, "{name}: octaves {octaves}");
     }
 }
 
@@ -213,7 +218,7 @@ fn every_order_holds_from_below_a_thick_cloud_against_the_sun() {
     // high behind it: the worst view of the octaves fitted to the thin clouds alone
     // (1.61 of the path tracer here, the octaves' light carried through the cloud
     // with too much of the droplets' forward lobe; 1.18 with three octaves refitted to
-    // thick clouds too). Measured at 32 x 18: 1.08.
+    // thick clouds too). Measured at 32 x 18: the octaves 1.08, the transfer table 0.98.
     let particles = Cumulus {
         particles: 500,
         density: 0.04,
@@ -229,9 +234,10 @@ fn every_order_holds_from_below_a_thick_cloud_against_the_sun() {
     );
     let camera = Camera::look_at(eye, centre, Vec3::Y, Fov::Vertical(30.0), (32, 18)).unwrap();
     let to_sun = Sun::from_degrees(25.0, 20.0).unwrap().toward();
-    let (ratio, gain) = every_order(&particles, &camera, to_sun);
-    eprintln!("thick, from below, sun behind: every order, billboards / path tracer {ratio:.3}; path tracer / single {gain:.2}");
-    assert!((ratio - 1.0).abs() < 0.2, "{ratio}");
+    let ([table, octaves], gain) = every_order(&particles, &camera, to_sun);
+    eprintln!("thick, from below, sun behind: every order, billboards / path tracer {table:.3} (octaves {octaves:.3}); path tracer / single {gain:.2}");
+    assert!((table - 1.0).abs() < 0.1, "{table}");
+    assert!((octaves - 1.0).abs() < 0.2, "octaves {octaves}");
 }
 
 #[test]
@@ -323,7 +329,7 @@ fn the_sky_light_matches_the_path_tracer_in_the_mean() {
                 ambient,
                 phase: PhaseFunction::CloudMie,
                 haze: Haze::CLEAR,
-                scattering: Octaves::MULTIPLE,
+                scattering: Scattering::MULTIPLE,
             };
             let frame = render(&particles, &buffer, &camera, &light, None).unwrap();
             frame.pixels.iter().map(|p| p.x as f64).collect()

@@ -1,16 +1,17 @@
 //! `atmo bench clouds`: the light pass of the 3-D intensity buffer (clouds 3) against
 //! the Harris baseline (clouds 2.1) on the paper's three particle counts and three
 //! buffer sizes, in the same run; the buffer's error against the exact transmittance;
-//! the time to draw a 1280 x 720 frame with every order; and a small picture of every
-//! order against the path tracer, its error and the two times.
+//! the time to draw a 1280 x 720 frame with every order (by the transfer table and by
+//! the octaves) and to make the particles' depths the table reads; and a small picture
+//! of every order against the path tracer, its error and the two times.
 
 use anyhow::Result;
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::{Cumulus, SplitMix64};
 use atmo::clouds::harris::light_per_particle;
-use atmo::clouds::render::{render, Haze, Lighting};
-use atmo::clouds::{CloudShadow, Octaves, SkyLight};
+use atmo::clouds::render::{render_with_depths, Haze, Lighting};
+use atmo::clouds::{CloudDepths, CloudShadow, Octaves, Scattering, SkyLight};
 use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::clouds::{
     transmittance, Agreement, PathSettings, ReferenceCloud, ReferenceLight,
@@ -98,16 +99,37 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     .generate();
     let buffer = IntensityBuffer::new(&particles, to_sun, 256, forward, Splat::Pieces)?;
     let camera = bench_camera(&particles, (1280, 720));
-    let light = lighting(to_sun);
-    let (frame_ms, _) = timed_render(&particles, &buffer, &camera, &light, runs.min(5));
+    // The particles' depths, made once for frames of the same particles.
+    let mut depths = CloudDepths::default();
+    let depths_ms = median(
+        (0..runs.min(5))
+            .map(|_| time_ms(|| depths = CloudDepths::of(&particles).expect("validated")))
+            .collect(),
+    );
     emit(
         json,
-        json!({"bench": "clouds.frame", "params": {"particles": particles.len(), "width": 1280, "height": 720, "scattering": "multiple"}, "median_ms": frame_ms}),
+        json!({"bench": "clouds.depths", "params": {"particles": particles.len(), "resolution": atmo::clouds::sky_light::VERTICAL_RESOLUTION}, "median_ms": depths_ms}),
         format!(
-            "clouds.frame      {:>6} particles 1280 x 720: {frame_ms:.1} ms (every order)",
+            "clouds.depths     {:>6} particles: {depths_ms:.1} ms (once per particle set)",
             particles.len()
         ),
     );
+    for (name, scattering) in [
+        ("multiple", Scattering::MULTIPLE),
+        ("octaves", Scattering::Octaves(Octaves::MULTIPLE)),
+    ] {
+        let light = lighting(to_sun, scattering);
+        let (frame_ms, _) =
+            timed_render(&particles, &depths, &buffer, &camera, &light, runs.min(5));
+        emit(
+            json,
+            json!({"bench": "clouds.frame", "params": {"particles": particles.len(), "width": 1280, "height": 720, "scattering": name}, "median_ms": frame_ms}),
+            format!(
+                "clouds.frame      {:>6} particles 1280 x 720: {frame_ms:.1} ms (every order, {name})",
+                particles.len()
+            ),
+        );
+    }
     // The cloud's shadow on the ground, made with each light pass where a picture shows
     // the ground: its time beside the light pass's, and its transmittance on a grid of
     // ground points 125 m apart around the shadow against the exact one.
@@ -155,16 +177,16 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
             light_ms / shadow_ms
         ),
     );
-    // Every order against the path tracer, on a small picture of the same view.
+    // Every order against the path tracer, on a small picture of the same view: by the
+    // table and by the octaves, against the same path-traced picture.
     let size = if quick { (32, 18) } else { (64, 36) };
     let paths = if quick { 8 } else { 16 };
     let small = bench_camera(&particles, size);
-    let (fast_ms, fast) = timed_render(&particles, &buffer, &small, &light, runs);
     let reference = ReferenceCloud::new(
         &particles,
         ReferenceLight {
             to_sun: to_sun.as_dvec3(),
-            phase: light.phase,
+            phase: PhaseFunction::CloudMie,
             sky: 0.0,
         },
     );
@@ -175,48 +197,57 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     };
     let mut traced = Vec::new();
     let traced_ms = time_ms(|| traced = reference.path_traced_picture(&small, &settings));
+    let traced: Vec<f64> = traced.iter().map(|t| t.0).collect();
     // Over the cloud's pixels (those its particles cover, optical depth over 0.1): the
     // mean, and the share of 8 x 8 blocks within 15 %.
     let covered = reference.covered(&small);
-    let agreement = Agreement::of(
-        &fast.pixels.iter().map(|p| p.x as f64).collect::<Vec<_>>(),
-        &traced.iter().map(|t| t.0).collect::<Vec<_>>(),
-        &covered,
-        small.width as usize,
-    );
-    let error = agreement.mean_ratio - 1.0;
-    let share = |within: usize| within as f64 / agreement.blocks.max(1) as f64;
-    let (blocks, medians) = (
-        share(agreement.blocks_within_15),
-        share(agreement.medians_within_15),
-    );
-    emit(
-        json,
-        json!({"bench": "clouds.multiple", "params": {"particles": particles.len(), "width": size.0, "height": size.1,
-                   "scattering": "multiple", "paths_per_pixel": paths,
-                   "cloud_pixels": covered.iter().filter(|c| **c).count()},
-               "median_ms": fast_ms, "baseline": "clouds.path-traced", "baseline_median_ms": traced_ms,
-               "ratio": traced_ms / fast_ms,
-               "error": {"vs_path_traced": error, "blocks_within_15": blocks, "blocks": agreement.blocks,
-                         "block_medians_within_15": medians}}),
-        format!(
-            "clouds.multiple   {:>6} particles {} x {}: {fast_ms:.1} ms   path tracer ({paths} paths) {traced_ms:.0} ms   ratio {:.0}   mean error {:+.1} %   8 x 8 blocks within 15 %: {} of {} by their means, {} by their medians",
-            particles.len(),
-            size.0,
-            size.1,
-            traced_ms / fast_ms,
-            100.0 * error,
-            agreement.blocks_within_15,
-            agreement.blocks,
-            agreement.medians_within_15
-        ),
-    );
+    for (name, scattering) in [
+        ("multiple", Scattering::MULTIPLE),
+        ("octaves", Scattering::Octaves(Octaves::MULTIPLE)),
+    ] {
+        let light = lighting(to_sun, scattering);
+        let (fast_ms, fast) = timed_render(&particles, &depths, &buffer, &small, &light, runs);
+        let agreement = Agreement::of(
+            &fast.pixels.iter().map(|p| p.x as f64).collect::<Vec<_>>(),
+            &traced,
+            &covered,
+            small.width as usize,
+        );
+        let error = agreement.mean_ratio - 1.0;
+        let share = |within: usize| within as f64 / agreement.blocks.max(1) as f64;
+        let (blocks, medians) = (
+            share(agreement.blocks_within_15),
+            share(agreement.medians_within_15),
+        );
+        emit(
+            json,
+            json!({"bench": "clouds.multiple", "params": {"particles": particles.len(), "width": size.0, "height": size.1,
+                       "scattering": name, "paths_per_pixel": paths,
+                       "cloud_pixels": covered.iter().filter(|c| **c).count()},
+                   "median_ms": fast_ms, "baseline": "clouds.path-traced", "baseline_median_ms": traced_ms,
+                   "ratio": traced_ms / fast_ms,
+                   "error": {"vs_path_traced": error, "blocks_within_15": blocks, "blocks": agreement.blocks,
+                             "block_medians_within_15": medians}}),
+            format!(
+                "clouds.multiple   {:>6} particles {} x {} ({name}): {fast_ms:.1} ms   path tracer ({paths} paths) {traced_ms:.0} ms   ratio {:.0}   mean error {:+.1} %   8 x 8 blocks within 15 %: {} of {} by their means, {} by their medians",
+                particles.len(),
+                size.0,
+                size.1,
+                traced_ms / fast_ms,
+                100.0 * error,
+                agreement.blocks_within_15,
+                agreement.blocks,
+                agreement.medians_within_15
+            ),
+        );
+    }
     Ok(())
 }
 
-/// The median time of `runs` CPU drawings of the cloud, ms, and the last picture.
+/// The median time of drawing `particles` (their `depths` given), and the last frame.
 fn timed_render(
     particles: &[atmo::clouds::particles::Particle],
+    depths: &CloudDepths,
     buffer: &IntensityBuffer,
     camera: &Camera,
     light: &Lighting,
@@ -227,7 +258,8 @@ fn timed_render(
         (0..runs)
             .map(|_| {
                 time_ms(|| {
-                    frame = render(particles, buffer, camera, light, None).expect("a pinhole")
+                    frame = render_with_depths(particles, depths, buffer, camera, light, None)
+                        .expect("a pinhole")
                 })
             })
             .collect(),
@@ -235,15 +267,15 @@ fn timed_render(
     (ms, frame)
 }
 
-/// The benches' light: unit sunlight from `to_sun`, every order, no ambient light.
-fn lighting(to_sun: Vec3) -> Lighting {
+/// The benches' light: unit sunlight from `to_sun`, `scattering`, no ambient light.
+fn lighting(to_sun: Vec3, scattering: Scattering) -> Lighting {
     Lighting {
         to_sun,
         sun: Vec3::ONE,
         ambient: SkyLight::NONE,
         phase: PhaseFunction::CloudMie,
         haze: Haze::CLEAR,
-        scattering: Octaves::MULTIPLE,
+        scattering,
     }
 }
 
@@ -327,8 +359,10 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         .light(gpu, to_sun, forward, Splat::Pieces)
         .map_err(gpu_error)?;
     let camera = bench_camera(&particles, (1280, 720));
-    let light = lighting(to_sun);
-    let (cpu_ms, cpu) = timed_render(&particles, &buffer, &camera, &light, runs);
+    // The GPU draws every order by the octaves.
+    let light = lighting(to_sun, Scattering::Octaves(Octaves::MULTIPLE));
+    let depths = CloudDepths::default();
+    let (cpu_ms, cpu) = timed_render(&particles, &depths, &buffer, &camera, &light, runs);
     let (wall, gpu_ms, frame) = time_gpu(runs, || {
         let Rendered { frame, gpu_ms } = clouds.render(gpu, &camera, &light, None)?;
         Ok((frame, gpu_ms))
@@ -342,7 +376,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
         gpu,
         Case {
             name: "clouds.frame.gpu",
-            params: json!({"particles": particles.len(), "width": camera.width, "height": camera.height, "scattering": "multiple"}),
+            params: json!({"particles": particles.len(), "width": camera.width, "height": camera.height, "scattering": "octaves"}),
             wall_ms: wall,
             gpu_ms,
             cpu_ms,

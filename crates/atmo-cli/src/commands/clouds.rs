@@ -11,9 +11,9 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::files;
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{dims_the_sky, render_with_depths, Haze, Lighting};
+use atmo::clouds::render::{needs_depths, render_with_depths, Haze, Lighting, Scattering};
 use atmo::clouds::shadow::{CloudShadow, Ground};
-use atmo::clouds::{vertical_depths, Octaves, SkyLight};
+use atmo::clouds::{CloudDepths, Octaves, SkyLight};
 use atmo::error::check_range;
 use atmo::files::check_folder;
 use atmo::image::{Display, Frame, ImageKind};
@@ -114,8 +114,9 @@ pub struct CloudStill {
     /// Intensity buffer voxels along each axis (the paper: 128, 256, 384).
     #[arg(long, default_value_t = 256)]
     resolution: usize,
-    /// Light scattered once (`single`, the paper's model) or every order
-    /// (`multiple`: octaves fitted to a path tracer; docs/clouds.md).
+    /// Light scattered once (`single`, the paper's model) or every order: `multiple`, a
+    /// transfer table fitted to a path tracer (docs/clouds.md), or `octaves`, the
+    /// octaves fitted to it, which the GPU (--gpu, the window) draws for both.
     #[arg(long, value_enum, default_value_t = ScatteringArg::Multiple)]
     scattering: ScatteringArg,
     /// With --scattering single: the part of scattered light taken to go on along the
@@ -259,35 +260,42 @@ pub const WIND_STEP_S: f32 = 4.0;
 /// The light pass and the drawing, on the CPU or on a GPU.
 enum Renderer {
     /// The buffer and its resolution (none before the first light pass), and the
-    /// particles' depths down the vertical for the sky's light inside the cloud.
+    /// particles' depths in the cloud for the sky's light inside it and the transfer
+    /// table.
     Cpu(Option<IntensityBuffer>, usize, KeptDepths),
     /// The device and the cloud on it.
     Gpu(Box<(Gpu, GpuClouds)>),
 }
 
-/// The particles' depths down the vertical ([`vertical_depths`]) and the particles they
-/// were made for: they depend on the particles alone, so frames of the same particles
-/// under a moving sun or camera (`--animate sun`, the window) make them once. (The GPU
-/// keeps its own in the particles' records.)
-#[derive(Default)]
-struct KeptDepths(RefCell<Option<(Vec<Particle>, Depths)>>);
+/// `light` as the GPU draws it: every order by the octaves (the transfer table reads the
+/// depth in front of each blob, which billboards blended in hardware do not know).
+fn as_on_gpu(light: &Lighting) -> Lighting {
+    Lighting {
+        scattering: Scattering::Octaves(light.scattering.octaves()),
+        ..*light
+    }
+}
 
-/// Each particle's `[tau, T]` down the vertical.
-type Depths = Vec<[f32; 2]>;
+/// The particles' depths in the cloud ([`CloudDepths`]) and the particles they were
+/// made for: they depend on the particles alone, so frames of the same particles under a
+/// moving sun or camera (`--animate sun`, the window) make them once. (The GPU keeps
+/// its own in the particles' records.)
+#[derive(Default)]
+struct KeptDepths(RefCell<Option<(Vec<Particle>, CloudDepths)>>);
 
 impl KeptDepths {
     /// The depths of `particles`, made again only where they are not those last given.
-    fn of(&self, particles: &[Particle]) -> Result<Ref<'_, [[f32; 2]]>> {
+    fn of(&self, particles: &[Particle]) -> Result<Ref<'_, CloudDepths>> {
         let stale = self
             .0
             .borrow()
             .as_ref()
             .is_none_or(|(kept, _)| kept != particles);
         if stale {
-            *self.0.borrow_mut() = Some((particles.to_vec(), vertical_depths(particles)?));
+            *self.0.borrow_mut() = Some((particles.to_vec(), CloudDepths::of(particles)?));
         }
         Ok(Ref::map(self.0.borrow(), |kept| {
-            kept.as_ref().expect("made above").1.as_slice()
+            &kept.as_ref().expect("made above").1
         }))
     }
 }
@@ -344,16 +352,17 @@ impl Renderer {
         Ok(match self {
             Renderer::Cpu(buffer, _, kept) => {
                 let buffer = buffer.as_ref().expect("a light pass comes first");
-                let depths = dims_the_sky(light)
+                let none = CloudDepths::default();
+                let depths = needs_depths(light)
                     .then(|| kept.of(particles))
                     .transpose()?;
-                let depths = depths.as_deref().unwrap_or_default();
+                let depths = depths.as_deref().unwrap_or(&none);
                 render_with_depths(particles, depths, buffer, camera, light, background)?
             }
             Renderer::Gpu(on) => {
                 let (gpu, clouds) = &**on;
                 clouds
-                    .render(gpu, camera, light, background)
+                    .render(gpu, camera, &as_on_gpu(light), background)
                     .map_err(gpu_error)?
                     .frame
             }
@@ -395,6 +404,7 @@ fn parse_vec3(text: &str) -> Result<Vec3, String> {
 enum ScatteringArg {
     Single,
     Multiple,
+    Octaves,
 }
 
 /// Where the ambient light comes from.
@@ -462,7 +472,7 @@ pub struct Cloud {
     forward: f32,
     splat: Splat,
     phase: PhaseFunction,
-    scattering: Octaves,
+    scattering: Scattering,
     ambient: Ambient,
     sky: bool,
     ground_albedo: Option<f32>,
@@ -521,17 +531,20 @@ impl Cloud {
             check_range("--ground-albedo", albedo as f64, 0.0, 1.0)?;
         }
         let scattering = match still.scattering {
-            ScatteringArg::Single => Octaves::SINGLE,
-            ScatteringArg::Multiple => {
+            ScatteringArg::Single => Scattering::SINGLE,
+            every => {
                 if still.forward != 0.0 {
                     return Err(atmo::Error::Invalid(format!(
-                        "--forward = {} applies to --scattering single only (the octaves of \
-                         --scattering multiple need the sun's transmittance: --forward 0)",
+                        "--forward = {} applies to --scattering single only (every order \
+                         needs the sun's transmittance: --forward 0)",
                         still.forward
                     ))
                     .into());
                 }
-                Octaves::MULTIPLE
+                match every {
+                    ScatteringArg::Octaves => Scattering::Octaves(Octaves::MULTIPLE),
+                    _ => Scattering::MULTIPLE,
+                }
             }
         };
         let phase = match still.phase {
@@ -1062,7 +1075,7 @@ impl CloudPictures for WindowClouds {
             slot => slot.insert(CloudsPass::new(gpu, picture.texture.format()).map_err(gpu_error)?),
         };
         clouds
-            .prepare(gpu, encoder, pass, &camera, &light)
+            .prepare(gpu, encoder, pass, &camera, &as_on_gpu(&light))
             .map_err(gpu_error)?;
         picture.draw_over(encoder, |render| pass.draw(render));
         Ok(())
@@ -1213,7 +1226,7 @@ mod tests {
     }
 
     /// With the sky's light dimmed inside the cloud, a window on the CPU keeps the
-    /// particles' depths down the vertical while only the sun moves and makes them again
+    /// particles' depths in the cloud while only the sun moves and makes them again
     /// once the wind has moved the particles: each picture is a fresh window's, bit for
     /// bit.
     #[test]
@@ -1237,7 +1250,7 @@ mod tests {
             let Renderer::Cpu(_, _, kept) = &lit.renderer else {
                 panic!("on the CPU");
             };
-            let depths = kept.0.borrow().as_ref().expect("made").1.as_ptr();
+            let depths = kept.0.borrow().as_ref().expect("made").1.out.as_ptr();
             depths
         };
         let mut p = window.params();

@@ -18,14 +18,19 @@ pub mod particles;
 pub mod render;
 pub mod shadow;
 pub mod sky_light;
+pub mod transfer;
+mod transfer_fitted;
 
 pub use buffer::{IntensityBuffer, Splat};
 pub use generator::Cumulus;
 pub use octaves::Octaves;
 pub use particles::Particle;
-pub use render::{dims_the_sky, render, render_with_depths, Haze, Lighting};
+pub use render::{
+    dims_the_sky, needs_depths, render, render_with_depths, Haze, Lighting, Scattering,
+};
 pub use shadow::CloudShadow;
 pub use sky_light::{vertical_depths, SkyDimming, SkyLight};
+pub use transfer::{CloudDepths, TransferTable};
 
 /// Eight values of the drawing's per-pixel quantities, one per pixel of a billboard's
 /// row: the hot loop of [`render`](mod@render) takes a row eight pixels at a time, its

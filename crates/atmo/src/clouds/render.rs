@@ -19,7 +19,8 @@ use rayon::prelude::*;
 use super::buffer::IntensityBuffer;
 use super::octaves::{Emission, Octaves};
 use super::particles::{tabulated_emission_nodes_lanes, Particle};
-use super::sky_light::{vertical_depths, SkyLight};
+use super::sky_light::SkyLight;
+use super::transfer::{CloudDepths, TransferTable};
 use super::{Lanes, LANES};
 use crate::atmosphere::phase::PhaseFunction;
 use crate::error::{Error, Result};
@@ -36,15 +37,57 @@ pub struct Lighting {
     pub sun: Vec3,
     /// The sky's radiance around the cloud (the paper has none), which the droplets
     /// scatter toward the eye by their phase function and every order of
-    /// `scattering` ([`SkyLight::scattered`]); [`SkyLight::NONE`] for none.
+    /// `scattering`'s octaves ([`SkyLight::scattered`], [`Scattering::octaves`]);
+    /// [`SkyLight::NONE`] for none.
     pub ambient: SkyLight,
     /// The droplets' phase function (clouds (6)'s `p`), e.g.
     /// [`PhaseFunction::CloudMie`].
     pub phase: PhaseFunction,
-    /// Single scattering, or every order by octaves.
-    pub scattering: Octaves,
+    /// Single scattering, or every order.
+    pub scattering: Scattering,
     /// The air between the eye and the cloud.
     pub haze: Haze,
+}
+
+/// How the sun's light scattered more than once is drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Scattering {
+    /// By octaves of single scattering ([`Octaves`]; [`Octaves::SINGLE`] for single
+    /// scattering alone): what the GPU's billboards draw too.
+    Octaves(Octaves),
+    /// Single scattering and a transfer table for the orders past the first
+    /// ([`TransferTable`]; the CPU's).
+    Transfer(&'static TransferTable),
+}
+
+impl Scattering {
+    /// Single scattering: the paper's model.
+    pub const SINGLE: Scattering = Scattering::Octaves(Octaves::SINGLE);
+    /// Every order, by the table fitted to the path tracer: the default.
+    pub const MULTIPLE: Scattering = Scattering::Transfer(&TransferTable::FITTED);
+
+    /// The octaves the sky's light follows ([`SkyLight::scattered`], its dimming), and
+    /// the sun's but for the table's orders past the first: with the table, the sky's
+    /// light is that of [`Octaves::MULTIPLE`].
+    pub fn octaves(&self) -> Octaves {
+        match self {
+            Scattering::Octaves(octaves) => *octaves,
+            Scattering::Transfer(_) => Octaves::MULTIPLE,
+        }
+    }
+
+    /// The table, if the orders past the first are drawn by one.
+    pub fn table(&self) -> Option<&'static TransferTable> {
+        match self {
+            Scattering::Octaves(_) => None,
+            Scattering::Transfer(table) => Some(table),
+        }
+    }
+
+    /// Refuses octaves outside their ranges, naming the field.
+    pub fn validate(&self) -> Result<()> {
+        self.octaves().validate()
+    }
 }
 
 /// The atmosphere between the eye and the cloud (its aerial perspective,
@@ -80,28 +123,34 @@ pub fn render(
     light: &Lighting,
     background: Option<&Frame>,
 ) -> Result<Frame> {
-    let depths = if dims_the_sky(light) {
-        vertical_depths(particles)?
+    let depths = if needs_depths(light) {
+        CloudDepths::of(particles)?
     } else {
-        Vec::new()
+        CloudDepths::default()
     };
     render_with_depths(particles, &depths, buffer, camera, light, background)
 }
 
 /// Whether `light` dims the sky's light inside the cloud, and so needs the particles'
-/// depths down the vertical ([`render_with_depths`]).
+/// depths down the vertical ([`CloudDepths::vertical`]).
 pub fn dims_the_sky(light: &Lighting) -> bool {
-    !light.ambient.dimming(&light.scattering).is_flat()
+    !light.ambient.dimming(&light.scattering.octaves()).is_flat()
 }
 
-/// [`render`] with the particles' depths down the vertical given ([`vertical_depths`],
-/// one per particle), for a caller that draws the same particles again under another
-/// sun or from another camera: they depend on the particles alone, and making them
-/// costs tens of milliseconds for 60,134 particles. Not read (and may be empty) where
-/// the sky's light is not dimmed ([`dims_the_sky`]).
+/// Whether drawing with `light` reads the particles' [`CloudDepths`]: where the sky's
+/// light is dimmed inside the cloud ([`dims_the_sky`]) or a transfer table draws the
+/// orders past the first (its `tau_out`).
+pub fn needs_depths(light: &Lighting) -> bool {
+    dims_the_sky(light) || light.scattering.table().is_some()
+}
+
+/// [`render`] with the particles' depths given ([`CloudDepths::of`]), for a caller that
+/// draws the same particles again under another sun or from another camera: they
+/// depend on the particles alone, and making them costs tens of milliseconds for
+/// 60,134 particles. Not read (and may be empty) where [`needs_depths`] says so.
 pub fn render_with_depths(
     particles: &[Particle],
-    depths: &[[f32; 2]],
+    depths: &CloudDepths,
     buffer: &IntensityBuffer,
     camera: &Camera,
     light: &Lighting,
@@ -153,20 +202,46 @@ pub fn render_with_depths(
     phases.extend([0.0f32; LANES]);
     // The sky's light the droplets scatter along a ray, taken where a blob was drawn,
     // and how much of it reaches each particle inside the cloud from above and below.
-    let sky = light.ambient.scattered(light.phase, &light.scattering);
-    let dimming = light.ambient.dimming(&light.scattering);
+    let octaves_of_sky = light.scattering.octaves();
+    let sky = light.ambient.scattered(light.phase, &octaves_of_sky);
+    let dimming = light.ambient.dimming(&octaves_of_sky);
+    let given = |what: &str, count: usize| {
+        if count == particles.len() {
+            Ok(())
+        } else {
+            Err(Error::Invalid(format!(
+                "{count} {what} given for {} particles",
+                particles.len()
+            )))
+        }
+    };
     let top_shares: Vec<f32> = if dimming.is_flat() {
         vec![0.0; particles.len()]
-    } else if depths.len() != particles.len() {
-        return Err(Error::Invalid(format!(
-            "{} vertical depths given for {} particles",
-            depths.len(),
-            particles.len()
-        )));
     } else {
-        depths.iter().map(|&d| dimming.top_share(d)).collect()
+        given("vertical depths", depths.vertical.len())?;
+        depths
+            .vertical
+            .iter()
+            .map(|&d| dimming.top_share(d))
+            .collect()
     };
-    let octaves = light.scattering.terms();
+    // With a table, the cosine to the sun of each pixel's ray.
+    let table = light.scattering.table();
+    let cosines: Vec<f32> = match table {
+        None => Vec::new(),
+        Some(_) => {
+            given("depths out of the cloud", depths.out.len())?;
+            let mut cosines = Vec::with_capacity(w * h + LANES);
+            cosines.par_extend((0..w * h).into_par_iter().map(|k| light.to_sun.dot(ray(k))));
+            cosines.extend([0.0f32; LANES]);
+            cosines
+        }
+    };
+    let octaves = match table {
+        None => light.scattering.octaves(),
+        Some(_) => Octaves::SINGLE,
+    }
+    .terms();
     let mut frame = Frame::new(camera.width, camera.height);
     frame
         .pixels
@@ -182,6 +257,8 @@ pub fn render_with_depths(
             // the same times each blob's share of that light from above.
             let padded = pixels.len() + LANES;
             let mut through = vec![1.0f32; padded];
+            // With a table, the optical depth in front, `-ln through` (kept as a sum).
+            let mut in_front = vec![0.0f32; if table.is_some() { padded } else { 0 }];
             let (mut single, mut higher) = (vec![0.0f32; padded], vec![0.0f32; padded]);
             let (mut skylit, mut skytop) = (vec![0.0f32; padded], vec![0.0f32; padded]);
             // Blocks of BLOCK columns across the band: whether one of their pixels still
@@ -292,8 +369,36 @@ pub fn render_with_depths(
                             sums[i..i + LANES].copy_from_slice(new.as_array());
                         };
                         add(&mut single, blob.single);
-                        add(&mut higher, blob.higher);
                         let absorbed = Lanes::ONE - blob.transmitted;
+                        match table {
+                            None => add(&mut higher, blob.higher),
+                            Some(table) => {
+                                // The table's light at the blob's mean depth toward the
+                                // sun, its particle's depth out, the ray's angle and the
+                                // depth in front of the blob's middle.
+                                let front = Lanes::from(&in_front[i..i + LANES]);
+                                let half = Lanes::splat(0.5);
+                                let eye = front + half * (emission.u[0] + emission.u[1]);
+                                let sun = -half * (emission.log_gamma[0] + emission.log_gamma[1]);
+                                let look = table.lookup(
+                                    sun,
+                                    eye.fast_min(sun).fast_min(Lanes::splat(depths.out[k])),
+                                    Lanes::from(&cosines[band * BAND * w + i..][..LANES]),
+                                    eye,
+                                );
+                                let mask = live.to_array();
+                                let f: [f32; LANES] = std::array::from_fn(|lane| {
+                                    if mask[lane] != 0.0 {
+                                        look.value(table, lane)
+                                    } else {
+                                        0.0
+                                    }
+                                });
+                                add(&mut higher, Lanes::from(f) * absorbed);
+                                let sum = live.select(front + tau, front);
+                                in_front[i..i + LANES].copy_from_slice(sum.as_array());
+                            }
+                        }
                         add(&mut skylit, absorbed);
                         add(&mut skytop, absorbed * top);
                         let kept = live.select(t_through * blob.transmitted, t_through);
@@ -307,7 +412,11 @@ pub fn render_with_depths(
             let haze = light.haze;
             for (j, e) in pixels.iter_mut().enumerate() {
                 let t = through[j];
-                *e = light.sun * (single[j] + light.scattering.higher_share(t) * higher[j]);
+                let share = match table {
+                    None => octaves_of_sky.higher_share(t),
+                    Some(_) => 1.0,
+                };
+                *e = light.sun * (single[j] + share * higher[j]);
                 if skylit[j] > 0.0 {
                     // The blobs' mean share of the light from above, weighted as
                     // their sky light is.

@@ -189,7 +189,13 @@ pub const VERTICAL_RESOLUTION: usize = 64;
 /// no forward scattering (its `Gamma` is then the transmittance from the top), so the
 /// sky's depths come from the same machinery as the sun's.
 pub fn vertical_depths(particles: &[Particle]) -> Result<Vec<[f32; 2]>> {
-    let buffer = IntensityBuffer::new(particles, Vec3::Y, VERTICAL_RESOLUTION, 0.0, Splat::Pieces)?;
+    depths_along(particles, Vec3::Y)
+}
+
+/// [`vertical_depths`] along any unit `axis`: each particle's optical depth from the
+/// side `axis` points to, and the whole cloud's along the line through its centre.
+pub(crate) fn depths_along(particles: &[Particle], axis: Vec3) -> Result<Vec<[f32; 2]>> {
+    let buffer = IntensityBuffer::new(particles, axis, VERTICAL_RESOLUTION, 0.0, Splat::Pieces)?;
     Ok(particles
         .iter()
         .map(|p| {
