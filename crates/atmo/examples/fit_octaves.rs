@@ -4,7 +4,8 @@
 //! optical depth about 3 to 55 through the middle, blobs large and small), each seen
 //! from above, level and below, the sun 25 deg high from the front, the side and behind
 //! and 60 deg high. Prints each view's mean of the octaves (`atmo::clouds::Octaves`)
-//! over the path tracer's (on the cloud's pixels) and its 8 x 8 blocks within 15 %.
+//! over the path tracer's (on the cloud's pixels) and its 8 x 8 blocks within 15 %, then
+//! the scores of the octaves and of the library's transfer table over all the views.
 //! `--clouds c200,c2000,c9382` keeps the views of the clouds named: those three are the
 //! 36 views the octaves were fitted to. With `--search`, a grid search over the
 //! octaves' numbers, best worst view first: how `Octaves::MULTIPLE` was chosen
@@ -147,13 +148,10 @@ fn main() -> Result<()> {
         }
     });
     octaves.validate()?;
-    let views: Vec<View> = views(paths)?
-        .into_iter()
-        .filter(|v| {
-            value("--clouds")
-                .is_none_or(|c| c.split(',').any(|c| v.name.starts_with(&format!("{c}-"))))
-        })
-        .collect();
+    let chosen = value("--clouds");
+    let views = views(paths, |cloud| {
+        chosen.is_none_or(|c| c.split(',').any(|c| c == cloud))
+    })?;
     for (view, score) in views.iter().zip(scores(&views, &octaves)?) {
         println!(
             "{:<22} octaves / path tracer {:.3}   blocks within 15 %: {} of {} by their means, {} by their medians",
@@ -161,6 +159,11 @@ fn main() -> Result<()> {
         );
     }
     println!("{octaves:?}: {}", summary(&scores(&views, &octaves)?));
+    let table = views
+        .iter()
+        .map(|v| Ok(v.agreement(&v.rendered(Scattering::MULTIPLE)?)))
+        .collect::<Result<Vec<_>>>()?;
+    println!("the library's transfer table: {}", summary(&table));
     if args.iter().any(|a| a == "--floor") {
         let scores = views
             .iter()
@@ -488,9 +491,9 @@ fn write_table(table: &TransferTable, file: &Path, how: &str) -> Result<()> {
     Ok(())
 }
 
-/// The 36 views, each with its path-traced picture (from the temporary folder when an
-/// earlier run made it).
-fn views(paths: usize) -> Result<Vec<View>> {
+/// The views of the clouds `chosen` keeps (all 108: twelve a cloud), each with its
+/// path-traced picture (from the temporary folder when an earlier run made it).
+fn views(paths: usize, chosen: impl Fn(&str) -> bool) -> Result<Vec<View>> {
     let clouds = [
         ("c200", 200, 0.006),
         ("c2000", 2000, 0.006),
@@ -499,6 +502,8 @@ fn views(paths: usize) -> Result<Vec<View>> {
         ("c1000", 1000, 0.002),
         ("c4000", 4000, 0.015),
         ("c20000", 20000, 0.04),
+        ("c300", 300, 0.003),
+        ("c8000", 8000, 0.004),
     ];
     // Eye height (None: level with the cloud's middle) and horizontal distance, m.
     let eyes = [
@@ -515,7 +520,7 @@ fn views(paths: usize) -> Result<Vec<View>> {
     let folder = std::env::temp_dir().join("atmo-fit-octaves");
     std::fs::create_dir_all(&folder)?;
     let mut views = Vec::new();
-    for (cloud, count, density) in clouds {
+    for (cloud, count, density) in clouds.into_iter().filter(|c| chosen(c.0)) {
         let particles = Cumulus {
             particles: count,
             density,

@@ -8,10 +8,11 @@
 //! `S_k = a_k tau_k p I_k / 4 pi` for a thin particle, each pixel here follows its own
 //! ray through the blob and integrates the light the blob sends along it, what it
 //! absorbs of its own light included ([`Emission`]), for every octave of
-//! [`Octaves`] (docs/clouds.md, "Drawing"). A billboard's row is drawn eight pixels at
-//! a time in SIMD lanes (the `wide` crate): the pixel's arithmetic, not memory, was the
-//! frame's cost, and on two cores this draws the bench's frame 2.35 times faster than a
-//! pixel at a time.
+//! [`Octaves`] (docs/clouds.md, "Drawing"), or single scattering and the orders past
+//! the first from a [`TransferTable`] ([`Scattering`]). A billboard's row is drawn
+//! eight pixels at a time in SIMD lanes (the `wide` crate): the pixel's arithmetic, not
+//! memory, was the frame's cost, and on two cores this draws the bench's frame 2.35
+//! times faster than a pixel at a time.
 
 use glam::Vec3;
 use rayon::prelude::*;

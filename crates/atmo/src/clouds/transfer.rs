@@ -22,16 +22,16 @@
 //! scattering is added (clouds (5)). The values are fitted, at least 0, by least squares
 //! to the volumetric path tracer
 //! ([`crate::reference::clouds::ReferenceCloud::path_traced`]): its light less the
-//! billboards' own single scattering, over 84 views of seven cumulus clouds of 200 to
+//! billboards' own single scattering, over 108 views of nine cumulus clouds of 200 to
 //! 20,000 particles and optical depth about 3 to 55 (`examples/fit_octaves.rs
 //! --transfer`, whose `--write` makes `transfer_fitted.rs`).
 //!
 //! Why a table rather than octaves ([`super::octaves`]): octaves see only the depth
 //! toward the sun, and their light at a point cannot know how deep in the cloud the
 //! point lies the other ways, which decides the level of the diffuse light of the many
-//! orders. Over the 84 views (32 paths a pixel) the octaves' worst view is 1.32 times
-//! the path tracer, 52 views are within 10 % in the mean and 52 % of the 8 x 8 blocks
-//! within 15 %; the table's 1.22, 65 and 64 %. On the bench's view, a 60,134-particle
+//! orders. Over the 108 views (32 paths a pixel) the octaves' worst view is 1.34 times
+//! the path tracer, 66 views are within 10 % in the mean and 54 % of the 8 x 8 blocks
+//! within 15 %; the table's 1.20, 84 and 67 %. On the bench's view, a 60,134-particle
 //! cloud no fit has seen, from below against the sun: +4 % in the mean where the
 //! octaves are +41 %. It costs three coarse light passes once per cloud shape (not per
 //! sun) and a 16-node lookup a blob-pixel. The GPU's billboards, blended in hardware,
