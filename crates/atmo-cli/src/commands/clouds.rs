@@ -116,7 +116,8 @@ pub struct CloudStill {
     resolution: usize,
     /// Light scattered once (`single`, the paper's model) or every order: `multiple`, a
     /// transfer table fitted to a path tracer (docs/clouds.md), or `octaves`, the
-    /// octaves fitted to it, which the GPU (--gpu, the window) draws for both.
+    /// octaves fitted to it, which the GPU (--backend gpu, the window on a GPU) draws
+    /// for both.
     #[arg(long, value_enum, default_value_t = ScatteringArg::Multiple)]
     scattering: ScatteringArg,
     /// With --scattering single: the part of scattered light taken to go on along the

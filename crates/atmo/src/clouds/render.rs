@@ -67,9 +67,8 @@ impl Scattering {
     /// Every order, by the table fitted to the path tracer: the default.
     pub const MULTIPLE: Scattering = Scattering::Transfer(&TransferTable::FITTED);
 
-    /// The octaves the sky's light follows ([`SkyLight::scattered`], its dimming), and
-    /// the sun's but for the table's orders past the first: with the table, the sky's
-    /// light is that of [`Octaves::MULTIPLE`].
+    /// The octaves the sky's light follows (its tilt, [`SkyLight::scattered`], and its
+    /// dimming inside the cloud): these octaves, or with a table [`Octaves::MULTIPLE`].
     pub fn octaves(&self) -> Octaves {
         match self {
             Scattering::Octaves(octaves) => *octaves,
@@ -148,7 +147,7 @@ pub fn needs_depths(light: &Lighting) -> bool {
 /// [`render`] with the particles' depths given ([`CloudDepths::of`]), for a caller that
 /// draws the same particles again under another sun or from another camera: they
 /// depend on the particles alone, and making them costs tens of milliseconds for
-/// 60,134 particles. Not read (and may be empty) where [`needs_depths`] says so.
+/// 60,134 particles. Not read (and may be empty) unless [`needs_depths`].
 pub fn render_with_depths(
     particles: &[Particle],
     depths: &CloudDepths,
