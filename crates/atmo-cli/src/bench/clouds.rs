@@ -114,10 +114,7 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
             particles.len()
         ),
     );
-    for (name, scattering) in [
-        ("multiple", Scattering::MULTIPLE),
-        ("octaves", Scattering::Octaves(Octaves::MULTIPLE)),
-    ] {
+    for (name, scattering) in EVERY_ORDER {
         let light = lighting(to_sun, scattering);
         let (frame_ms, _) =
             timed_render(&particles, &depths, &buffer, &camera, &light, runs.min(5));
@@ -201,10 +198,7 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     // Over the cloud's pixels (those its particles cover, optical depth over 0.1): the
     // mean, and the share of 8 x 8 blocks within 15 %.
     let covered = reference.covered(&small);
-    for (name, scattering) in [
-        ("multiple", Scattering::MULTIPLE),
-        ("octaves", Scattering::Octaves(Octaves::MULTIPLE)),
-    ] {
+    for (name, scattering) in EVERY_ORDER {
         let light = lighting(to_sun, scattering);
         let (fast_ms, fast) = timed_render(&particles, &depths, &buffer, &small, &light, runs);
         let agreement = Agreement::of(
@@ -243,6 +237,13 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     }
     Ok(())
 }
+
+/// The two models of every order the benches time and score, by their names in the
+/// JSON's params: the transfer table (the CPU's default) and the octaves (the GPU's).
+const EVERY_ORDER: [(&str, Scattering); 2] = [
+    ("multiple", Scattering::MULTIPLE),
+    ("octaves", Scattering::Octaves(Octaves::MULTIPLE)),
+];
 
 /// The median time of drawing `particles` (their `depths` given), and the last frame.
 fn timed_render(

@@ -373,9 +373,10 @@ pub fn render_with_depths(
                         match table {
                             None => add(&mut higher, blob.higher),
                             Some(table) => {
-                                // The table's light at the blob's mean depth toward the
-                                // sun, its particle's depth out, the ray's angle and the
-                                // depth in front of the blob's middle.
+                                // The table's light at the emission nodes' mean depths
+                                // toward the sun and toward the eye (the cloud's in front
+                                // and theirs into the blob), the least of those and the
+                                // particle's depth out, and the ray's angle.
                                 let front = Lanes::from(&in_front[i..i + LANES]);
                                 let half = Lanes::splat(0.5);
                                 let eye = front + half * (emission.u[0] + emission.u[1]);

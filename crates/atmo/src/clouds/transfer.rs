@@ -183,11 +183,11 @@ impl CloudDepths {
         let vertical = vertical_depths(particles)?;
         let mut out = vec![f32::INFINITY; particles.len()];
         for along in [
-            vertical.clone(),
-            depths_along(particles, Vec3::X)?,
-            depths_along(particles, Vec3::Z)?,
+            &vertical,
+            &depths_along(particles, Vec3::X)?,
+            &depths_along(particles, Vec3::Z)?,
         ] {
-            for (out, [tau, column]) in out.iter_mut().zip(along) {
+            for (out, &[tau, column]) in out.iter_mut().zip(along) {
                 *out = out.min(tau).min((column - tau).max(0.0));
             }
         }
