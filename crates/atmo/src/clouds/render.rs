@@ -190,16 +190,17 @@ pub fn render_with_depths(
         buffer.grid_step(rx),
         buffer.grid_step(ry),
     );
-    // Pixel `k`'s unit ray; the phase function for it, the same for every blob it
-    // crosses (one lane-load past the last pixel is read and not used).
+    // Pixel `k`'s unit ray; its cosine to the sun and the phase function for it, the
+    // same for every blob it crosses (one lane-load past the last pixel is read and not
+    // used).
     let ray = |k: usize| (r0 + (k % w) as f32 * rx + (k / w) as f32 * ry).normalize();
-    let mut phases = Vec::with_capacity(w * h + LANES);
-    phases.par_extend(
-        (0..w * h)
-            .into_par_iter()
-            .map(|k| light.phase.eval_f32(light.to_sun.dot(ray(k)))),
-    );
-    phases.extend([0.0f32; LANES]);
+    let mut cosines = Vec::with_capacity(w * h + LANES);
+    cosines.par_extend((0..w * h).into_par_iter().map(|k| light.to_sun.dot(ray(k))));
+    cosines.extend([0.0f32; LANES]);
+    let phases: Vec<f32> = cosines
+        .par_iter()
+        .map(|&c| light.phase.eval_f32(c))
+        .collect();
     // The sky's light the droplets scatter along a ray, taken where a blob was drawn,
     // and how much of it reaches each particle inside the cloud from above and below.
     let octaves_of_sky = light.scattering.octaves();
@@ -225,18 +226,11 @@ pub fn render_with_depths(
             .map(|&d| dimming.top_share(d))
             .collect()
     };
-    // With a table, the cosine to the sun of each pixel's ray.
-    let table = light.scattering.table();
-    let cosines: Vec<f32> = match table {
-        None => Vec::new(),
-        Some(_) => {
-            given("depths out of the cloud", depths.out.len())?;
-            let mut cosines = Vec::with_capacity(w * h + LANES);
-            cosines.par_extend((0..w * h).into_par_iter().map(|k| light.to_sun.dot(ray(k))));
-            cosines.extend([0.0f32; LANES]);
-            cosines
-        }
-    };
+    // With a table, laid out for drawing.
+    let table = light.scattering.table().map(TransferTable::cells);
+    if table.is_some() {
+        given("depths out of the cloud", depths.out.len())?;
+    }
     let octaves = match table {
         None => light.scattering.octaves(),
         Some(_) => Octaves::SINGLE,
@@ -370,9 +364,9 @@ pub fn render_with_depths(
                         };
                         add(&mut single, blob.single);
                         let absorbed = Lanes::ONE - blob.transmitted;
-                        match table {
+                        match &table {
                             None => add(&mut higher, blob.higher),
-                            Some(table) => {
+                            Some(cells) => {
                                 // The table's light at the emission nodes' mean depths
                                 // toward the sun and toward the eye (the cloud's in front
                                 // and theirs into the blob), the least of those and the
@@ -381,21 +375,13 @@ pub fn render_with_depths(
                                 let half = Lanes::splat(0.5);
                                 let eye = front + half * (emission.u[0] + emission.u[1]);
                                 let sun = -half * (emission.log_gamma[0] + emission.log_gamma[1]);
-                                let look = table.lookup(
+                                let f = cells.at(
                                     sun,
                                     eye.fast_min(sun).fast_min(Lanes::splat(depths.out[k])),
                                     Lanes::from(&cosines[band * BAND * w + i..][..LANES]),
                                     eye,
                                 );
-                                let mask = live.to_array();
-                                let f: [f32; LANES] = std::array::from_fn(|lane| {
-                                    if mask[lane] != 0.0 {
-                                        look.value(table, lane)
-                                    } else {
-                                        0.0
-                                    }
-                                });
-                                add(&mut higher, Lanes::from(f) * absorbed);
+                                add(&mut higher, f * absorbed);
                                 let sum = live.select(front + tau, front);
                                 in_front[i..i + LANES].copy_from_slice(sum.as_array());
                             }
