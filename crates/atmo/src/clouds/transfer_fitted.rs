@@ -1,5 +1,5 @@
 //! The transfer table fitted to the path tracer ([`super::transfer`]), written by
-//! `cargo run --release -p atmo --example fit_octaves -- --paths 32 --transfer --smooth 0.0001 --write`:
+//! `cargo run --release -p atmo --example fit_clouds -- --paths 32 --transfer --smooth 0.0001 --write`:
 //! `[sun][out][cosine][eye]`, 1/sr per unit sun irradiance.
 
 /// The fitted values.

@@ -1,11 +1,14 @@
-//! Every order of the clouds' light against the volumetric path tracer over 84 views:
-//! seven cumulus clouds (200 and 2,000 particles of density 0.006, 9,382 of the
-//! generator's 0.04, 500 of 0.04, 1,000 of 0.002, 4,000 of 0.015 and 20,000 of 0.04:
-//! optical depth about 3 to 55 through the middle, blobs large and small), each seen
-//! from above, level and below, the sun 25 deg high from the front, the side and behind
-//! and 60 deg high. Prints each view's mean of the octaves (`atmo::clouds::Octaves`)
-//! over the path tracer's (on the cloud's pixels) and its 8 x 8 blocks within 15 %, then
-//! the scores of the octaves and of the library's transfer table over all the views.
+//! Every order of the clouds' light against the volumetric path tracer over 108 views:
+//! nine cumulus clouds (200 and 2,000 particles of density 0.006, 9,382 of the
+//! generator's 0.04, 500 of 0.04, 1,000 of 0.002, 4,000 of 0.015, 20,000 of 0.04, 300
+//! of 0.003 and 8,000 of 0.004: optical depth about 3 to 55 through the middle, blobs
+//! large and small), each seen from above, level and below, the sun 25 deg high from
+//! the front, the side and behind and 60 deg high. Fits the two models of the orders
+//! past the first: prints each view's mean of the octaves (`atmo::clouds::Octaves`)
+//! over the path tracer's (on the cloud's pixels) and its 8 x 8 blocks within 15 %,
+//! then the scores of the octaves and of the library's transfer table over all the
+//! views.
+//!
 //! `--clouds c200,c2000,c9382` keeps the views of the clouds named: those three are the
 //! 36 views the octaves were fitted to. With `--search`, a grid search over the
 //! octaves' numbers, best worst view first: how `Octaves::MULTIPLE` was chosen
@@ -18,13 +21,13 @@
 //! (`atmo::clouds::TransferTable`) fitted to the path tracer over the views, then over
 //! all clouds but one and scored on that one's views (`--smooth S` weighs the penalty on
 //! neighbouring values' differences, default 1e-4); `--write` writes the table fitted
-//! to every view into the library (`src/clouds/transfer_fitted.rs`). About two minutes.
+//! to every view into the library (`src/clouds/transfer_fitted.rs`). About three minutes.
 //!
-//! `cargo run --release -p atmo --example fit_octaves -- [--paths N] [--clouds A,B]
+//! `cargo run --release -p atmo --example fit_clouds -- [--paths N] [--clouds A,B]
 //! [--search] [--floor] [--oracle] [--transfer [--smooth S] [--write]] [--octaves
 //! COUNT,A,B,C,K,D,E]` (the fields of `Octaves` in order). The path-traced pictures
-//! (48 x 28, N paths a pixel, default 32: about 25 minutes on two cores for the 84
-//! views) are kept in the system's temporary folder and reused.
+//! (48 x 28, N paths a pixel, default 32: about half an hour on two cores for the 108
+//! views, 128 paths about two hours) are kept in the system's temporary folder and reused.
 
 use std::path::Path;
 
@@ -69,7 +72,7 @@ impl View {
             _ => format!("-orders{orders}-seed{seed}"),
         };
         let file = std::env::temp_dir()
-            .join("atmo-fit-octaves")
+            .join("atmo-fit-clouds")
             .join(format!("{}{kind}-{paths}.txt", self.name));
         traced(&file, || {
             eprintln!("{}{kind}: path tracing {paths} paths a pixel", self.name);
@@ -183,7 +186,7 @@ fn main() -> Result<()> {
         if args.iter().any(|a| a == "--write") {
             let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/clouds/transfer_fitted.rs");
             let how = format!(
-                "cargo run --release -p atmo --example fit_octaves -- --paths {paths} --transfer --smooth {smooth} --write"
+                "cargo run --release -p atmo --example fit_clouds -- --paths {paths} --transfer --smooth {smooth} --write"
             );
             write_table(&table, &file, &how)?;
             println!("written to {}", file.display());
@@ -517,7 +520,7 @@ fn views(paths: usize, chosen: impl Fn(&str) -> bool) -> Result<Vec<View>> {
         ("behind", 25.0, 20.0),
         ("high", 60.0, 250.0),
     ];
-    let folder = std::env::temp_dir().join("atmo-fit-octaves");
+    let folder = std::env::temp_dir().join("atmo-fit-clouds");
     std::fs::create_dir_all(&folder)?;
     let mut views = Vec::new();
     for (cloud, count, density) in clouds.into_iter().filter(|c| chosen(c.0)) {
