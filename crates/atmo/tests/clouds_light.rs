@@ -196,17 +196,17 @@ fn every_order(particles: &[Particle], camera: &Camera, to_sun: Vec3) -> ([f64; 
 
 #[test]
 fn every_order_matches_the_path_tracer() {
-    // Measured at 48 x 28: the transfer table 1.10 (front), 1.09 (side), 1.01 (behind)
-    // of the path tracer in the mean, the octaves 1.06, 1.12 and 0.83; every order is 3
-    // to 5.5 times single scattering here. Both are fitted to many views of several
-    // clouds (docs/clouds.md), this one's among them.
+    // Measured at 48 x 28: the transfer table 1.045 (front), 1.067 (side), 0.994
+    // (behind) of the path tracer in the mean, within the 10 %; the octaves
+    // 1.06, 1.12 and 0.83; every order is 3 to 5.5 times single scattering here. Both
+    // are fitted to many views of several clouds (docs/clouds.md), this one's among them.
     let particles = cloud();
     let camera = camera(&particles, 48, 28);
     for (name, to_sun, _) in lit(&particles) {
         let ([table, octaves], gain) = every_order(&particles, &camera, to_sun);
         eprintln!("{name}: every order, billboards / path tracer {table:.3} (octaves {octaves:.3}); path tracer / single {gain:.2}");
         assert!(gain > 2.5, "{name}: higher orders add light: {gain}");
-        assert!((table - 1.0).abs() < 0.12, "{name}: {table}");
+        assert!((table - 1.0).abs() < 0.1, "{name}: {table}");
         assert!((octaves - 1.0).abs() < 0.2, "{name}: octaves {octaves}");
     }
 }

@@ -29,9 +29,10 @@
 //! Why a table rather than octaves ([`super::octaves`]): octaves see only the depth
 //! toward the sun, and their light at a point cannot know how deep in the cloud the
 //! point lies the other ways, which decides the level of the diffuse light of the many
-//! orders. Over the 108 views (32 paths a pixel) the octaves' worst view is 1.34 times
-//! the path tracer, 66 views are within 10 % in the mean and 54 % of the 8 x 8 blocks
-//! within 15 %; the table's 1.20, 84 and 67 %. On the bench's view, a 60,134-particle
+//! orders. Over the 108 views (128 paths a pixel) the octaves' worst view is 1.33 times
+//! the path tracer, 55 views are within 10 % in the mean and 54 % of the 8 x 8 blocks
+//! within 15 %; the table's 1.20, 86 and 72 % (67 % on average over each cloud held
+//! out of the fit in turn). On the bench's view, a 60,134-particle
 //! cloud no fit has seen, from below against the sun: +4 % in the mean where the
 //! octaves are +41 %. It costs three coarse light passes once per cloud shape (not per
 //! sun) and a 16-node lookup a blob-pixel. The GPU's billboards, blended in hardware,
