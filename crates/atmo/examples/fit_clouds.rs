@@ -155,13 +155,14 @@ fn main() -> Result<()> {
     let views = views(paths, |cloud| {
         chosen.is_none_or(|c| c.split(',').any(|c| c == cloud))
     })?;
-    for (view, score) in views.iter().zip(scores(&views, &octaves)?) {
+    let octave_scores = scores(&views, &octaves)?;
+    for (view, score) in views.iter().zip(&octave_scores) {
         println!(
             "{:<22} octaves / path tracer {:.3}   blocks within 15 %: {} of {} by their means, {} by their medians",
             view.name, score.mean_ratio, score.blocks_within_15, score.blocks, score.medians_within_15
         );
     }
-    println!("{octaves:?}: {}", summary(&scores(&views, &octaves)?));
+    println!("{octaves:?}: {}", summary(&octave_scores));
     let table = views
         .iter()
         .map(|v| Ok(v.agreement(&v.rendered(Scattering::MULTIPLE)?)))

@@ -71,7 +71,8 @@ impl TransferTable {
     };
 
     /// `F` at one point, multilinear between the nodes and held at the end nodes
-    /// outside them.
+    /// outside them (the table laid out anew each call: for a few points, where a
+    /// picture lays it out once).
     pub fn at(&self, tau_sun: f32, tau_out: f32, cos: f32, tau_eye: f32) -> f32 {
         let [s, o, c, e] = [tau_sun, tau_out, cos, tau_eye].map(Lanes::splat);
         self.cells().at(s, o, c, e).to_array()[0]
@@ -100,16 +101,6 @@ impl TransferTable {
             .collect();
         Cells(cells)
     }
-}
-
-/// The lowest corner and the weights of the upper ones along the four axes of
-/// [`TransferTable`], for eight lanes ([`Cells::at`]).
-struct Lookup {
-    base: [f32; 8],
-    sun: [f32; 8],
-    out: [f32; 8],
-    cosine: [f32; 8],
-    eye: [f32; 8],
 }
 
 /// Strides of the table's axes.
@@ -141,31 +132,18 @@ impl Cells {
         // The index of each lane's lowest corner.
         let base =
             ((sun * Lanes::splat(o) + out) * Lanes::splat(c) + cosine) * Lanes::splat(e) + eye;
-        Lookup {
-            base: base.to_array(),
-            sun: sun_share.to_array(),
-            out: out_share.to_array(),
-            cosine: cosine_share.to_array(),
-            eye: eye_share.to_array(),
-        }
-        .values(self)
-    }
-}
-
-impl Lookup {
-    /// The lanes' values, a lane at a time: its cell's four quarters (sun and out)
-    /// lerped in SSE, then the cosine's pair and the eye's. One cache line a lane:
-    /// with the 16 corners read one by one from the table, the lookup took about
-    /// 110 ms of the bench's 410 ms frame; this, about 70.
-    #[inline(always)]
-    fn values(&self, cells: &Cells) -> Lanes {
+        let [base, fs, fo, fc, fe] =
+            [base, sun_share, out_share, cosine_share, eye_share].map(|v| v.to_array());
+        // A lane at a time: its cell's four quarters (sun and out) lerped in SSE, then the
+        // cosine's pair and the eye's. One cache line a lane: with the 16 corners read one
+        // by one from the table, the lookup took about 110 ms of the bench's 410 ms
+        // frame; this, about 70.
         Lanes::new(std::array::from_fn(|lane| {
-            let Cell([s0o0, s0o1, s1o0, s1o1]) = cells.0[self.base[lane] as usize];
-            let (fs, fo) = (self.sun[lane], self.out[lane]);
-            let s0 = s0o0.lerp(s0o1, fo);
-            let corners = s0.lerp(s1o0.lerp(s1o1, fo), fs);
-            let eyes = corners.xy().lerp(corners.zw(), self.cosine[lane]);
-            eyes.x + self.eye[lane] * (eyes.y - eyes.x)
+            let Cell([s0o0, s0o1, s1o0, s1o1]) = self.0[base[lane] as usize];
+            let s0 = s0o0.lerp(s0o1, fo[lane]);
+            let corners = s0.lerp(s1o0.lerp(s1o1, fo[lane]), fs[lane]);
+            let eyes = corners.xy().lerp(corners.zw(), fc[lane]);
+            eyes.x + fe[lane] * (eyes.y - eyes.x)
         }))
     }
 }
