@@ -12,6 +12,13 @@ struct GpuParticle {
     // (atmo::clouds::sky_light::vertical_depths; 0 until the sky's light needs them).
     sky_depth: f32,
     sky_column: f32,
+    // The least optical depth from the centre out of the cloud along the six axes
+    // (atmo::clouds::CloudDepths::out, the transfer table's tau_out; made the least of
+    // itself and each pass's along an axis, the largest f32 before).
+    out_depth: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // Mirrors atmo_gpu::clouds::BufferFrame: world to buffer axes (rows x, y along the

@@ -2,8 +2,11 @@
 // drawn back to front with E_k = S_k + T_k E_{k-1} (5) as premultiplied "over"
 // blending, S_k the light the blob sends along each pixel's own ray (its column faded
 // at its cut, the sunlight read at its two emission nodes, integrated over its depth,
-// the phase for the ray), as atmo::clouds::render does. The higher octaves go to a
-// second target, scaled afterwards by the cloud's depth on the ray.
+// the phase for the ray), as atmo::clouds::render does. The orders past the first by
+// the octaves go to a second target, scaled afterwards by the cloud's depth on the ray;
+// by the transfer table, with the single-scattered light, the depth toward the eye read
+// from a second buffer lit from the eye (the depth in front of a blob on its pixel, the
+// CPU's, is not known to billboards blended in hardware).
 
 // Mirrors atmo_gpu::clouds::DrawParams.
 struct DrawParams {
@@ -35,7 +38,12 @@ struct DrawParams {
     width: u32,
     height: u32,
     octave_count: u32,
+    // Where the grid lit from the eye starts in `log_gamma`.
+    eye_base: u32,
     pad0: u32,
+    pad1: u32,
+    pad2: u32,
+    pad3: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: DrawParams;
@@ -43,8 +51,13 @@ struct DrawParams {
 @group(0) @binding(2) var<storage, read> particles: array<GpuParticle>;
 // Particle indices, farthest first.
 @group(0) @binding(3) var<storage, read> order: array<u32>;
-// ln Gamma at voxel centres, [x][z][y].
+// ln Gamma at voxel centres, [x][z][y]: the sun's grid, then (with the table) the
+// eye's at params.eye_base.
 @group(0) @binding(4) var<storage, read> log_gamma: array<f32>;
+// The grid lit from the eye: toward the eye from the particles' mean.
+@group(0) @binding(5) var<uniform> eye: BufferFrame;
+// The transfer table's values, [sun][out][cosine][eye] (atmo::clouds::TransferTable).
+@group(0) @binding(6) var<storage, read> table: array<f32>;
 
 struct Billboard {
     @builtin(position) clip: vec4<f32>,
@@ -56,6 +69,8 @@ struct Billboard {
     @location(3) @interpolate(flat) density: f32,
     // The sky's light at the particle against outside the cloud, RGB.
     @location(4) @interpolate(flat) sky_inside: vec3<f32>,
+    // The particle's depth out of the cloud (CloudDepths::out).
+    @location(5) @interpolate(flat) out_depth: f32,
 }
 
 struct Colours {
@@ -118,11 +133,49 @@ fn vertex(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> Bil
     out.sun = p.albedo * params.sun.xyz;
     out.albedo = p.albedo;
     out.density = p.density;
+    out.out_depth = p.out_depth;
     // SkyDimming::top_share and SkyDimming::at: the two-stream profile down the vertical.
     let e = params.sky_above.w;
     let top = clamp((p.sky_column - p.sky_depth + e) / (p.sky_column + 2.0 * e), 0.0, 1.0);
     out.sky_inside = params.sky_below.xyz + (params.sky_above.xyz - params.sky_below.xyz) * top;
     return out;
+}
+
+// The lower of the nodes around v of `edges` (the first `count`) and the upper's
+// weight, held at the end nodes: atmo::clouds::transfer's hat_lanes.
+fn hat(v: f32, edges: array<f32, TRANSFER_NODES>, count: u32) -> vec2<f32> {
+    var e = edges;
+    var node = 0u;
+    for (var i = 1u; i + 1u < count; i++) {
+        if v >= e[i] {
+            node = i;
+        }
+    }
+    let share = clamp((v - e[node]) / (e[node + 1u] - e[node]), 0.0, 1.0);
+    return vec2<f32>(f32(node), share);
+}
+
+// TransferTable::at: the table multilinear between its nodes.
+fn transfer(to_sun: f32, out: f32, cosine: f32, to_eye: f32) -> f32 {
+    let s = hat(to_sun, TRANSFER_SUN, TRANSFER_SUN_COUNT);
+    let o = hat(out, TRANSFER_OUT, TRANSFER_OUT_COUNT);
+    let c = hat(cosine, TRANSFER_COSINE, TRANSFER_COSINE_COUNT);
+    let e = hat(to_eye, TRANSFER_EYE, TRANSFER_EYE_COUNT);
+    let share = vec4<f32>(s.y, o.y, c.y, e.y);
+    let strides = vec4<u32>(
+        TRANSFER_OUT_COUNT * TRANSFER_COSINE_COUNT * TRANSFER_EYE_COUNT,
+        TRANSFER_COSINE_COUNT * TRANSFER_EYE_COUNT,
+        TRANSFER_EYE_COUNT,
+        1u,
+    );
+    let base = dot(vec4<u32>(u32(s.x), u32(o.x), u32(c.x), u32(e.x)), strides);
+    var sum = 0.0;
+    for (var k = 0u; k < 16u; k++) {
+        let upper = (vec4<u32>(k) >> vec4<u32>(3u, 2u, 1u, 0u)) & vec4<u32>(1u);
+        let w = select(vec4<f32>(1.0) - share, share, upper == vec4<u32>(1u));
+        sum += w.x * w.y * w.z * w.w * table[base + dot(upper, strides)];
+    }
+    return sum;
 }
 
 // Particle::faded_column: the column at squared distance b2 from the centre, faded to
@@ -200,8 +253,22 @@ fn blob_integral(tau: f32, u: vec2<f32>, l: vec2<f32>) -> f32 {
     return tau * exp(start) * ratio;
 }
 
+// The orders past the first by the octaves.
 @fragment
 fn fragment(b: Billboard) -> Colours {
+    return shade(b, false);
+}
+
+// The orders past the first by the transfer table.
+@fragment
+fn fragment_table(b: Billboard) -> Colours {
+    return shade(b, true);
+}
+
+// A fragment of the billboard `b`, the orders past the first by the transfer table
+// (`table`, a constant of each entry point, so that each compiles to its own branch
+// alone) or by the octaves.
+fn shade(b: Billboard, table: bool) -> Colours {
     // The pixel's centre, in pixels, and its ray (component 1 along the view axis).
     let pixel = b.clip.xy;
     let w = f32(params.width);
@@ -220,9 +287,7 @@ fn fragment(b: Billboard) -> Colours {
     // The sunlight at the blob's two emission nodes along the ray, in the grid.
     let inv_length = inverseSqrt(rr);
     let g_ray = to_buffer(frame, r) / frame.voxel.xyz;
-    let g_eye = (to_buffer(frame, params.position.xyz) - frame.min.xyz) / frame.voxel.xyz
-        - vec3<f32>(0.5);
-    let g = g_eye + t * g_ray;
+    let g = grid_of(frame, params.position.xyz) + t * g_ray;
     let along = (s * inv_length) * g_ray;
     let n0 = emission_node(tau, 0.21132487);
     let n1 = emission_node(tau, 0.7886751);
@@ -230,7 +295,8 @@ fn fragment(b: Billboard) -> Colours {
     let near = g + n0.y * along;
     let l = vec2<f32>(log_gamma_at(near), log_gamma_at(g + n1.y * along));
     // Octaves::light: single scattering, and the higher octaves apart.
-    let p = phase(dot(params.to_sun.xyz, r) * inv_length);
+    let cosine = dot(params.to_sun.xyz, r) * inv_length;
+    let p = phase(cosine);
     let single = p * blob_integral(tau, u, l);
     var higher = 0.0;
     var weight = 1.0;
@@ -244,6 +310,19 @@ fn fragment(b: Billboard) -> Colours {
         higher += weight * pi * blob_integral(tau, u, share * l);
     }
     let alpha = 1.0 - exp(-tau);
+    // The transfer table's light (atmo::clouds::render) at the emission nodes' mean
+    // depths toward the sun and toward the eye, the least of those and the particle's
+    // depth out, and the ray's angle.
+    var tabled = 0.0;
+    if table {
+        let e_ray = to_buffer(eye, r) / eye.voxel.xyz;
+        let e = grid_of(eye, params.position.xyz) + t * e_ray;
+        let e_along = (s * inv_length) * e_ray;
+        let to_eye = -0.5 * (log_gamma_in(eye, params.eye_base, e + n0.y * e_along)
+            + log_gamma_in(eye, params.eye_base, e + n1.y * e_along));
+        let to_sun = -0.5 * (l.x + l.y);
+        tabled = alpha * transfer(to_sun, min(min(to_eye, to_sun), b.out_depth), cosine, to_eye);
+    }
     // OctaveTerms::light: the slab's diffuse light, the cloud's whole depth along the
     // sun's ray through the nearer node (IntensityBuffer::column_depth_grid).
     if params.diffuse.x > 0.0 {
@@ -259,7 +338,7 @@ fn fragment(b: Billboard) -> Colours {
     let haze = params.haze_transmittance.xyz;
     var out: Colours;
     let sky = b.albedo * b.sky_inside * sky_along(r * inv_length);
-    out.picture = vec4<f32>(haze * (single * b.sun + alpha * sky)
+    out.picture = vec4<f32>(haze * ((single + tabled) * b.sun + alpha * sky)
         + alpha * params.haze_inscatter.xyz, alpha);
     out.higher = vec4<f32>(haze * higher * b.sun, alpha);
     return out;

@@ -1,29 +1,45 @@
 // Reading an intensity buffer (atmo::clouds::buffer::IntensityBuffer's lookups), for
 // the passes that read one: the pass declares `frame` (its BufferFrame) and `log_gamma`
-// (ln Gamma at voxel centres, [x][z][y]).
+// (ln Gamma at voxel centres, [x][z][y]; the draw's holds a second grid after the
+// sun's, lit from the eye).
 
-fn cell(x: u32, z: u32, y: u32) -> f32 {
-    let n = frame.resolution;
-    return log_gamma[(x * n + z) * n + y];
+// The value at voxel (x, z, y) of the n^3 grid starting at `base` in `log_gamma`.
+fn cell(base: u32, n: u32, x: u32, z: u32, y: u32) -> f32 {
+    return log_gamma[base + (x * n + z) * n + y];
 }
 
-// ln Gamma at grid coordinates g (voxel centres at integers), trilinear, clamped to
-// the grid, 0 on the sun's side of it: IntensityBuffer::sample_log_grid.
-fn log_gamma_at(g: vec3<f32>) -> f32 {
+// ln Gamma at grid coordinates g (voxel centres at integers) of the grid `f` starting
+// at `base`, trilinear, clamped to the grid, 0 on the light's side of it:
+// IntensityBuffer::sample_log_grid.
+fn log_gamma_in(f: BufferFrame, base: u32, g: vec3<f32>) -> f32 {
     if g.y < -0.5 {
         return 0.0;
     }
-    let n = frame.resolution;
+    let n = f.resolution;
     let last = f32(n - 1u);
     let c = clamp(g, vec3<f32>(0.0), vec3<f32>(last));
     let top = n - 2u;
     let i = min(vec3<u32>(c), vec3<u32>(top));
-    let f = c - vec3<f32>(i);
-    let a = mix(cell(i.x, i.z, i.y), cell(i.x, i.z, i.y + 1u), f.y);
-    let b = mix(cell(i.x + 1u, i.z, i.y), cell(i.x + 1u, i.z, i.y + 1u), f.y);
-    let c0 = mix(cell(i.x, i.z + 1u, i.y), cell(i.x, i.z + 1u, i.y + 1u), f.y);
-    let d = mix(cell(i.x + 1u, i.z + 1u, i.y), cell(i.x + 1u, i.z + 1u, i.y + 1u), f.y);
-    return mix(mix(a, b, f.x), mix(c0, d, f.x), f.z);
+    let w = c - vec3<f32>(i);
+    let a = mix(cell(base, n, i.x, i.z, i.y), cell(base, n, i.x, i.z, i.y + 1u), w.y);
+    let b = mix(cell(base, n, i.x + 1u, i.z, i.y), cell(base, n, i.x + 1u, i.z, i.y + 1u), w.y);
+    let c0 = mix(cell(base, n, i.x, i.z + 1u, i.y), cell(base, n, i.x, i.z + 1u, i.y + 1u), w.y);
+    let d = mix(
+        cell(base, n, i.x + 1u, i.z + 1u, i.y),
+        cell(base, n, i.x + 1u, i.z + 1u, i.y + 1u),
+        w.y,
+    );
+    return mix(mix(a, b, w.x), mix(c0, d, w.x), w.z);
+}
+
+// ln Gamma of the pass's own grid (`frame`, at the start of `log_gamma`).
+fn log_gamma_at(g: vec3<f32>) -> f32 {
+    return log_gamma_in(frame, 0u, g);
+}
+
+// Grid coordinates of the world point p in the grid of `f`.
+fn grid_of(f: BufferFrame, p: vec3<f32>) -> vec3<f32> {
+    return (to_buffer(f, p) - f.min.xyz) / f.voxel.xyz - vec3<f32>(0.5);
 }
 
 // The whole cloud's optical depth along the light through grid coordinates g: -ln

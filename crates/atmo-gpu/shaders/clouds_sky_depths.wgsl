@@ -1,7 +1,8 @@
-// Each particle's depths for the sky's light inside the cloud
-// (atmo::clouds::sky_light::vertical_depths): the buffer lit from the zenith read at
-// the particle's centre, the optical depth above it and the whole column's, written
-// into the particle's record.
+// Each particle's depths (atmo::clouds::CloudDepths::of): a buffer lit along an axis
+// read at the particle's centre, the optical depth from the lit side and the whole
+// column's, written into the particle's record (kept for the sky's light inside the
+// cloud from the vertical's pass, which runs last); and the least of its depths out
+// from either side, made the least of its own and those of the passes before.
 
 @group(0) @binding(0) var<uniform> frame: BufferFrame;
 @group(0) @binding(1) var<storage, read_write> particles: array<GpuParticle>;
@@ -18,8 +19,15 @@ fn main(
     if k >= frame.particles {
         return;
     }
-    let g = (to_buffer(frame, particles[k].position_radius.xyz) - frame.min.xyz)
-        / frame.voxel.xyz - vec3<f32>(0.5);
-    particles[k].sky_depth = -log_gamma_at(g);
-    particles[k].sky_column = column_depth_at(g);
+    let depths = depths_at(particles[k].position_radius.xyz);
+    particles[k].sky_depth = depths.x;
+    particles[k].sky_column = depths.y;
+    let out = min(depths.x, max(depths.y - depths.x, 0.0));
+    particles[k].out_depth = min(particles[k].out_depth, out);
+}
+
+// The optical depth from the lit side to p and the whole column through p.
+fn depths_at(p: vec3<f32>) -> vec2<f32> {
+    let g = grid_of(frame, p);
+    return vec2<f32>(-log_gamma_at(g), column_depth_at(g));
 }

@@ -156,7 +156,9 @@ impl Gpu {
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
             }))
     }
 
@@ -301,6 +303,18 @@ impl Gpu {
         blend: wgpu::BlendComponent,
         targets: usize,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
+        self.blended_pipeline_of("fragment", module, layout, blend, targets)
+    }
+
+    /// [`Gpu::blended_pipeline`] with the fragment shader `fragment` of `module`.
+    pub fn blended_pipeline_of(
+        &self,
+        fragment: &str,
+        module: &wgpu::ShaderModule,
+        layout: Option<&wgpu::PipelineLayout>,
+        blend: wgpu::BlendComponent,
+        targets: usize,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
         let target = wgpu::ColorTargetState {
             format: wgpu::TextureFormat::Rgba32Float,
             blend: Some(wgpu::BlendState {
@@ -310,7 +324,14 @@ impl Gpu {
             write_mask: wgpu::ColorWrites::ALL,
         };
         let targets = vec![Some(target); targets];
-        self.screen_pipeline("a render pipeline", module, layout, &targets, None)
+        self.pipeline(
+            "a render pipeline",
+            module,
+            fragment,
+            layout,
+            &targets,
+            None,
+        )
     }
 
     /// A render pipeline drawing `vertex` and `fragment` of `module` (no vertex
@@ -320,6 +341,19 @@ impl Gpu {
         &self,
         what: &str,
         module: &wgpu::ShaderModule,
+        layout: Option<&wgpu::PipelineLayout>,
+        targets: &[Option<wgpu::ColorTargetState>],
+        depth: Option<wgpu::DepthStencilState>,
+    ) -> Result<wgpu::RenderPipeline, GpuError> {
+        self.pipeline(what, module, "fragment", layout, targets, depth)
+    }
+
+    /// [`Gpu::screen_pipeline`] with the fragment shader `fragment` of `module`.
+    fn pipeline(
+        &self,
+        what: &str,
+        module: &wgpu::ShaderModule,
+        fragment: &str,
         layout: Option<&wgpu::PipelineLayout>,
         targets: &[Option<wgpu::ColorTargetState>],
         depth: Option<wgpu::DepthStencilState>,
@@ -337,7 +371,7 @@ impl Gpu {
                     },
                     fragment: Some(wgpu::FragmentState {
                         module,
-                        entry_point: Some("fragment"),
+                        entry_point: Some(fragment),
                         compilation_options: Default::default(),
                         targets,
                     }),

@@ -10,6 +10,7 @@ use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::FOOTPRINT;
 use atmo::clouds::particles::FADE_SCALE;
 use atmo::clouds::render::OPAQUE;
+use atmo::clouds::transfer;
 use atmo::shafts::planes::{ANGLE_STEP, MAX_ANGLE_SAMPLES, NEAR_LAMP};
 use atmo::shafts::shadow_map::RECEIVER_BIAS;
 use atmo::sky::shells::export;
@@ -141,11 +142,22 @@ const FILES: &[(&str, &str)] = &[
     ),
 ];
 
+/// The length of the transfer table's node arrays in WGSL: its longest axis's.
+const TRANSFER_NODES: usize = 6;
+const _: () = assert!(
+    transfer::SUN.len() <= TRANSFER_NODES
+        && transfer::OUT.len() <= TRANSFER_NODES
+        && transfer::COSINE.len() <= TRANSFER_NODES
+        && transfer::EYE.len() <= TRANSFER_NODES
+);
+
 /// The constants WGSL shares with the Rust, generated: `const PHASE_RAYLEIGH: u32 = 0u;`
 /// and the rest of [`PhaseFunction::CODES`], this module's codes, the sky model's
 /// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, the clouds' `FOOTPRINT`,
-/// `FADE_SCALE` and `OPAQUE`, the shadow maps' `RECEIVER_BIAS`, and the shafts' near-lamp
-/// slabs' `NEAR_LAMP`, `ANGLE_STEP` and `MAX_ANGLE_SAMPLES`.
+/// `FADE_SCALE` and `OPAQUE` and their transfer table's nodes (`TRANSFER_SUN` and its
+/// `TRANSFER_SUN_COUNT`, ..., padded to `TRANSFER_NODES`), the shadow maps'
+/// `RECEIVER_BIAS`, and the shafts' near-lamp slabs' `NEAR_LAMP`, `ANGLE_STEP` and
+/// `MAX_ANGLE_SAMPLES`.
 pub fn prelude() -> String {
     let phases = PhaseFunction::CODES
         .iter()
@@ -168,6 +180,24 @@ pub fn prelude() -> String {
     out.push_str(&format!("const FADE_SCALE: f32 = {:?};\n", FADE_SCALE));
     // The transmittance below which a cloud's pixel counts as opaque.
     out.push_str(&format!("const OPAQUE: f32 = {:?};\n", OPAQUE));
+    // The clouds' transfer table's nodes, each axis padded with its last node.
+    out.push_str(&format!("const TRANSFER_NODES: u32 = {TRANSFER_NODES}u;\n"));
+    for (name, nodes) in [
+        ("SUN", &transfer::SUN[..]),
+        ("OUT", &transfer::OUT),
+        ("COSINE", &transfer::COSINE),
+        ("EYE", &transfer::EYE),
+    ] {
+        let padded: Vec<String> = (0..TRANSFER_NODES)
+            .map(|k| format!("{:?}", nodes[k.min(nodes.len() - 1)]))
+            .collect();
+        out.push_str(&format!(
+            "const TRANSFER_{name}: array<f32, {TRANSFER_NODES}> = array<f32, {TRANSFER_NODES}>({});\n\
+             const TRANSFER_{name}_COUNT: u32 = {}u;\n",
+            padded.join(", "),
+            nodes.len()
+        ));
+    }
     // How much nearer than a receiver's plane a shadow map's surface must be.
     out.push_str(&format!(
         "const RECEIVER_BIAS: f32 = {:?};\n",

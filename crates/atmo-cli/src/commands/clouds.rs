@@ -116,8 +116,8 @@ pub struct CloudStill {
     resolution: usize,
     /// Light scattered once (`single`, the paper's model) or every order: `multiple`, a
     /// transfer table fitted to a path tracer (docs/clouds.md), or `octaves`, the
-    /// octaves fitted to it, which the GPU (--backend gpu, the window on a GPU) draws
-    /// for both.
+    /// octaves fitted to it (faster on the GPU, which reads the table's depth toward
+    /// the eye from a second light pass, lit from the eye, whenever the camera moves).
     #[arg(long, value_enum, default_value_t = ScatteringArg::Multiple)]
     scattering: ScatteringArg,
     /// With --scattering single: the part of scattered light taken to go on along the
@@ -268,15 +268,6 @@ enum Renderer {
     Gpu(Box<(Gpu, GpuClouds)>),
 }
 
-/// `light` as the GPU draws it: every order by the octaves (the transfer table reads the
-/// depth in front of each blob, which billboards blended in hardware do not know).
-fn as_on_gpu(light: &Lighting) -> Lighting {
-    Lighting {
-        scattering: Scattering::Octaves(light.scattering.octaves()),
-        ..*light
-    }
-}
-
 /// The particles' depths in the cloud ([`CloudDepths`]) and the particles they were
 /// made for: they depend on the particles alone, so frames of the same particles under a
 /// moving sun or camera (`--animate sun`, the window) make them once. (The GPU keeps
@@ -363,7 +354,7 @@ impl Renderer {
             Renderer::Gpu(on) => {
                 let (gpu, clouds) = &**on;
                 clouds
-                    .render(gpu, camera, &as_on_gpu(light), background)
+                    .render(gpu, camera, light, background)
                     .map_err(gpu_error)?
                     .frame
             }
@@ -1076,7 +1067,7 @@ impl CloudPictures for WindowClouds {
             slot => slot.insert(CloudsPass::new(gpu, picture.texture.format()).map_err(gpu_error)?),
         };
         clouds
-            .prepare(gpu, encoder, pass, &camera, &as_on_gpu(&light))
+            .prepare(gpu, encoder, pass, &camera, &light)
             .map_err(gpu_error)?;
         picture.draw_over(encoder, |render| pass.draw(render));
         Ok(())

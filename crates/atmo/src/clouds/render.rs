@@ -54,10 +54,10 @@ pub struct Lighting {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Scattering {
     /// By octaves of single scattering ([`Octaves`]; [`Octaves::SINGLE`] for single
-    /// scattering alone): what the GPU's billboards draw too.
+    /// scattering alone).
     Octaves(Octaves),
     /// Single scattering and a transfer table for the orders past the first
-    /// ([`TransferTable`]; the CPU's).
+    /// ([`TransferTable`]).
     Transfer(&'static TransferTable),
 }
 
