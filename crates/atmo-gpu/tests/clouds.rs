@@ -202,6 +202,58 @@ fn the_transfer_table_draws_the_cpu_picture() {
     );
 }
 
+/// What the table's draw keeps between frames (the buffer lit from the eye, the
+/// particles' depths) follows the camera and the particles: after the camera moves, and
+/// after the particles move, the picture is the one a new cloud draws of them.
+#[test]
+fn the_tables_buffers_follow_the_camera_and_the_particles() {
+    let Some(gpu) = gpu() else { return };
+    let particles = cloud();
+    let light = Lighting {
+        scattering: Scattering::MULTIPLE,
+        ..lighting(PhaseFunction::CloudMie, Octaves::MULTIPLE)
+    };
+    let drawn = |clouds: &GpuClouds, camera: &Camera| {
+        clouds
+            .render(&gpu, camera, &light, None)
+            .unwrap()
+            .frame
+            .pixels
+    };
+    let fresh = |particles: &[Particle], camera: &Camera| {
+        let mut clouds = GpuClouds::new(&gpu, particles, 48).unwrap();
+        clouds.light(&gpu, to_sun(), 0.0, Splat::Pieces).unwrap();
+        drawn(&clouds, camera)
+    };
+    let mut clouds = GpuClouds::new(&gpu, &particles, 48).unwrap();
+    clouds.light(&gpu, to_sun(), 0.0, Splat::Pieces).unwrap();
+    let first = drawn(&clouds, &camera());
+    let other = Camera::look_at(
+        Vec3::new(500.0, 1900.0, -400.0),
+        Vec3::new(0.0, 1650.0, 0.0),
+        Vec3::Y,
+        Fov::Vertical(50.0),
+        (120, 80),
+    )
+    .unwrap();
+    let seen = drawn(&clouds, &other);
+    assert!(seen == fresh(&particles, &other), "the camera moved");
+    // Spread out about the middle: other depths out, another eye's frame.
+    let middle = Vec3::new(0.0, 1650.0, 0.0);
+    let moved: Vec<Particle> = particles
+        .iter()
+        .map(|p| Particle {
+            position: middle + 1.2 * (p.position - middle),
+            ..*p
+        })
+        .collect();
+    clouds.move_particles(&gpu, &moved).unwrap();
+    clouds.light(&gpu, to_sun(), 0.0, Splat::Pieces).unwrap();
+    let spread = drawn(&clouds, &other);
+    assert!(spread == fresh(&moved, &other), "the particles moved");
+    assert!(spread != seen && seen != first);
+}
+
 #[test]
 fn the_cloud_draws_over_a_callers_target_as_it_reads_back() {
     // Recorded into the caller's encoder and put over the caller's own target (a
