@@ -38,9 +38,10 @@ struct DrawParams {
     width: u32,
     height: u32,
     octave_count: u32,
-    // Where the grid lit from the eye starts in `log_gamma`.
+    // Where the grid lit from the eye starts in `log_gamma`, and its scale across its
+    // rays (atmo_gpu::clouds::seen_from).
     eye_base: u32,
-    pad0: u32,
+    eye_scale: f32,
     pad1: u32,
     pad2: u32,
     pad3: u32,
@@ -54,7 +55,9 @@ struct DrawParams {
 // ln Gamma at voxel centres, [x][z][y]: the sun's grid, then (with the table) the
 // eye's at params.eye_base.
 @group(0) @binding(4) var<storage, read> log_gamma: array<f32>;
-// The grid lit from the eye: toward the eye from the particles' mean.
+// The grid lit from the eye along each pixel's ray: of the particles as seen from the
+// eye, where a pixel's ray is the line (eye_scale (r . right), eye_scale (r . up), z),
+// z its depth along the view axis.
 @group(0) @binding(5) var<uniform> eye: BufferFrame;
 // The transfer table's values, [sun][out][cosine][eye] (atmo::clouds::TransferTable).
 @group(0) @binding(6) var<storage, read> table: array<f32>;
@@ -315,11 +318,10 @@ fn shade(b: Billboard, table: bool) -> Colours {
     // depth out, and the ray's angle.
     var tabled = 0.0;
     if table {
-        let e_ray = to_buffer(eye, r) / eye.voxel.xyz;
-        let e = grid_of(eye, params.position.xyz) + t * e_ray;
-        let e_along = (s * inv_length) * e_ray;
-        let to_eye = -0.5 * (log_gamma_in(eye, params.eye_base, e + n0.y * e_along)
-            + log_gamma_in(eye, params.eye_base, e + n1.y * e_along));
+        let across = params.eye_scale * vec2<f32>(dot(r, params.right.xyz), dot(r, params.up.xyz));
+        let depths = vec2<f32>(t) + (s * inv_length) * vec2<f32>(n0.y, n1.y);
+        let to_eye = -0.5 * (log_gamma_in(eye, params.eye_base, grid_of(eye, vec3<f32>(across, depths.x)))
+            + log_gamma_in(eye, params.eye_base, grid_of(eye, vec3<f32>(across, depths.y))));
         let to_sun = -0.5 * (l.x + l.y);
         tabled = alpha * transfer(to_sun, min(min(to_eye, to_sun), b.out_depth), cosine, to_eye);
     }

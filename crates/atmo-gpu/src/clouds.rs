@@ -7,9 +7,10 @@
 //! moving camera none with the octaves. The transfer table (every order by default,
 //! as on the CPU) needs each blob's optical depth toward the eye, which billboards
 //! blended in hardware cannot sum along their pixel as the CPU does: it is read from a
-//! second, coarser buffer lit from the eye ([`EYE_RESOLUTION`]), one light pass more
-//! when the camera moves. [`GpuClouds::render`] reads the picture back (the stills);
-//! [`GpuClouds::prepare`] records the draw into the caller's encoder and a
+//! second buffer lit from the eye along each pixel's ray (the particles as seen from
+//! the camera, [`eye_resolution`]), one light pass more when the camera moves.
+//! [`GpuClouds::render`] reads the picture back (the stills); [`GpuClouds::prepare`]
+//! records the draw into the caller's encoder and a
 //! [`CloudsPass`] puts the cloud over the caller's own target, with no read-back.
 
 use std::cell::{Cell, RefCell};
@@ -95,9 +96,10 @@ gpu_struct! {
         width: u32,
         height: u32,
         octave_count: u32,
-        /// Where the grid lit from the eye starts in the intensity buffer, f32s.
+        /// Where the grid lit from the eye starts in the intensity buffer, f32s, and the
+        /// scale across its rays (`seen_from`'s `s`).
         eye_base: u32,
-        pad0: u32,
+        eye_scale: f32,
         pad1: u32,
         pad2: u32,
         pad3: u32,
@@ -107,11 +109,17 @@ gpu_struct! {
 /// Workgroup size of the compute passes (the shaders' `@workgroup_size(64)`).
 const GROUP: u32 = 64;
 
-/// Voxels a side of the buffer lit from the eye that the transfer table's depth toward
-/// the eye is read from. Over the 108 views `examples/fit_clouds` scores (the CPU drawing
-/// with such a buffer in place of its exact depth in front), 64 gives 66 % of blocks
-/// within 15 % and 128 gives 67 %, against the exact depth's 72 % and the octaves' 54 %.
-pub const EYE_RESOLUTION: u32 = 64;
+/// The most voxels a side of the buffer lit from the eye that the transfer table's
+/// depth toward the eye is read from ([`eye_resolution`]).
+pub const EYE_RESOLUTION: u32 = 256;
+
+/// Voxels a side of the buffer lit from the eye for a picture of `width` x `height`:
+/// about one across four pixels, from 64 to [`EYE_RESOLUTION`]. Coarser, a blob's light
+/// takes the grid's squares: on the window's 960 x 600 view of the 60,134-particle
+/// cumulus, 128 shows them, 192 faintly, 256 not.
+pub fn eye_resolution(width: u32, height: u32) -> u32 {
+    (width.max(height) / 4).clamp(64, EYE_RESOLUTION)
+}
 
 /// A cloud on the GPU: its particles, its intensity buffer, the passes.
 pub struct GpuClouds {
@@ -124,8 +132,11 @@ pub struct GpuClouds {
     eye_offset: u64,
     /// The light pass's frame, once it has run.
     frame: Option<BufferFrame>,
-    /// The frame of the grid lit from the eye that `cells` holds, if any.
-    eye_frame: Cell<Option<BufferFrame>>,
+    /// The frame of the grid lit from the eye that `cells` holds and the camera's
+    /// position and axes it was made for, if any.
+    eye_frame: Cell<Option<(BufferFrame, [Vec3; 4])>>,
+    /// The particles' records as seen from the eye (`seen_from`), for its light pass.
+    eye_particles: wgpu::Buffer,
     /// The particles' mean position, m.
     centre: Vec3,
     /// The buffer lit along an axis ([`VERTICAL_RESOLUTION`]^3) the particles' depths
@@ -219,6 +230,11 @@ impl GpuClouds {
             eye_offset,
             frame: None,
             eye_frame: Cell::new(None),
+            eye_particles: gpu.storage(
+                "the particles seen from the eye",
+                bytemuck::cast_slice(&records(particles)),
+                "the particle count",
+            )?,
             centre,
             sky_cells,
             sky_depths: Cell::new(false),
@@ -274,7 +290,14 @@ impl GpuClouds {
         let frame = self.buffer_frame(to_sun, forward, splat, self.resolution)?;
         let params = gpu.uniform("the buffer frame", &frame);
         let time = gpu.run("the clouds' light pass", |encoder| {
-            self.record_light(gpu, encoder, &frame, &params, self.sun_cells())
+            self.record_light(
+                gpu,
+                encoder,
+                &frame,
+                &params,
+                &self.particle_buffer,
+                self.sun_cells(),
+            )
         })?;
         self.frame = Some(frame);
         Ok(time)
@@ -289,21 +312,7 @@ impl GpuClouds {
         splat: Splat,
         resolution: u32,
     ) -> Result<BufferFrame, GpuError> {
-        let light = LightFrame::new(&self.particles, to_sun, forward)?;
-        let voxel = (light.max - light.min) / resolution as f32;
-        let row = |v: Vec3| [v.x, v.y, v.z, 0.0];
-        let m = light.from_world;
-        Ok(BufferFrame {
-            x_axis: row(m.row(0)),
-            y_axis: row(m.row(1)),
-            z_axis: row(m.row(2)),
-            min: row(light.min),
-            voxel: row(voxel),
-            resolution,
-            particles: self.particles.len() as u32,
-            pieces: (splat == Splat::Pieces) as u32,
-            forward_bits: forward.to_bits(),
-        })
+        frame_of(&self.particles, to_sun, forward, splat, resolution)
     }
 
     /// The sun's grid in `cells`.
@@ -311,21 +320,22 @@ impl GpuClouds {
         grid(&self.cells, 0, self.resolution)
     }
 
-    /// Records a light pass of `frame` (uploaded as `params`) into `cells` (sized for
-    /// its grid).
+    /// Records a light pass of `frame` (uploaded as `params`) of the particles' records
+    /// `particles` into `cells` (sized for its grid).
     fn record_light(
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         frame: &BufferFrame,
         params: &wgpu::Buffer,
+        particles: &wgpu::Buffer,
         cells: wgpu::BufferBinding<'_>,
     ) {
         let splat_group = gpu.bind_group(
             &self.splat.get_bind_group_layout(0),
             &[
                 params.as_entire_binding(),
-                self.particle_buffer.as_entire_binding(),
+                particles.as_entire_binding(),
                 wgpu::BindingResource::Buffer(cells.clone()),
             ],
         );
@@ -410,7 +420,7 @@ impl GpuClouds {
         let frame = self.buffer_frame(axis, 0.0, Splat::Pieces, VERTICAL_RESOLUTION as u32)?;
         let params = gpu.uniform("the depths' buffer frame", &frame);
         let cells = grid(&self.sky_cells, 0, VERTICAL_RESOLUTION as u32);
-        self.record_light(gpu, encoder, &frame, &params, cells);
+        self.record_light(gpu, encoder, &frame, &params, &self.particle_buffer, cells);
         let group = gpu.bind_group(
             &self.depths_pass.get_bind_group_layout(0),
             &[
@@ -498,12 +508,25 @@ impl GpuClouds {
         // The grid lit from the eye, again where the eye has moved.
         if let Some(eye) = billboards
             .eye
-            .filter(|eye| self.eye_frame.get() != Some(*eye))
+            .as_ref()
+            .filter(|eye| self.eye_frame.get() != Some((eye.frame, eye.pose)))
         {
-            let params = gpu.uniform("the eye's buffer frame", &eye);
-            let cells = grid(&self.cells, self.eye_offset, EYE_RESOLUTION);
-            self.record_light(gpu, encoder, &eye, &params, cells);
-            self.eye_frame.set(Some(eye));
+            gpu.queue.write_buffer(
+                &self.eye_particles,
+                0,
+                bytemuck::cast_slice(&records(&eye.particles)),
+            );
+            let params = gpu.uniform("the eye's buffer frame", &eye.frame);
+            let cells = grid(&self.cells, self.eye_offset, eye.frame.resolution);
+            self.record_light(
+                gpu,
+                encoder,
+                &eye.frame,
+                &params,
+                &self.eye_particles,
+                cells,
+            );
+            self.eye_frame.set(Some((eye.frame, eye.pose)));
         }
         let size = (camera.width, camera.height);
         let [picture, higher] = match pass.targets.take() {
@@ -589,14 +612,20 @@ impl GpuClouds {
         let focal = 0.5 * h as f32 / tan_half_height;
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
         let sky = light.ambient.scattered(light.phase, &octaves_of_sky);
-        // With the table, the grid lit from the eye: toward it from the particles' mean.
+        // With the table, the grid lit from the eye along each pixel's ray.
         let table = light.scattering.table();
         let eye = match table {
             Some(_) => {
-                let to_eye = (camera.position - self.centre)
-                    .try_normalize()
-                    .unwrap_or(Vec3::Y);
-                Some(self.buffer_frame(to_eye, 0.0, Splat::Pieces, EYE_RESOLUTION)?)
+                let (particles, scale) = seen_from(&self.particles, self.centre, camera);
+                let n = eye_resolution(w, h);
+                let frame = frame_of(&particles, Vec3::NEG_Z, 0.0, Splat::Pieces, n)?;
+                let pose = [camera.position, camera.forward, camera.right, camera.up];
+                Some(Eye {
+                    frame,
+                    pose,
+                    particles,
+                    scale,
+                })
             }
             None => None,
         };
@@ -625,7 +654,7 @@ impl GpuClouds {
             height: h,
             octave_count: octaves.count,
             eye_base: (self.eye_offset / 4) as u32,
-            pad0: 0,
+            eye_scale: eye.as_ref().map_or(1.0, |eye| eye.scale),
             pad1: 0,
             pad2: 0,
             pad3: 0,
@@ -633,7 +662,10 @@ impl GpuClouds {
         let params = gpu.uniform("the cloud draw", &params);
         let frame_buffer = gpu.uniform("the buffer frame", &frame);
         // Without the table, the sun's frame and the fitted table stand in, unread.
-        let eye_buffer = gpu.uniform("the eye's buffer frame", &eye.unwrap_or(frame));
+        let eye_buffer = gpu.uniform(
+            "the eye's buffer frame",
+            &eye.as_ref().map_or(frame, |eye| eye.frame),
+        );
         let table_buffer = gpu.storage(
             "the transfer table",
             bytemuck::cast_slice(&table.unwrap_or(&TransferTable::FITTED).values),
@@ -688,11 +720,21 @@ impl GpuClouds {
 }
 
 /// A draw of the billboards: its bindings, how many particles are in front, and the
-/// frame of the grid lit from the eye it reads (with the table, which it is drawn by).
+/// grid lit from the eye it reads (with the table, which it is drawn by).
 struct Billboards {
     group: wgpu::BindGroup,
     count: u32,
-    eye: Option<BufferFrame>,
+    eye: Option<Eye>,
+}
+
+/// The grid lit from the eye along each pixel's ray: the particles [`seen_from`] the
+/// camera and their scale across, the light pass's frame, and the camera's position and
+/// axes it was made for.
+struct Eye {
+    frame: BufferFrame,
+    pose: [Vec3; 4],
+    particles: Vec<Particle>,
+    scale: f32,
 }
 
 gpu_struct! {
@@ -845,6 +887,66 @@ pub(crate) fn target_texture(
 pub fn shadow_texture(gpu: &Gpu, shadow: &CloudShadow) -> wgpu::Texture {
     let n = shadow.resolution as u32;
     gpu.float_texture("the cloud's shadow", &shadow.depth, n, n)
+}
+
+/// The frame of a light pass of `particles` lit from `to_sun` into a `resolution`^3
+/// grid.
+fn frame_of(
+    particles: &[Particle],
+    to_sun: Vec3,
+    forward: f32,
+    splat: Splat,
+    resolution: u32,
+) -> Result<BufferFrame, GpuError> {
+    let light = LightFrame::new(particles, to_sun, forward)?;
+    let voxel = (light.max - light.min) / resolution as f32;
+    let row = |v: Vec3| [v.x, v.y, v.z, 0.0];
+    let m = light.from_world;
+    Ok(BufferFrame {
+        x_axis: row(m.row(0)),
+        y_axis: row(m.row(1)),
+        z_axis: row(m.row(2)),
+        min: row(light.min),
+        voxel: row(voxel),
+        resolution,
+        particles: particles.len() as u32,
+        pieces: (splat == Splat::Pieces) as u32,
+        forward_bits: forward.to_bits(),
+    })
+}
+
+/// The particles as seen from `camera`, in a space where its rays are parallel (to -z):
+/// a point `d` from the eye goes to `(s (d . right) / z, s (d . up) / z, z)`, `z = d .
+/// forward`, `s` the depth of the particles' mean (returned). Each particle keeps its
+/// column along every ray: its radius across is scaled by `s / z` at its centre and its
+/// density by `z / s` (only its spread along the ray, now `s / z` of its own, is not
+/// kept). The light pass of these lit from -z is the optical depth toward the eye along
+/// each pixel's own ray, where a pass lit along one direction from the eye reads, near
+/// a blob, the depth in front of its neighbours (a blob-sized mottle wherever the rays
+/// leave that direction). Particles not wholly in front of the eye weigh nothing.
+fn seen_from(particles: &[Particle], centre: Vec3, camera: &Camera) -> (Vec<Particle>, f32) {
+    let s = camera.depth(centre).max(1.0);
+    let warped = particles
+        .iter()
+        .map(|p| {
+            let d = p.position - camera.position;
+            let z = d.dot(camera.forward);
+            if z <= p.reach() {
+                return Particle {
+                    position: Vec3::new(0.0, 0.0, s),
+                    density: 0.0,
+                    ..*p
+                };
+            }
+            Particle {
+                position: Vec3::new(s * d.dot(camera.right) / z, s * d.dot(camera.up) / z, z),
+                radius: p.radius * s / z,
+                density: p.density * z / s,
+                albedo: p.albedo,
+            }
+        })
+        .collect();
+    (warped, s)
 }
 
 /// The `n`^3 grid of f32 starting `offset` bytes into `cells`.

@@ -37,9 +37,9 @@
 //! octaves are +41 %. It costs three coarse light passes once per cloud shape (not per
 //! sun) and a 16-node lookup a blob-pixel. The GPU's billboards, blended in hardware
 //! back to front, do not know the depth in front of a blob on its pixel: they read the
-//! depth toward the eye from a second, coarse buffer lit from the eye (`atmo_gpu`'s
-//! `EYE_RESOLUTION`), which over the 108 views scores 66 % of blocks where the sum along
-//! the pixel scores 72 %.
+//! depth toward the eye from a second buffer lit from the eye along each pixel's ray
+//! (`atmo_gpu::clouds`), which over the 108 views scores 66 % of blocks where the sum
+//! along the pixel scores 72 %.
 
 use super::particles::Particle;
 use super::sky_light::{depths_along, vertical_depths};
