@@ -19,15 +19,11 @@ fn main(
     if k >= frame.particles {
         return;
     }
-    let depths = depths_at(particles[k].position_radius.xyz);
-    particles[k].sky_depth = depths.x;
-    particles[k].sky_column = depths.y;
-    let out = min(depths.x, max(depths.y - depths.x, 0.0));
+    let g = grid_of(frame, particles[k].position_radius.xyz);
+    let depth = -log_gamma_at(g);
+    let column = column_depth_at(g);
+    particles[k].sky_depth = depth;
+    particles[k].sky_column = column;
+    let out = min(depth, max(column - depth, 0.0));
     particles[k].out_depth = min(particles[k].out_depth, out);
-}
-
-// The optical depth from the lit side to p and the whole column through p.
-fn depths_at(p: vec3<f32>) -> vec2<f32> {
-    let g = grid_of(frame, p);
-    return vec2<f32>(-log_gamma_at(g), column_depth_at(g));
 }

@@ -16,9 +16,8 @@
 use std::cell::{Cell, RefCell};
 
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
-use atmo::clouds::octaves::Octaves;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{Lighting, Scattering};
+use atmo::clouds::render::Lighting;
 use atmo::clouds::shadow::CloudShadow;
 use atmo::clouds::sky_light::{SkyDimming, VERTICAL_RESOLUTION};
 use atmo::clouds::transfer::{CloudDepths, TransferTable};
@@ -132,13 +131,10 @@ pub struct GpuClouds {
     eye_offset: u64,
     /// The light pass's frame, once it has run.
     frame: Option<BufferFrame>,
-    /// The frame of the grid lit from the eye that `cells` holds and the camera's
-    /// position and axes it was made for, if any.
-    eye_frame: Cell<Option<(BufferFrame, [Vec3; 4])>>,
+    /// The grid lit from the eye that `cells` holds, if any.
+    eye: Cell<Option<EyeGrid>>,
     /// The particles' records as seen from the eye (`seen_from`), for its light pass.
     eye_particles: wgpu::Buffer,
-    /// The particles' mean position, m.
-    centre: Vec3,
     /// The buffer lit along an axis ([`VERTICAL_RESOLUTION`]^3) the particles' depths
     /// are read from (for the sky's light, the vertical's), and whether their records
     /// hold the vertical's.
@@ -207,7 +203,6 @@ impl GpuClouds {
         let prefix = module("clouds_prefix.wgsl")?;
         let draw = module("clouds_lookup.wgsl clouds_draw.wgsl")?;
         let depths_pass = module("clouds_lookup.wgsl clouds_sky_depths.wgsl")?;
-        let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
         let over = |fragment| {
             gpu.blended_pipeline_of(
                 fragment,
@@ -229,13 +224,12 @@ impl GpuClouds {
             cells,
             eye_offset,
             frame: None,
-            eye_frame: Cell::new(None),
+            eye: Cell::new(None),
             eye_particles: gpu.storage(
                 "the particles seen from the eye",
                 bytemuck::cast_slice(&records(particles)),
                 "the particle count",
             )?,
-            centre,
             sky_cells,
             sky_depths: Cell::new(false),
             out_depths: Cell::new(false),
@@ -270,9 +264,8 @@ impl GpuClouds {
             bytemuck::cast_slice(&records(particles)),
         );
         self.particles.copy_from_slice(particles);
-        self.centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
         self.frame = None;
-        self.eye_frame.set(None);
+        self.eye.set(None);
         self.sky_depths.set(false);
         self.out_depths.set(false);
         Ok(())
@@ -318,6 +311,33 @@ impl GpuClouds {
     /// The sun's grid in `cells`.
     fn sun_cells(&self) -> wgpu::BufferBinding<'_> {
         grid(&self.cells, 0, self.resolution)
+    }
+
+    /// The grid lit from the eye a draw from `camera` reads: the one kept where the
+    /// camera and the picture's size are those it was made for, else the particles seen
+    /// from the eye and the frame of their light pass.
+    fn eye_for(&self, camera: &Camera) -> Result<Eye, GpuError> {
+        let pose = [camera.position, camera.forward, camera.right, camera.up];
+        let size = (camera.width, camera.height);
+        if let Some(grid) = self
+            .eye
+            .get()
+            .filter(|kept| kept.pose == pose && kept.size == size)
+        {
+            return Ok(Eye { grid, seen: None });
+        }
+        let (particles, scale) = seen_from(&self.particles, camera);
+        let n = eye_resolution(size.0, size.1);
+        let frame = frame_of(&particles, Vec3::NEG_Z, 0.0, Splat::Pieces, n)?;
+        Ok(Eye {
+            grid: EyeGrid {
+                frame,
+                scale,
+                pose,
+                size,
+            },
+            seen: Some(particles),
+        })
     }
 
     /// Records a light pass of `frame` (uploaded as `params`) of the particles' records
@@ -498,23 +518,23 @@ impl GpuClouds {
         camera: &Camera,
         light: &Lighting,
     ) -> Result<(), GpuError> {
-        let octaves = Drawn::of(light)?;
-        let dimming = light.ambient.dimming(&octaves.sky);
+        light.scattering.validate()?;
+        let dimming = light.ambient.dimming(&light.scattering.octaves());
         let billboards = self.billboards(gpu, camera, light, &dimming)?;
         // The sky's light inside the cloud and the transfer table need each particle's
         // depths: made once for particles where they are.
         let table = light.scattering.table().is_some();
         self.record_missing_depths(gpu, encoder, !dimming.is_flat(), table)?;
         // The grid lit from the eye, again where the eye has moved.
-        if let Some(eye) = billboards
-            .eye
-            .as_ref()
-            .filter(|eye| self.eye_frame.get() != Some((eye.frame, eye.pose)))
+        if let Some(Eye {
+            grid: eye,
+            seen: Some(particles),
+        }) = &billboards.eye
         {
             gpu.queue.write_buffer(
                 &self.eye_particles,
                 0,
-                bytemuck::cast_slice(&records(&eye.particles)),
+                bytemuck::cast_slice(&records(particles)),
             );
             let params = gpu.uniform("the eye's buffer frame", &eye.frame);
             let cells = grid(&self.cells, self.eye_offset, eye.frame.resolution);
@@ -526,7 +546,7 @@ impl GpuClouds {
                 &self.eye_particles,
                 cells,
             );
-            self.eye_frame.set(Some((eye.frame, eye.pose)));
+            self.eye.set(Some(*eye));
         }
         let size = (camera.width, camera.height);
         let [picture, higher] = match pass.targets.take() {
@@ -546,8 +566,8 @@ impl GpuClouds {
         let params = CompositeParams {
             corner: pass.corner.map(|c| c as f32),
             exposure: pass.exposure,
-            depth_scale: octaves.drawn.depth_scale,
-            higher: (octaves.drawn.count > 1) as u32,
+            depth_scale: light.scattering.blob_octaves().depth_scale,
+            higher: (light.scattering.blob_octaves().count > 1) as u32,
             pad0: 0,
             pad1: 0,
             pad2: 0,
@@ -605,28 +625,16 @@ impl GpuClouds {
             "the particle count",
         )?;
         let (tan_half_width, tan_half_height) = camera.pinhole("the clouds' billboards")?;
-        let Drawn {
-            drawn: octaves,
-            sky: octaves_of_sky,
-        } = Drawn::of(light)?;
+        let octaves = light.scattering.blob_octaves();
         let focal = 0.5 * h as f32 / tan_half_height;
         let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
-        let sky = light.ambient.scattered(light.phase, &octaves_of_sky);
+        let sky = light
+            .ambient
+            .scattered(light.phase, &light.scattering.octaves());
         // With the table, the grid lit from the eye along each pixel's ray.
         let table = light.scattering.table();
         let eye = match table {
-            Some(_) => {
-                let (particles, scale) = seen_from(&self.particles, self.centre, camera);
-                let n = eye_resolution(w, h);
-                let frame = frame_of(&particles, Vec3::NEG_Z, 0.0, Splat::Pieces, n)?;
-                let pose = [camera.position, camera.forward, camera.right, camera.up];
-                Some(Eye {
-                    frame,
-                    pose,
-                    particles,
-                    scale,
-                })
-            }
+            Some(_) => Some(self.eye_for(camera)?),
             None => None,
         };
         // The phase function's code and parameter (functions.wgsl's phase_function).
@@ -654,7 +662,7 @@ impl GpuClouds {
             height: h,
             octave_count: octaves.count,
             eye_base: (self.eye_offset / 4) as u32,
-            eye_scale: eye.as_ref().map_or(1.0, |eye| eye.scale),
+            eye_scale: eye.as_ref().map_or(1.0, |eye| eye.grid.scale),
             pad1: 0,
             pad2: 0,
             pad3: 0,
@@ -664,7 +672,7 @@ impl GpuClouds {
         // Without the table, the sun's frame and the fitted table stand in, unread.
         let eye_buffer = gpu.uniform(
             "the eye's buffer frame",
-            &eye.as_ref().map_or(frame, |eye| eye.frame),
+            &eye.as_ref().map_or(frame, |eye| eye.grid.frame),
         );
         let table_buffer = gpu.storage(
             "the transfer table",
@@ -727,14 +735,22 @@ struct Billboards {
     eye: Option<Eye>,
 }
 
-/// The grid lit from the eye along each pixel's ray: the particles [`seen_from`] the
-/// camera and their scale across, the light pass's frame, and the camera's position and
-/// axes it was made for.
-struct Eye {
+/// The grid lit from the eye along each pixel's ray: its light pass's frame, the scale
+/// across of the particles [`seen_from`] the camera, and the camera's position and axes
+/// and the picture's size it was made for.
+#[derive(Clone, Copy, PartialEq)]
+struct EyeGrid {
     frame: BufferFrame,
-    pose: [Vec3; 4],
-    particles: Vec<Particle>,
     scale: f32,
+    pose: [Vec3; 4],
+    size: (u32, u32),
+}
+
+/// A draw's grid lit from the eye, and the particles seen from the eye where it must be
+/// made (`None`: the one `cells` holds).
+struct Eye {
+    grid: EyeGrid,
+    seen: Option<Vec<Particle>>,
 }
 
 gpu_struct! {
@@ -924,7 +940,8 @@ fn frame_of(
 /// each pixel's own ray, where a pass lit along one direction from the eye reads, near
 /// a blob, the depth in front of its neighbours (a blob-sized mottle wherever the rays
 /// leave that direction). Particles not wholly in front of the eye weigh nothing.
-fn seen_from(particles: &[Particle], centre: Vec3, camera: &Camera) -> (Vec<Particle>, f32) {
+fn seen_from(particles: &[Particle], camera: &Camera) -> (Vec<Particle>, f32) {
+    let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
     let s = camera.depth(centre).max(1.0);
     let warped = particles
         .iter()
@@ -955,28 +972,5 @@ fn grid(cells: &wgpu::Buffer, offset: u64, n: u32) -> wgpu::BufferBinding<'_> {
         buffer: cells,
         offset,
         size: std::num::NonZeroU64::new((n as u64).pow(3) * 4),
-    }
-}
-
-/// The octaves a draw's billboards draw by, and those the sky's light follows
-/// (`atmo::clouds::render`'s): with the transfer table, single scattering and
-/// [`Octaves::MULTIPLE`]; else the light's octaves both.
-struct Drawn {
-    drawn: Octaves,
-    sky: Octaves,
-}
-
-impl Drawn {
-    /// Refuses octaves outside their ranges, naming the field.
-    fn of(light: &Lighting) -> Result<Drawn, GpuError> {
-        light.scattering.validate()?;
-        let sky = light.scattering.octaves();
-        Ok(match light.scattering {
-            Scattering::Octaves(_) => Drawn { drawn: sky, sky },
-            Scattering::Transfer(_) => Drawn {
-                drawn: Octaves::SINGLE,
-                sky,
-            },
-        })
     }
 }

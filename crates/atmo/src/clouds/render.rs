@@ -76,6 +76,15 @@ impl Scattering {
         }
     }
 
+    /// The octaves each blob's own light is drawn by: these octaves, or with a table
+    /// single scattering (the table adds the rest).
+    pub fn blob_octaves(&self) -> Octaves {
+        match self {
+            Scattering::Octaves(octaves) => *octaves,
+            Scattering::Transfer(_) => Octaves::SINGLE,
+        }
+    }
+
     /// The table, if the orders past the first are drawn by one.
     pub fn table(&self) -> Option<&'static TransferTable> {
         match self {
@@ -231,11 +240,7 @@ pub fn render_with_depths(
     if table.is_some() {
         given("depths out of the cloud", depths.out.len())?;
     }
-    let octaves = match table {
-        None => light.scattering.octaves(),
-        Some(_) => Octaves::SINGLE,
-    }
-    .terms();
+    let octaves = light.scattering.blob_octaves().terms();
     let mut frame = Frame::new(camera.width, camera.height);
     frame
         .pixels
