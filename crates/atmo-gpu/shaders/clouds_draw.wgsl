@@ -1,7 +1,7 @@
 // Drawing the cloud (clouds 2.2): each particle a screen-parallel Gaussian billboard,
 // drawn back to front with E_k = S_k + T_k E_{k-1} (5) as premultiplied "over"
 // blending, S_k the light the blob sends along each pixel's own ray (its column faded
-// at its cut, the sunlight read at its two emission nodes, integrated over its depth,
+// at its cut, the sunlight read at its three emission nodes, integrated over its depth,
 // the phase for the ray), as atmo::clouds::render does. The orders past the first by
 // the octaves go to a second target, scaled afterwards by the cloud's depth on the ray;
 // by the transfer table, with the single-scattered light, the depth toward the eye read
@@ -239,21 +239,13 @@ fn emission_node(tau: f32, node: f32) -> vec2<f32> {
     return vec2<f32>(u, sqrt(2.0) * erf_inverse(clamp(2.0 * q - 1.0, -0.999999, 0.999999)));
 }
 
-// atmo::clouds::octaves::Emission::integral: the integral of exp(f(u)) e^-u over
-// 0..tau, f linear through (u0, l0) and (u1, l1), capped at 0 at the ends.
-fn blob_integral(tau: f32, u: vec2<f32>, l: vec2<f32>) -> f32 {
-    var slope = 0.0;
-    if u.y - u.x > 1e-6 * tau {
-        slope = (l.y - l.x) / (u.y - u.x);
+// 1 - e^-tau, by its series for a thin blob (OctaveTerms::light).
+fn absorbed_of(tau: f32) -> f32 {
+    if tau < 0.25 {
+        return tau * (1.0 - tau / 2.0 * (1.0 - tau / 3.0 * (1.0 - tau / 4.0 * (1.0 - tau / 5.0
+            * (1.0 - tau / 6.0)))));
     }
-    let start = min(l.x - slope * u.x, 0.0);
-    let end = min(l.x + slope * (tau - u.x), 0.0);
-    let x = end - start - tau;
-    var ratio = 1.0 + 0.5 * x;
-    if abs(x) >= 1e-3 {
-        ratio = (exp(x) - 1.0) / x;
-    }
-    return tau * exp(start) * ratio;
+    return 1.0 - exp(-tau);
 }
 
 // The orders past the first by the octaves.
@@ -287,20 +279,33 @@ fn shade(b: Billboard, table: bool) -> Colours {
     if tau <= 0.0 {
         discard;
     }
-    // The sunlight at the blob's two emission nodes along the ray, in the grid.
+    // The sunlight at the blob's emission nodes along the ray, in the grid, and the
+    // cloud's extinction there (the slope of ln Gamma along the light).
     let inv_length = inverseSqrt(rr);
     let g_ray = to_buffer(frame, r) / frame.voxel.xyz;
     let g = grid_of(frame, params.position.xyz) + t * g_ray;
     let along = (s * inv_length) * g_ray;
-    let n0 = emission_node(tau, 0.21132487);
-    let n1 = emission_node(tau, 0.7886751);
-    let u = vec2<f32>(n0.x, n1.x);
+    let n0 = emission_node(tau, EMISSION_FRACTIONS.x);
+    let n1 = emission_node(tau, EMISSION_FRACTIONS.y);
+    let n2 = emission_node(tau, EMISSION_FRACTIONS.z);
+    let ls = vec3<f32>(n0.y, n1.y, n2.y);
     let near = g + n0.y * along;
-    let l = vec2<f32>(log_gamma_at(near), log_gamma_at(g + n1.y * along));
-    // Octaves::light: single scattering, and the higher octaves apart.
+    let r0 = log_gamma_and_slope_in(frame, 0u, near);
+    let r1 = log_gamma_and_slope_in(frame, 0u, g + n1.y * along);
+    let r2 = log_gamma_and_slope_in(frame, 0u, g + n2.y * along);
+    let l = vec3<f32>(r0.x, r1.x, r2.x);
+    // The blobs beside (atmo::clouds::render): the others' extinction at each node
+    // times its distance from the blob's middle. The GPU does not know the depth in
+    // front of the blob, which the CPU bounds this by.
+    let own = tau * exp(-0.5 * ls * ls) / sqrt(2.0 * PI);
+    let others = max(vec3<f32>(r0.y, r1.y, r2.y) * (-s / frame.voxel.y) - own, vec3<f32>(0.0));
+    let dimmed = exp(-others * ls);
+    // Octaves::light: single scattering, and the higher octaves apart, by the
+    // Gauss-Legendre rule in the blob's absorbed fraction.
+    let alpha = absorbed_of(tau);
     let cosine = dot(params.to_sun.xyz, r) * inv_length;
     let p = phase(cosine);
-    let single = p * blob_integral(tau, u, l);
+    let single = p * alpha * dot(EMISSION_WEIGHTS, exp(l) * dimmed);
     var higher = 0.0;
     var weight = 1.0;
     var shape = 1.0;
@@ -310,28 +315,31 @@ fn shade(b: Billboard, table: bool) -> Colours {
         shape *= params.octaves.z;
         share *= params.octaves.x;
         let pi = shape * p + (1.0 - shape) / (4.0 * PI);
-        higher += weight * pi * blob_integral(tau, u, share * l);
+        higher += weight * pi * alpha * dot(EMISSION_WEIGHTS, exp(share * l) * dimmed);
     }
-    let alpha = 1.0 - exp(-tau);
     // The transfer table's light (atmo::clouds::render) at the emission nodes' mean
     // depths toward the sun and toward the eye, the least of those and the particle's
     // depth out, and the ray's angle.
     var tabled = 0.0;
     if table {
         let across = params.eye_scale * vec2<f32>(dot(r, params.right.xyz), dot(r, params.up.xyz));
-        let depths = vec2<f32>(t) + (s * inv_length) * vec2<f32>(n0.y, n1.y);
-        let to_eye = -0.5 * (log_gamma_in(eye, params.eye_base, grid_of(eye, vec3<f32>(across, depths.x)))
-            + log_gamma_in(eye, params.eye_base, grid_of(eye, vec3<f32>(across, depths.y))));
-        let to_sun = -0.5 * (l.x + l.y);
+        let depths = vec3<f32>(t) + (s * inv_length) * ls;
+        let eye_at = vec3<f32>(
+            log_gamma_in(eye, params.eye_base, grid_of(eye, vec3<f32>(across, depths.x))),
+            log_gamma_in(eye, params.eye_base, grid_of(eye, vec3<f32>(across, depths.y))),
+            log_gamma_in(eye, params.eye_base, grid_of(eye, vec3<f32>(across, depths.z))),
+        );
+        let to_eye = -dot(EMISSION_WEIGHTS, eye_at);
+        let to_sun = -dot(EMISSION_WEIGHTS, l);
         tabled = alpha * transfer(to_sun, min(min(to_eye, to_sun), b.out_depth), cosine, to_eye);
     }
     // OctaveTerms::light: the slab's diffuse light, the cloud's whole depth along the
-    // sun's ray through the nearer node (IntensityBuffer::column_depth_grid).
+    // sun's ray through the nearest node (IntensityBuffer::column_depth_grid).
     if params.diffuse.x > 0.0 {
         let t = column_depth_at(near);
         let e = params.diffuse.y;
-        let profile = max((vec2<f32>(t) + l + vec2<f32>(e)) / (t + 2.0 * e), vec2<f32>(0.0));
-        higher += params.diffuse.x * 0.5 * (profile.x + profile.y) * (1.0 - exp(-t)) * alpha
+        let profile = max((vec3<f32>(t) + l + vec3<f32>(e)) / (t + 2.0 * e), vec3<f32>(0.0));
+        higher += params.diffuse.x * dot(EMISSION_WEIGHTS, profile * dimmed) * (1.0 - exp(-t)) * alpha
             / (4.0 * PI);
     }
     // Premultiplied: colour + (1 - alpha) x what is behind, alpha = 1 - T_k; hazed, the

@@ -9,11 +9,12 @@ fn cell(base: u32, n: u32, x: u32, z: u32, y: u32) -> f32 {
 }
 
 // ln Gamma at grid coordinates g (voxel centres at integers) of the grid `f` starting
-// at `base`, trilinear, clamped to the grid, 0 on the light's side of it:
-// IntensityBuffer::sample_log_grid.
-fn log_gamma_in(f: BufferFrame, base: u32, g: vec3<f32>) -> f32 {
+// at `base`, trilinear, clamped to the grid, 0 on the light's side of it
+// (IntensityBuffer::sample_log_grid); and its slope along the light per voxel
+// (IntensityBuffer::extinction times -voxel.y).
+fn log_gamma_and_slope_in(f: BufferFrame, base: u32, g: vec3<f32>) -> vec2<f32> {
     if g.y < -0.5 {
-        return 0.0;
+        return vec2<f32>(0.0);
     }
     let n = f.resolution;
     let last = f32(n - 1u);
@@ -21,15 +22,21 @@ fn log_gamma_in(f: BufferFrame, base: u32, g: vec3<f32>) -> f32 {
     let top = n - 2u;
     let i = min(vec3<u32>(c), vec3<u32>(top));
     let w = c - vec3<f32>(i);
-    let a = mix(cell(base, n, i.x, i.z, i.y), cell(base, n, i.x, i.z, i.y + 1u), w.y);
-    let b = mix(cell(base, n, i.x + 1u, i.z, i.y), cell(base, n, i.x + 1u, i.z, i.y + 1u), w.y);
-    let c0 = mix(cell(base, n, i.x, i.z + 1u, i.y), cell(base, n, i.x, i.z + 1u, i.y + 1u), w.y);
-    let d = mix(
+    // Each corner across the light: its two values along it.
+    let a = vec2<f32>(cell(base, n, i.x, i.z, i.y), cell(base, n, i.x, i.z, i.y + 1u));
+    let b = vec2<f32>(cell(base, n, i.x + 1u, i.z, i.y), cell(base, n, i.x + 1u, i.z, i.y + 1u));
+    let c0 = vec2<f32>(cell(base, n, i.x, i.z + 1u, i.y), cell(base, n, i.x, i.z + 1u, i.y + 1u));
+    let d = vec2<f32>(
         cell(base, n, i.x + 1u, i.z + 1u, i.y),
         cell(base, n, i.x + 1u, i.z + 1u, i.y + 1u),
-        w.y,
     );
-    return mix(mix(a, b, w.x), mix(c0, d, w.x), w.z);
+    let across = mix(mix(a, b, w.x), mix(c0, d, w.x), w.z);
+    return vec2<f32>(mix(across.x, across.y, w.y), across.y - across.x);
+}
+
+// ln Gamma alone.
+fn log_gamma_in(f: BufferFrame, base: u32, g: vec3<f32>) -> f32 {
+    return log_gamma_and_slope_in(f, base, g).x;
 }
 
 // ln Gamma of the pass's own grid (`frame`, at the start of `log_gamma`).

@@ -8,7 +8,7 @@
 
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::FOOTPRINT;
-use atmo::clouds::particles::FADE_SCALE;
+use atmo::clouds::particles::{EMISSION_WEIGHTS, FADE_SCALE, GAUSS_LEGENDRE};
 use atmo::clouds::render::OPAQUE;
 use atmo::clouds::transfer;
 use atmo::shafts::planes::{ANGLE_STEP, MAX_ANGLE_SAMPLES, NEAR_LAMP};
@@ -154,10 +154,10 @@ const _: () = assert!(
 /// The constants WGSL shares with the Rust, generated: `const PHASE_RAYLEIGH: u32 = 0u;`
 /// and the rest of [`PhaseFunction::CODES`], this module's codes, the sky model's
 /// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, the clouds' `FOOTPRINT`,
-/// `FADE_SCALE` and `OPAQUE` and their transfer table's nodes (`TRANSFER_SUN` and its
-/// `TRANSFER_SUN_COUNT`, ..., padded to `TRANSFER_NODES`), the shadow maps'
-/// `RECEIVER_BIAS`, and the shafts' near-lamp slabs' `NEAR_LAMP`, `ANGLE_STEP` and
-/// `MAX_ANGLE_SAMPLES`.
+/// `FADE_SCALE`, `EMISSION_FRACTIONS`, `EMISSION_WEIGHTS` and `OPAQUE` and their
+/// transfer table's nodes (`TRANSFER_SUN` and its `TRANSFER_SUN_COUNT`, ..., padded to
+/// `TRANSFER_NODES`), the shadow maps' `RECEIVER_BIAS`, and the shafts' near-lamp
+/// slabs' `NEAR_LAMP`, `ANGLE_STEP` and `MAX_ANGLE_SAMPLES`.
 pub fn prelude() -> String {
     let phases = PhaseFunction::CODES
         .iter()
@@ -178,6 +178,14 @@ pub fn prelude() -> String {
     // and the scale of a faded billboard's column.
     out.push_str(&format!("const FOOTPRINT: f32 = {:?};\n", FOOTPRINT));
     out.push_str(&format!("const FADE_SCALE: f32 = {:?};\n", FADE_SCALE));
+    // A blob's emission nodes: their shares of its absorbed fraction and their weights.
+    for (name, values) in [
+        ("EMISSION_FRACTIONS", GAUSS_LEGENDRE),
+        ("EMISSION_WEIGHTS", EMISSION_WEIGHTS),
+    ] {
+        let [a, b, c] = values;
+        out.push_str(&format!("const {name} = vec3<f32>({a:?}, {b:?}, {c:?});\n"));
+    }
     // The transmittance below which a cloud's pixel counts as opaque.
     out.push_str(&format!("const OPAQUE: f32 = {:?};\n", OPAQUE));
     // The clouds' transfer table's nodes, each axis padded with its last node.

@@ -304,12 +304,6 @@ fn the_cloud_draws_over_a_callers_target_as_it_reads_back() {
         .map(|p| p.max_element())
         .fold(0.0, f32::max);
     assert!(mean_level(&read_back, 4.0) > 15.0, "the picture is dark");
-    eprintln!(
-        "DEBUG outside {:?} inside {:?} {:?}",
-        texels[(tw + 2) as usize],
-        texels[(4 * tw + 8) as usize],
-        texels[(40 * tw + 68) as usize]
-    );
     for (i, p) in read_back.pixels.iter().enumerate() {
         let (x, y) = (i as u32 % w, i as u32 / w);
         let d = (at(x + 8, y + 4) - *p).abs().max_element();

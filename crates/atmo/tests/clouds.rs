@@ -112,22 +112,30 @@ fn particle_order_and_thread_count_do_not_change_the_buffer() {
     assert_eq!(one.log_gamma, reference.log_gamma);
 }
 
+/// 2,000 points in the cloud: near particle centres (chosen by `seed`), jittered
+/// within their radius.
+fn points_in(particles: &[Particle], seed: u64) -> Vec<Vec3> {
+    let mut rng = SplitMix64::new(seed);
+    (0..2000)
+        .map(|_| {
+            let p = particles[(rng.next_u64() % particles.len() as u64) as usize];
+            p.position
+                + Vec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                ) * p.radius
+        })
+        .collect()
+}
+
 #[test]
 fn trilinear_lookups_between_centres_stay_close_to_the_exact_transmittance() {
     let particles = cloud(3000);
     let to_sun = sun(35.0, 40.0);
     let buffer = IntensityBuffer::new(&particles, to_sun, 96, 0.0, Splat::Pieces).unwrap();
-    let mut rng = SplitMix64::new(3);
     let (mut sum, mut count) = (0.0f64, 0);
-    // Points in the cloud: near particle centres, jittered.
-    for _ in 0..2000 {
-        let p = particles[(rng.next_u64() % particles.len() as u64) as usize];
-        let point = p.position
-            + Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            ) * p.radius;
+    for point in points_in(&particles, 3) {
         let exact = transmittance(&particles, to_sun, point);
         if exact > 1e-2 {
             sum += (buffer.sample(point) as f64 - exact).abs() / exact;
@@ -139,6 +147,40 @@ fn trilinear_lookups_between_centres_stay_close_to_the_exact_transmittance() {
     // Outside the grid on the sun's side: full sunlight.
     let far_up = particles[0].position + to_sun.normalize() * 5000.0;
     assert_eq!(buffer.sample(far_up), 1.0);
+}
+
+/// The buffer's slope along the light (`IntensityBuffer::extinction`, what the drawing
+/// takes the blobs beside a blob from) against the particles' extinction at the same
+/// points: the mean over a voxel along the light, so converging as the voxels shrink
+/// (measured 38, 8.4 and 4.0 % in the mean where the cloud is at 32^3, 96^3 and
+/// 192^3); nothing outside the cloud.
+#[test]
+fn the_buffers_slope_along_the_light_is_the_clouds_extinction() {
+    let particles = cloud(3000);
+    let to_sun = sun(35.0, 40.0);
+    let extinction = |x: Vec3| particles.iter().map(|p| p.extinction_at(x)).sum::<f32>();
+    let mean_error = |resolution: usize| {
+        let buffer =
+            IntensityBuffer::new(&particles, to_sun, resolution, 0.0, Splat::Pieces).unwrap();
+        let (mut sum, mut count) = (0.0f64, 0);
+        for point in points_in(&particles, 5) {
+            let exact = extinction(point) as f64;
+            if exact > 1e-3 {
+                sum += (buffer.extinction(point) as f64 - exact).abs() / exact;
+                count += 1;
+            }
+        }
+        assert!(count > 200, "{count} points");
+        let far_up = particles[0].position + to_sun.normalize() * 5000.0;
+        assert_eq!(buffer.extinction(far_up), 0.0);
+        sum / count as f64
+    };
+    let errors = [32, 96, 192].map(mean_error);
+    eprintln!("the buffer's extinction: mean error {errors:?} at 32^3, 96^3 and 192^3");
+    assert!(
+        errors[2] < 0.06 && errors[1] < errors[0] && errors[2] < errors[1],
+        "{errors:?}"
+    );
 }
 
 #[test]

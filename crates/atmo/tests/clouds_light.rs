@@ -147,9 +147,11 @@ fn mean_ratio(camera: &Camera, covered: &[bool], fast: &[f64], reference: &[f64]
 
 #[test]
 fn single_scattering_pictures_match_the_quadrature() {
-    // Measured: the billboards 5 to 6 % dark from the front and the side, 1.5 %
-    // from behind (the overlap of big blobs, docs/clouds.md); the paper's own
-    // billboards were 16 % dark from the front on this cloud at density 0.04.
+    // The bounds: within 3 % in the mean, 5 % RMS of the mean. Measured: 0.999,
+    // 0.989 and 0.992 of the quadrature, RMS 2.4, 3.4 and 3.3 % (front, side, behind);
+    // before the blobs beside and the third emission node, 0.942, 0.946 and 0.985
+    // (docs/clouds.md, "Drawing"); the paper's own billboards were 16 % dark from the
+    // front on this cloud at density 0.04.
     let particles = cloud();
     let camera = camera(&particles, 64, 36);
     for (name, to_sun, cloud) in lit(&particles) {
@@ -160,9 +162,13 @@ fn single_scattering_pictures_match_the_quadrature() {
             .collect();
         assert!(reference.iter().all(|v| *v >= 0.0 && v.is_finite()));
         let fast = fast(&particles, &camera, to_sun, Scattering::SINGLE);
-        let ratio = mean_ratio(&camera, &cloud.covered(&camera), &fast, &reference);
-        eprintln!("{name}: single scattering, billboards / quadrature {ratio:.3}");
-        assert!((ratio - 1.0).abs() < 0.08, "{name}: {ratio}");
+        let agreement = Agreement::of(&fast, &reference, &cloud.covered(&camera), 64);
+        let (ratio, rms) = (agreement.mean_ratio, agreement.rms_of_mean);
+        eprintln!("{name}: single scattering, billboards / quadrature {ratio:.4}, rms {rms:.4}");
+        assert!(
+            (ratio - 1.0).abs() < 0.03 && rms < 0.05,
+            "{name}: {ratio} {rms}"
+        );
     }
 }
 
@@ -196,9 +202,9 @@ fn every_order(particles: &[Particle], camera: &Camera, to_sun: Vec3) -> ([f64; 
 
 #[test]
 fn every_order_matches_the_path_tracer() {
-    // Measured at 48 x 28: the transfer table 1.045 (front), 1.067 (side), 0.994
+    // Measured at 48 x 28: the transfer table 1.065 (front), 1.078 (side), 0.998
     // (behind) of the path tracer in the mean, within the 10 %; the octaves
-    // 1.06, 1.12 and 0.83; every order is 3 to 5.5 times single scattering here. Both
+    // 1.12, 1.13 and 0.84; every order is 3 to 5.5 times single scattering here. Both
     // are fitted to many views of several clouds (docs/clouds.md), this one's among them.
     let particles = cloud();
     let camera = camera(&particles, 48, 28);

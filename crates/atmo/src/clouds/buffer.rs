@@ -217,7 +217,18 @@ impl IntensityBuffer {
     /// light), bilinear across the light.
     #[inline]
     pub fn column_depth_grid(&self, g: Vec3) -> f32 {
-        first(self.lookup_lanes::<true>([g.x, g.y, g.z].map(Lanes::splat))[1])
+        first(self.sample_lanes::<true>([g.x, g.y, g.z].map(Lanes::splat))[2])
+    }
+
+    /// The cloud's extinction coefficient at the world point `p` (1/m) as the buffer
+    /// holds it: how fast `ln Gamma` falls along the light's travel there (between the
+    /// voxel centres on either side of `p` along the light, bilinear across it). With
+    /// [`Splat::Pieces`] and no forward scattering, the particles' extinction averaged
+    /// over a voxel along the light; with forward scattering, less the share scattered
+    /// forward.
+    pub fn extinction(&self, p: Vec3) -> f32 {
+        let g = self.grid_coordinates(p);
+        -first(self.sample_lanes::<false>([g.x, g.y, g.z].map(Lanes::splat))[1]) / self.voxel.y
     }
 
     /// `ln Gamma` at grid coordinates `g`, trilinear between voxel centres (clamped to
@@ -230,22 +241,18 @@ impl IntensityBuffer {
     /// [`IntensityBuffer::sample_log_grid`] at eight points (grid coordinates).
     #[inline(always)]
     pub(crate) fn sample_log_lanes(&self, g: [Lanes; 3]) -> Lanes {
-        self.lookup_lanes::<false>(g)[0]
+        self.sample_lanes::<false>(g)[0]
     }
 
-    /// [`IntensityBuffer::sample_log_grid`] and [`IntensityBuffer::column_depth_grid`]
-    /// at eight points (grid coordinates), which share the voxel across the light.
+    /// At eight points (grid coordinates): `ln Gamma` trilinear, its slope along the
+    /// light per voxel (`-voxel.y` times [`IntensityBuffer::extinction`]) and, with
+    /// `DEPTH`, the whole cloud's optical depth along the light through them
+    /// ([`IntensityBuffer::column_depth_grid`], else 0), which all share the voxel
+    /// across the light. The voxel and the fractions in lanes, the values each point
+    /// needs read one by one (no gather on the baseline instruction set), the lerps in
+    /// lanes.
     #[inline(always)]
-    pub(crate) fn sample_log_and_depth_lanes(&self, g: [Lanes; 3]) -> [Lanes; 2] {
-        self.lookup_lanes::<true>(g)
-    }
-
-    /// `ln Gamma` at eight points and, with `DEPTH`, the whole cloud's optical depth
-    /// along the light through them (else 0): the voxel and the fractions in lanes, the
-    /// values each point needs read one by one (no gather on the baseline instruction
-    /// set), the lerps in lanes.
-    #[inline(always)]
-    fn lookup_lanes<const DEPTH: bool>(&self, g: [Lanes; 3]) -> [Lanes; 2] {
+    pub(crate) fn sample_lanes<const DEPTH: bool>(&self, g: [Lanes; 3]) -> [Lanes; 3] {
         let n = self.resolution;
         let sun_side = g[1].simd_lt(Lanes::splat(-0.5));
         let last = Lanes::splat((n - 1) as f32);
@@ -280,19 +287,23 @@ impl IntensityBuffer {
                 f[2],
             )
         };
+        let pairs = pairs.map(Lanes::new);
         let log_gamma = across(std::array::from_fn(|corner| {
-            lerp(
-                Lanes::new(pairs[2 * corner]),
-                Lanes::new(pairs[2 * corner + 1]),
-                f[1],
-            )
+            lerp(pairs[2 * corner], pairs[2 * corner + 1], f[1])
+        }));
+        let slope = across(std::array::from_fn(|corner| {
+            pairs[2 * corner + 1] - pairs[2 * corner]
         }));
         let depth = if DEPTH {
             -across(layer.map(Lanes::new))
         } else {
             Lanes::ZERO
         };
-        [sun_side.select(Lanes::ZERO, log_gamma), depth]
+        [
+            sun_side.select(Lanes::ZERO, log_gamma),
+            sun_side.select(Lanes::ZERO, slope),
+            depth,
+        ]
     }
 }
 

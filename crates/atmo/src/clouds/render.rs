@@ -13,13 +13,31 @@
 //! eight pixels at a time in SIMD lanes (the `wide` crate): the pixel's arithmetic, not
 //! memory, was the frame's cost, and on two cores this draws the bench's frame 2.35
 //! times faster than a pixel at a time.
+//!
+//! The blobs beside. Composited by their centres, a blob's light is dimmed by the whole
+//! of every blob before it and by nothing of those after, where overlapping blobs
+//! really share the depth: a blob's light comes from its emission nodes, and the
+//! depth in front of node `j` at `l_j` standard deviations `s` from the blob's middle
+//! is the blobs' before less their parts behind the node, plus the parts in front of
+//! it of those after. Where the blobs' centres are spread evenly along the ray about
+//! the node (a mean field), those differ by `sigma_o l_j s`, `sigma_o` the other
+//! blobs' extinction at the node (the buffer's slope of `ln Gamma` along the light,
+//! [`IntensityBuffer::extinction`], less the blob's own): the node's light is dimmed
+//! by that much more, or less. On the 200-particle cloud of `tests/clouds_light.rs`
+//! the picture's single scattering went from 0.942, 0.946 and 0.985 of the quadrature
+//! (sun from the front, the side and behind) to 1.006, 0.995 and 0.993, with the third
+//! emission node. In a scratch harness that knew every blob of a pixel (unfaded, in
+//! double precision), the mean field gave 1.013, 1.002 and 1.005 and the blobs' exact
+//! parts in front of each node 0.990, 0.982 and 0.994: the mean field is as good as
+//! knowing them. It needs nothing of the pixel, so the GPU's blended billboards draw
+//! it too.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::buffer::IntensityBuffer;
 use super::octaves::{Emission, Octaves};
-use super::particles::{tabulated_emission_nodes_lanes, Particle};
+use super::particles::{tabulated_emission_nodes_lanes, weighted_lanes, Particle};
 use super::sky_light::SkyLight;
 use super::transfer::{CloudDepths, TransferTable};
 use super::{Lanes, LANES};
@@ -241,6 +259,9 @@ pub fn render_with_depths(
         given("depths out of the cloud", depths.out.len())?;
     }
     let octaves = light.scattering.blob_octaves().terms();
+    // The buffer's slope of `ln Gamma` per voxel along the light to the extinction
+    // over a standard deviation of the blob, in lanes below: times `-s / voxel`.
+    let per_voxel = -1.0 / buffer.voxel.y;
     let mut frame = Frame::new(camera.width, camera.height);
     frame
         .pixels
@@ -291,6 +312,7 @@ pub fn render_with_depths(
                 dirty[b0..=b1].iter_mut().for_each(|d| *d = true);
                 let p = &particles[k];
                 let s = p.sigma();
+                let to_depth_per_sigma = Lanes::splat(per_voxel * s);
                 let albedo = Lanes::splat(p.albedo);
                 let top = Lanes::splat(top_shares[k]);
                 // The centre from the eye; its dot with a pixel's ray, affine in the pixel.
@@ -336,28 +358,41 @@ pub fn render_with_depths(
                         if live.none() {
                             continue;
                         }
-                        // The sunlight at two depths of the blob along the ray (see
+                        // The sunlight at the blob's emission nodes along the ray (see
                         // `emission_nodes`), from which the octaves integrate what the
-                        // blob sends toward the eye, and the cloud's whole depth along
-                        // the sun's ray through the nearer; the phase for this ray.
+                        // blob sends toward the eye, with the cloud's extinction there
+                        // (the slope of `ln Gamma` along the light) and its whole depth
+                        // along the sun's ray through the nearest; the phase for this ray.
                         let g_ray = lanes3(g_y, gx, xf);
                         let along_scale = Lanes::splat(s) / rr.sqrt();
-                        let [u0, l0, u1, l1] = tabulated_emission_nodes_lanes(tau);
-                        let at = |l: Lanes| -> [Lanes; 3] {
+                        let nodes = tabulated_emission_nodes_lanes(tau);
+                        let at = |j: usize| -> [Lanes; 3] {
                             std::array::from_fn(|c| {
-                                Lanes::splat(g_eye[c]) + g_ray[c] * (t + l * along_scale)
+                                Lanes::splat(g_eye[c]) + g_ray[c] * (t + nodes[j][1] * along_scale)
                             })
                         };
-                        let [near, slab] = if octaves.needs_slab() {
-                            buffer.sample_log_and_depth_lanes(at(l0))
-                        } else {
-                            [buffer.sample_log_lanes(at(l0)), Lanes::ZERO]
-                        };
+                        let reads = [
+                            if octaves.needs_slab() {
+                                buffer.sample_lanes::<true>(at(0))
+                            } else {
+                                buffer.sample_lanes::<false>(at(0))
+                            },
+                            buffer.sample_lanes::<false>(at(1)),
+                            buffer.sample_lanes::<false>(at(2)),
+                        ];
+                        // The blobs beside (the module doc): the others' extinction at
+                        // each node times its distance from the blob's middle.
+                        let beside = std::array::from_fn(|j| {
+                            let [_, l, phi] = nodes[j];
+                            let others = (reads[j][1] * to_depth_per_sigma - tau * phi)
+                                .fast_max(Lanes::ZERO);
+                            others * l
+                        });
                         let emission = Emission {
                             tau,
-                            u: [u0, u1],
-                            log_gamma: [near, buffer.sample_log_lanes(at(l1))],
-                            slab,
+                            log_gamma: reads.map(|r| r[0]),
+                            beside,
+                            slab: reads[0][2],
                         };
                         let phase = Lanes::from(&phases[band * BAND * w + i..][..LANES]);
                         let blob = octaves.light(phase, &emission);
@@ -377,9 +412,8 @@ pub fn render_with_depths(
                                 // and theirs into the blob), the least of those and the
                                 // particle's depth out, and the ray's angle.
                                 let front = Lanes::from(&in_front[i..i + LANES]);
-                                let half = Lanes::splat(0.5);
-                                let eye = front + half * (emission.u[0] + emission.u[1]);
-                                let sun = -half * (emission.log_gamma[0] + emission.log_gamma[1]);
+                                let eye = front + weighted_lanes(|j| nodes[j][0]);
+                                let sun = -weighted_lanes(|j| emission.log_gamma[j]);
                                 let f = cells.at(
                                     sun,
                                     eye.fast_min(sun).fast_min(Lanes::splat(depths.out[k])),

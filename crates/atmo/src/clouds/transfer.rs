@@ -1,8 +1,9 @@
 //! Multiple scattering by a transfer table (atmo's model for every order of the sun's
 //! light on the CPU; docs/clouds.md, "Every order: a transfer table"). The light that
 //! the orders past the first send toward the eye from a droplet is taken as a function
-//! `F` of four things the drawing knows or can know cheaply, at the blob's two emission
-//! nodes on the pixel's ray ([`super::particles::emission_nodes`]), their mean:
+//! `F` of four things the drawing knows or can know cheaply, at the blob's emission
+//! nodes on the pixel's ray ([`super::particles::emission_nodes`]), their mean by the
+//! nodes' weights:
 //!
 //! - `tau_sun`, the optical depth toward the sun: the intensity buffer's `-ln Gamma`
 //!   (clouds (7));

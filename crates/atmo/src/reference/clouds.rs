@@ -510,6 +510,9 @@ impl<'a> ReferenceCloud<'a> {
 pub struct Agreement {
     /// The picture's mean over the covered pixels, over the reference's.
     pub mean_ratio: f64,
+    /// The root mean square of the picture less the reference over the covered
+    /// pixels, over the reference's mean there.
+    pub rms_of_mean: f64,
     /// 8 x 8 blocks with at least half their pixels covered whose means are within 15 %
     /// of each other, and all such blocks (a measure of the picture's shape).
     pub blocks_within_15: usize,
@@ -534,9 +537,14 @@ impl Agreement {
                     (p + picture[k], r + reference[k], n + 1)
                 })
         };
-        let (p, r, _) = sums(&mut (0..picture.len()));
+        let (p, r, n) = sums(&mut (0..picture.len()));
+        let squares: f64 = (0..picture.len())
+            .filter(|&k| covered[k])
+            .map(|k| (picture[k] - reference[k]).powi(2))
+            .sum();
         let mut agreement = Agreement {
             mean_ratio: p / r,
+            rms_of_mean: (squares / n as f64).sqrt() / (r / n as f64),
             blocks_within_15: 0,
             blocks: 0,
             medians_within_15: 0,
