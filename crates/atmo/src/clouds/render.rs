@@ -37,7 +37,7 @@ use rayon::prelude::*;
 
 use super::buffer::IntensityBuffer;
 use super::octaves::{Emission, Octaves};
-use super::particles::{tabulated_emission_nodes_lanes, weighted_lanes, Particle};
+use super::particles::{tabulated_emission_nodes_lanes, weighted_lanes, Particle, EMISSION_NODES};
 use super::sky_light::SkyLight;
 use super::transfer::{CloudDepths, TransferTable};
 use super::{Lanes, LANES};
@@ -371,15 +371,13 @@ pub fn render_with_depths(
                                 Lanes::splat(g_eye[c]) + g_ray[c] * (t + nodes[j][1] * along_scale)
                             })
                         };
-                        let reads = [
-                            if octaves.needs_slab() {
+                        let reads: [_; EMISSION_NODES] = std::array::from_fn(|j| {
+                            if j == 0 && octaves.needs_slab() {
                                 buffer.sample_lanes::<true>(at(0))
                             } else {
-                                buffer.sample_lanes::<false>(at(0))
-                            },
-                            buffer.sample_lanes::<false>(at(1)),
-                            buffer.sample_lanes::<false>(at(2)),
-                        ];
+                                buffer.sample_lanes::<false>(at(j))
+                            }
+                        });
                         // The blobs beside (the module doc): the others' extinction at
                         // each node times its distance from the blob's middle.
                         let beside = std::array::from_fn(|j| {
