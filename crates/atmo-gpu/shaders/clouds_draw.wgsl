@@ -223,9 +223,8 @@ fn erf_inverse(x: f32) -> f32 {
 }
 
 // atmo::clouds::particles::emission_nodes: (u, l) at the Gauss-Legendre node `node`
-// of the absorbed fraction.
-fn emission_node(tau: f32, node: f32) -> vec2<f32> {
-    let absorbed = 1.0 - exp(-tau);
+// of the absorbed fraction, the blob's column `tau` absorbing `absorbed`.
+fn emission_node(tau: f32, absorbed: f32, node: f32) -> vec2<f32> {
     // ln(1 - v) for small v without losing it (log1p is not in WGSL).
     let v = absorbed * node;
     var u = -log(1.0 - v);
@@ -285,9 +284,10 @@ fn shade(b: Billboard, table: bool) -> Colours {
     let g_ray = to_buffer(frame, r) / frame.voxel.xyz;
     let g = grid_of(frame, params.position.xyz) + t * g_ray;
     let along = (s * inv_length) * g_ray;
-    let n0 = emission_node(tau, EMISSION_FRACTIONS.x);
-    let n1 = emission_node(tau, EMISSION_FRACTIONS.y);
-    let n2 = emission_node(tau, EMISSION_FRACTIONS.z);
+    let alpha = absorbed_of(tau);
+    let n0 = emission_node(tau, alpha, EMISSION_FRACTIONS.x);
+    let n1 = emission_node(tau, alpha, EMISSION_FRACTIONS.y);
+    let n2 = emission_node(tau, alpha, EMISSION_FRACTIONS.z);
     let ls = vec3<f32>(n0.y, n1.y, n2.y);
     let near = g + n0.y * along;
     let r0 = log_gamma_and_slope_in(frame, 0u, near);
@@ -302,7 +302,6 @@ fn shade(b: Billboard, table: bool) -> Colours {
     let dimmed = exp(-others * ls);
     // Octaves::light: single scattering, and the higher octaves apart, by the
     // Gauss-Legendre rule in the blob's absorbed fraction.
-    let alpha = absorbed_of(tau);
     let cosine = dot(params.to_sun.xyz, r) * inv_length;
     let p = phase(cosine);
     let single = p * alpha * dot(EMISSION_WEIGHTS, exp(l) * dimmed);
