@@ -267,15 +267,21 @@ impl IntensityBuffer {
         // `pairs[2 (2 dx + dz) + dy]`, its value in the last layer at `layer[2 dx + dz]`.
         let mut pairs = [[0.0f32; LANES]; 8];
         let mut layer = [[0.0f32; LANES]; 4];
+        // Each lane's cell as one slice, its corners at fixed offsets in it: one bounds
+        // check a lane rather than one a value took a tenth of the bench frame's
+        // instructions away (callgrind, 8.84 to 7.99 billion).
+        let corners = [0, n, n * n, n * n + n];
         for lane in 0..LANES {
             let column = (ix[lane] as usize * n + iz[lane] as usize) * n;
-            for (corner, offset) in [0, n, n * n, n * n + n].into_iter().enumerate() {
-                let at = column + offset + iy[lane] as usize;
-                let at = &self.log_gamma[at..at + 2];
-                pairs[2 * corner][lane] = at[0];
-                pairs[2 * corner + 1][lane] = at[1];
-                if DEPTH {
-                    layer[corner][lane] = self.log_gamma[column + offset + n - 1];
+            let cell = &self.log_gamma[column + iy[lane] as usize..][..n * n + n + 2];
+            for (corner, offset) in corners.into_iter().enumerate() {
+                pairs[2 * corner][lane] = cell[offset];
+                pairs[2 * corner + 1][lane] = cell[offset + 1];
+            }
+            if DEPTH {
+                let top = &self.log_gamma[column + n - 1..][..n * n + n + 1];
+                for (corner, offset) in corners.into_iter().enumerate() {
+                    layer[corner][lane] = top[offset];
                 }
             }
         }
