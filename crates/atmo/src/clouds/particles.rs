@@ -95,16 +95,57 @@ impl Particle {
     /// Optical depth along a line passing `b` m from the centre, between the line
     /// coordinates `l0 <= l1` (m, 0 at the point nearest the centre; infinite allowed).
     pub fn column(&self, b: f64, l0: f64, l1: f64) -> f64 {
+        self.line(b * b).depth(l0, l1)
+    }
+
+    /// The line passing `sqrt(b2)` m from the centre, for many lookups along it.
+    pub fn line(&self, b2: f64) -> Line {
+        let s = self.sigma() as f64;
+        let peak = self.density as f64 * (-b2 / (2.0 * s * s)).exp();
+        Line {
+            peak,
+            half_depth: peak * s * (std::f64::consts::PI / 2.0).sqrt(),
+            scale: 1.0 / (s * std::f64::consts::SQRT_2),
+        }
+    }
+}
+
+/// A line through a particle's Gaussian, `l` m along it from the point nearest the
+/// centre: the extinction `peak e^(-(scale l)^2)` and the optical depth
+/// `half_depth [erf(scale l)]` between two points (in double precision, for the
+/// references).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Line {
+    /// The extinction at the point nearest the centre, 1/m.
+    pub peak: f64,
+    /// Half the optical depth of the whole line.
+    pub half_depth: f64,
+    /// `1 / (s sqrt 2)`, 1/m.
+    pub scale: f64,
+}
+
+impl Line {
+    /// The extinction `l` m along the line, 1/m.
+    #[inline]
+    pub fn extinction(&self, l: f64) -> f64 {
+        let x = self.scale * l;
+        self.peak * (-x * x).exp()
+    }
+
+    /// `erf(scale l)`: the optical depth up to `l` is `half_depth` times this plus a
+    /// constant.
+    #[inline]
+    pub fn erf_at(&self, l: f64) -> f64 {
+        erf(self.scale * l)
+    }
+
+    /// The optical depth between `l0 <= l1` (0 otherwise; infinite allowed).
+    #[inline]
+    pub fn depth(&self, l0: f64, l1: f64) -> f64 {
         if l1 <= l0 {
             return 0.0;
         }
-        let s = self.sigma() as f64;
-        let k = 1.0 / (s * std::f64::consts::SQRT_2);
-        self.density as f64
-            * (-b * b / (2.0 * s * s)).exp()
-            * s
-            * (std::f64::consts::PI / 2.0).sqrt()
-            * (erf(l1 * k) - erf(l0 * k))
+        self.half_depth * (self.erf_at(l1) - self.erf_at(l0))
     }
 }
 

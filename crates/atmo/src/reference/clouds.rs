@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use crate::atmosphere::PhaseFunction;
 use crate::clouds::buffer::{IntensityBuffer, FOOTPRINT};
 use crate::clouds::generator::SplitMix64;
-use crate::clouds::particles::Particle;
+use crate::clouds::particles::{Line, Particle};
 use crate::reference::sampling::{mean_and_error, sample_cosine, PhaseSampler};
 use crate::view::Camera;
 
@@ -87,13 +87,13 @@ pub struct CloudVolume<'a> {
     entries: Vec<u32>,
 }
 
-/// A particle a ray passes: where along the ray it comes closest to the centre (m) and
-/// the square of that distance (m^2).
+/// A particle a ray passes: where along the ray it comes closest to the centre (m), and
+/// its Gaussian along the ray from there.
 #[derive(Debug, Clone, Copy)]
 struct Crossing {
     particle: u32,
     closest: f64,
-    b2: f64,
+    line: Line,
 }
 
 /// The particles along one ray from its origin, and the exact optical depth and
@@ -149,31 +149,33 @@ impl<'a> CloudVolume<'a> {
         }
     }
 
-    /// The particles along the ray from `origin` in the unit direction `dir`.
+    /// The particles along the ray from `origin` in the unit direction `dir`, each once
+    /// however many of the ray's cells it reaches into, in the order the ray first meets
+    /// their cells.
     pub fn ray(&self, origin: DVec3, dir: DVec3) -> RayThrough<'a> {
-        let mut seen: Vec<u32> = Vec::new();
-        self.walk(origin, dir, |c| {
-            seen.extend_from_slice(
-                &self.entries[self.starts[c] as usize..self.starts[c + 1] as usize],
-            )
+        let mut crossings = Vec::new();
+        MAILBOXES.with_borrow_mut(|mailboxes| {
+            let ray = mailboxes.next_ray(self.particles.len());
+            self.walk(origin, dir, |c| {
+                for &k in &self.entries[self.starts[c] as usize..self.starts[c + 1] as usize] {
+                    if std::mem::replace(&mut mailboxes.last[k as usize], ray) == ray {
+                        continue;
+                    }
+                    let p = &self.particles[k as usize];
+                    let d = p.position.as_dvec3() - origin;
+                    let closest = d.dot(dir);
+                    let b2 = (d - closest * dir).length_squared();
+                    let r = REACH * p.sigma() as f64;
+                    if b2 < r * r && closest + r > 0.0 {
+                        crossings.push(Crossing {
+                            particle: k,
+                            closest,
+                            line: p.line(b2),
+                        });
+                    }
+                }
+            });
         });
-        seen.sort_unstable();
-        seen.dedup();
-        let crossings = seen
-            .into_iter()
-            .filter_map(|k| {
-                let p = &self.particles[k as usize];
-                let d = p.position.as_dvec3() - origin;
-                let closest = d.dot(dir);
-                let b2 = (d - closest * dir).length_squared();
-                let r = REACH * p.sigma() as f64;
-                (b2 < r * r && closest + r > 0.0).then_some(Crossing {
-                    particle: k,
-                    closest,
-                    b2,
-                })
-            })
-            .collect();
         RayThrough {
             particles: self.particles,
             crossings,
@@ -243,29 +245,56 @@ impl<'a> CloudVolume<'a> {
     }
 }
 
+/// Mailboxes (Amanatides and Woo, section 4): for each particle, the last ray of this
+/// thread that met it, so that a ray takes a particle listed in several of its cells
+/// once without sorting what it met. Sorting and deduplicating took a quarter of the
+/// path tracer's time (perf, the fit's 9,382-particle views).
+struct Mailboxes {
+    /// This thread's last ray, counted from 1 (0: none).
+    ray: u32,
+    /// Per particle index, the last ray that met it.
+    last: Vec<u32>,
+}
+
+impl Mailboxes {
+    /// A new ray's number, with a box for each of `particles`; every box emptied when
+    /// the count wraps.
+    fn next_ray(&mut self, particles: usize) -> u32 {
+        if self.last.len() < particles {
+            self.last.resize(particles, 0);
+        }
+        self.ray = self.ray.wrapping_add(1);
+        if self.ray == 0 {
+            self.last.fill(0);
+            self.ray = 1;
+        }
+        self.ray
+    }
+}
+
+thread_local! {
+    static MAILBOXES: std::cell::RefCell<Mailboxes> = const {
+        std::cell::RefCell::new(Mailboxes { ray: 0, last: Vec::new() })
+    };
+}
+
 impl RayThrough<'_> {
     /// Optical depth between `t0 <= t1` m along the ray (infinite allowed).
     pub fn depth(&self, t0: f64, t1: f64) -> f64 {
         self.crossings
             .iter()
-            .map(|c| {
-                self.particles[c.particle as usize].column(
-                    c.b2.sqrt(),
-                    t0 - c.closest,
-                    t1 - c.closest,
-                )
-            })
+            .map(|c| c.line.depth(t0 - c.closest, t1 - c.closest))
             .sum()
     }
 
     /// Extinction and scattering coefficients `t` m along the ray, 1/m.
     pub fn extinction(&self, t: f64) -> (f64, f64) {
         self.crossings.iter().fold((0.0, 0.0), |(e, s), c| {
-            let p = &self.particles[c.particle as usize];
-            let sigma = p.sigma() as f64;
-            let l = t - c.closest;
-            let v = p.density as f64 * (-(c.b2 + l * l) / (2.0 * sigma * sigma)).exp();
-            (e + v, s + v * p.albedo as f64)
+            let v = c.line.extinction(t - c.closest);
+            (
+                e + v,
+                s + v * self.particles[c.particle as usize].albedo as f64,
+            )
         })
     }
 
@@ -292,13 +321,27 @@ impl RayThrough<'_> {
     /// depth (Newton steps kept inside a bisection bracket), with no majorant.
     pub fn free_flight(&self, target: f64) -> Option<f64> {
         let (_, end) = self.span()?;
-        if self.depth(0.0, end) < target {
+        // Each crossing's `erf` at the origin, the same at every step: the depth to
+        // `t > 0` costs one `erf` a crossing.
+        let origin: Vec<f64> = self
+            .crossings
+            .iter()
+            .map(|c| c.line.erf_at(-c.closest))
+            .collect();
+        let depth_to = |t: f64| -> f64 {
+            self.crossings
+                .iter()
+                .zip(&origin)
+                .map(|(c, from)| c.line.half_depth * (c.line.erf_at(t - c.closest) - from))
+                .sum()
+        };
+        if depth_to(end) < target {
             return None;
         }
         let (mut lo, mut hi) = (0.0, end);
         let mut t = 0.5 * end;
         for _ in 0..100 {
-            let f = self.depth(0.0, t) - target;
+            let f = depth_to(t) - target;
             if f.abs() <= 1e-10 * target.max(1.0) {
                 break;
             }
