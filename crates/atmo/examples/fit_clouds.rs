@@ -27,7 +27,8 @@
 //! [--search] [--floor] [--oracle] [--transfer [--smooth S] [--write]] [--octaves
 //! COUNT,A,B,C,K,D,E]` (the fields of `Octaves` in order). The path-traced pictures
 //! (48 x 28, N paths a pixel, default 32: about half an hour on two cores for the 108
-//! views, 128 paths about two hours) are kept in the system's temporary folder and reused.
+//! views, 128 paths about two hours, before the path tracer's mailboxes of 2026-12-05
+//! made it 1.7-2.1 times faster) are kept in the system's temporary folder and reused.
 
 use std::path::Path;
 
