@@ -660,6 +660,40 @@ fn pixels(camera: &Camera) -> Vec<(DVec3, DVec3)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::clouds::generator::Cumulus;
+
+    /// A ray through the grid meets each particle near it once, however many of its
+    /// cells the particle reaches into: its optical depth toward the sun is the sum over
+    /// every particle ([`transmittance`]), for rays of two clouds taken in turn on one
+    /// thread (whose mailboxes they share).
+    #[test]
+    fn a_ray_through_the_grid_meets_each_particle_once() {
+        let clouds = [2_000, 300].map(|count| {
+            Cumulus {
+                particles: count,
+                seed: count as u64,
+                ..Cumulus::default()
+            }
+            .generate()
+        });
+        let volumes = [CloudVolume::new(&clouds[0]), CloudVolume::new(&clouds[1])];
+        let to_sun = Vec3::new(0.3, 0.8, -0.2).normalize();
+        let mut rng = SplitMix64::new(7);
+        for k in 0..400 {
+            let particles = &clouds[k % 2];
+            let pick = (rng.unit_f64() * particles.len() as f64) as usize;
+            let jitter = Vec3::new(rng.unit_f64() as f32, rng.unit_f64() as f32, 0.5) * 20.0;
+            let point = particles[pick.min(particles.len() - 1)].position + jitter;
+            let exact = -transmittance(particles, to_sun, point).ln();
+            let grid = volumes[k % 2]
+                .ray(point.as_dvec3(), to_sun.as_dvec3())
+                .depth(0.0, f64::INFINITY);
+            assert!(
+                exact > 0.0 && (grid - exact).abs() <= 1e-4 * exact,
+                "ray {k}: {grid} through the grid, {exact} over every particle"
+            );
+        }
+    }
 
     /// The same picture agrees block by block; a block a fifth brighter drops out of
     /// those within 15 % and moves the mean by its share; a block under half covered is
