@@ -280,7 +280,7 @@ impl GpuClouds {
         forward: f32,
         splat: Splat,
     ) -> Result<Option<f64>, GpuError> {
-        let frame = self.buffer_frame(to_sun, forward, splat, self.resolution)?;
+        let frame = frame_of(&self.particles, to_sun, forward, splat, self.resolution)?;
         let params = gpu.uniform("the buffer frame", &frame);
         let time = gpu.run("the clouds' light pass", |encoder| {
             self.record_light(
@@ -294,18 +294,6 @@ impl GpuClouds {
         })?;
         self.frame = Some(frame);
         Ok(time)
-    }
-
-    /// The frame of a light pass of the particles lit from `to_sun` into a
-    /// `resolution`^3 grid.
-    fn buffer_frame(
-        &self,
-        to_sun: Vec3,
-        forward: f32,
-        splat: Splat,
-        resolution: u32,
-    ) -> Result<BufferFrame, GpuError> {
-        frame_of(&self.particles, to_sun, forward, splat, resolution)
     }
 
     /// The sun's grid in `cells`.
@@ -437,7 +425,13 @@ impl GpuClouds {
         encoder: &mut wgpu::CommandEncoder,
         axis: Vec3,
     ) -> Result<(), GpuError> {
-        let frame = self.buffer_frame(axis, 0.0, Splat::Pieces, VERTICAL_RESOLUTION as u32)?;
+        let frame = frame_of(
+            &self.particles,
+            axis,
+            0.0,
+            Splat::Pieces,
+            VERTICAL_RESOLUTION as u32,
+        )?;
         let params = gpu.uniform("the depths' buffer frame", &frame);
         let cells = grid(&self.sky_cells, 0, VERTICAL_RESOLUTION as u32);
         self.record_light(gpu, encoder, &frame, &params, &self.particle_buffer, cells);

@@ -36,10 +36,10 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::buffer::IntensityBuffer;
-use super::octaves::{Emission, Octaves};
+use super::octaves::{Emission, OctaveTerms, Octaves};
 use super::particles::{tabulated_emission_nodes_lanes, weighted_lanes, Particle, EMISSION_NODES};
 use super::sky_light::SkyLight;
-use super::transfer::{CloudDepths, TransferTable};
+use super::transfer::{Cells, CloudDepths, TransferTable};
 use super::{Lanes, LANES};
 use crate::atmosphere::phase::PhaseFunction;
 use crate::error::{Error, Result};
@@ -211,12 +211,6 @@ pub fn render_with_depths(
     // centre: `r = r0 + x rx + y ry`; so is its step in the buffer's grid.
     let r0 = camera.ray(0.5, 0.5);
     let (rx, ry) = (camera.ray(1.5, 0.5) - r0, camera.ray(0.5, 1.5) - r0);
-    let (g_eye, g0, gx, gy) = (
-        buffer.grid_coordinates(camera.position),
-        buffer.grid_step(r0),
-        buffer.grid_step(rx),
-        buffer.grid_step(ry),
-    );
     // Pixel `k`'s unit ray; its cosine to the sun and the phase function for it, the
     // same for every blob it crosses (one lane-load past the last pixel is read and not
     // used).
@@ -253,210 +247,297 @@ pub fn render_with_depths(
             .map(|&d| dimming.top_share(d))
             .collect()
     };
-    // With a table, laid out for drawing.
-    let table = light.scattering.table().map(TransferTable::cells);
-    if table.is_some() {
+    let blobs = Blobs {
+        particles,
+        order: &order,
+        footprint: &footprint,
+        width: w,
+        eye: camera.position,
+        rays: [r0, rx, ry],
+        grid: [
+            buffer.grid_coordinates(camera.position),
+            buffer.grid_step(r0),
+            buffer.grid_step(rx),
+            buffer.grid_step(ry),
+        ],
+        buffer,
+        octaves: light.scattering.blob_octaves().terms(),
+        cosines: &cosines,
+        phases: &phases,
+        top_shares: &top_shares,
+        table: light.scattering.table().map(TransferTable::cells),
+        out: &depths.out,
+    };
+    if blobs.table.is_some() {
         given("depths out of the cloud", depths.out.len())?;
     }
-    let octaves = light.scattering.blob_octaves().terms();
-    // The buffer's slope of `ln Gamma` per voxel along the light to the extinction
-    // over a standard deviation of the blob, in lanes below: times `-s / voxel`.
-    let per_voxel = -1.0 / buffer.voxel.y;
+    let table = blobs.table.is_some();
     let mut frame = Frame::new(camera.width, camera.height);
     frame
         .pixels
         .par_chunks_mut(BAND * w)
         .enumerate()
         .for_each(|(band, pixels)| {
-            let (y0, y1) = (band * BAND, (band * BAND + pixels.len() / w) as f32);
-            // Per pixel of the band (and a lane-load past the last): what still gets
-            // through from behind; the single-scattered and the higher octaves' light
-            // per unit sunlight (the higher kept apart until the pixel's depth is
-            // known); the share of the sky's light the blobs scatter (albedo times what
-            // each takes out of the pixel's ray), to be times the ray's sky light, and
-            // the same times each blob's share of that light from above.
-            let padded = pixels.len() + LANES;
-            let mut through = vec![1.0f32; padded];
-            // With a table, the optical depth in front, `-ln through` (kept as a sum).
-            let mut in_front = vec![0.0f32; if table.is_some() { padded } else { 0 }];
-            let (mut single, mut higher) = (vec![0.0f32; padded], vec![0.0f32; padded]);
-            let (mut skylit, mut skytop) = (vec![0.0f32; padded], vec![0.0f32; padded]);
-            // Blocks of BLOCK columns across the band: whether one of their pixels still
-            // lets light through, kept up to date lazily (`dirty` after a particle).
-            let blocks = w.div_ceil(BLOCK);
-            let (mut open, mut dirty) = (vec![true; blocks], vec![false; blocks]);
-            let rows_in_band = pixels.len() / w;
-            for (&k, &(sx, sy, sr)) in order.iter().zip(&footprint) {
-                if sy + sr < y0 as f32 || sy - sr > y1 || sx + sr < 0.0 || sx - sr > w as f32 {
-                    continue;
-                }
-                // Behind pixels that are all finished: nothing to draw.
-                let b0 = (sx - sr).max(0.0) as usize / BLOCK;
-                let b1 = ((sx + sr).max(0.0) as usize / BLOCK).min(blocks - 1);
-                let mut any_open = false;
-                for b in b0..=b1 {
-                    if dirty[b] {
-                        let cols = b * BLOCK..((b + 1) * BLOCK).min(w);
-                        open[b] = (0..rows_in_band).any(|r| {
-                            through[r * w + cols.start..r * w + cols.end]
-                                .iter()
-                                .any(|t| *t >= OPAQUE)
-                        });
-                        dirty[b] = false;
-                    }
-                    any_open |= open[b];
-                }
-                if !any_open {
-                    continue;
-                }
-                dirty[b0..=b1].iter_mut().for_each(|d| *d = true);
-                let p = &particles[k];
-                let s = p.sigma();
-                let to_depth_per_sigma = Lanes::splat(per_voxel * s);
-                let albedo = Lanes::splat(p.albedo);
-                let top = Lanes::splat(top_shares[k]);
-                // The centre from the eye; its dot with a pixel's ray, affine in the pixel.
-                let d = p.position - camera.position;
-                let (d2, d0, dx, dy) = (d.length_squared(), d.dot(r0), d.dot(rx), d.dot(ry));
-                let rows = ((sy - sr).floor().max(y0 as f32) as usize)
-                    ..((sy + sr).ceil().min(y1) as usize);
-                // The reach widened by 1 %: the pixels' rays, affine in the pixel in
-                // single precision, stray by up to 0.3 % of it across the frame.
-                let cut = d2 as f64 - (1.01 * p.reach() as f64).powi(2);
-                for y in rows {
-                    let yf = y as f32;
-                    // What is affine in the pixel, at the row's start; per lane below.
-                    let (r_y, t_y, g_y) = (r0 + yf * ry, d0 + yf * dy, g0 + yf * gy);
-                    let Some(cols) = row_span(
-                        r_y,
-                        rx,
-                        t_y,
-                        dx,
-                        cut,
-                        (sx - sr - 0.5, (sx + sr - 0.5).min(w as f32 - 1.0)),
-                    ) else {
-                        continue;
-                    };
-                    for x in cols.clone().step_by(LANES) {
-                        let i = (y - band * BAND) * w + x;
-                        let xf = Lanes::splat(x as f32) + LANE_OFFSETS;
-                        let t_through = Lanes::from(&through[i..i + LANES]);
-                        let mut live = xf.simd_lt(Lanes::splat(cols.end as f32))
-                            & t_through.simd_ge(Lanes::splat(OPAQUE));
-                        if live.none() {
-                            continue;
-                        }
-                        // The pixels' rays, their nearest approach to the centre (at `t`
-                        // times the ray) and the column through the blob there.
-                        let r = lanes3(r_y, rx, xf);
-                        let rr = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-                        let t = (Lanes::splat(t_y) + xf * dx) / rr;
-                        let tau = p.faded_column_lanes(
-                            (Lanes::splat(d2) - t * t * rr).fast_max(Lanes::ZERO),
-                        );
-                        live &= tau.simd_gt(Lanes::ZERO);
-                        if live.none() {
-                            continue;
-                        }
-                        // The sunlight at the blob's emission nodes along the ray (see
-                        // `emission_nodes`), from which the octaves integrate what the
-                        // blob sends toward the eye, with the cloud's extinction there
-                        // (the slope of `ln Gamma` along the light) and its whole depth
-                        // along the sun's ray through the nearest; the phase for this ray.
-                        let g_ray = lanes3(g_y, gx, xf);
-                        let along_scale = Lanes::splat(s) / rr.sqrt();
-                        let nodes = tabulated_emission_nodes_lanes(tau);
-                        let at = |j: usize| -> [Lanes; 3] {
-                            std::array::from_fn(|c| {
-                                Lanes::splat(g_eye[c]) + g_ray[c] * (t + nodes[j][1] * along_scale)
-                            })
-                        };
-                        let reads: [_; EMISSION_NODES] = std::array::from_fn(|j| {
-                            if j == 0 && octaves.needs_slab() {
-                                buffer.sample_lanes::<true>(at(0))
-                            } else {
-                                buffer.sample_lanes::<false>(at(j))
-                            }
-                        });
-                        // The blobs beside (the module doc): the others' extinction at
-                        // each node times its distance from the blob's middle.
-                        let beside = std::array::from_fn(|j| {
-                            let [_, l, phi] = nodes[j];
-                            let others = (reads[j][1] * to_depth_per_sigma - tau * phi)
-                                .fast_max(Lanes::ZERO);
-                            others * l
-                        });
-                        let emission = Emission {
-                            tau,
-                            log_gamma: reads.map(|r| r[0]),
-                            beside,
-                            slab: reads[0][2],
-                        };
-                        let phase = Lanes::from(&phases[band * BAND * w + i..][..LANES]);
-                        let blob = octaves.light(phase, &emission);
-                        let lit = t_through * albedo;
-                        let add = |sums: &mut [f32], v: Lanes| {
-                            let old = Lanes::from(&sums[i..i + LANES]);
-                            let new = live.select(old + lit * v, old);
-                            sums[i..i + LANES].copy_from_slice(new.as_array());
-                        };
-                        add(&mut single, blob.single);
-                        let absorbed = Lanes::ONE - blob.transmitted;
-                        match &table {
-                            None => add(&mut higher, blob.higher),
-                            Some(cells) => {
-                                // The table's light at the emission nodes' mean depths
-                                // toward the sun and toward the eye (the cloud's in front
-                                // and theirs into the blob), the least of those and the
-                                // particle's depth out, and the ray's angle.
-                                let front = Lanes::from(&in_front[i..i + LANES]);
-                                let eye = front + weighted_lanes(|j| nodes[j][0]);
-                                let sun = -weighted_lanes(|j| emission.log_gamma[j]);
-                                let f = cells.at(
-                                    sun,
-                                    eye.fast_min(sun).fast_min(Lanes::splat(depths.out[k])),
-                                    Lanes::from(&cosines[band * BAND * w + i..][..LANES]),
-                                    eye,
-                                );
-                                add(&mut higher, f * absorbed);
-                                let sum = live.select(front + tau, front);
-                                in_front[i..i + LANES].copy_from_slice(sum.as_array());
-                            }
-                        }
-                        add(&mut skylit, absorbed);
-                        add(&mut skytop, absorbed * top);
-                        let kept = live.select(t_through * blob.transmitted, t_through);
-                        through[i..i + LANES].copy_from_slice(kept.as_array());
-                    }
-                }
-            }
+            let mut sums = Sums::new(pixels.len(), table);
+            blobs.draw(band, &mut sums);
             // The sunlight by every order (the higher octaves by the cloud's depth on
             // the ray), the sky's light dimmed inside the cloud, the haze in front of the
             // cloud, then what shows through it.
             let haze = light.haze;
             for (j, e) in pixels.iter_mut().enumerate() {
-                let t = through[j];
-                let share = match table {
-                    None => octaves_of_sky.higher_share(t),
-                    Some(_) => 1.0,
+                let t = sums.through[j];
+                let share = if table {
+                    1.0
+                } else {
+                    octaves_of_sky.higher_share(t)
                 };
-                *e = light.sun * (single[j] + share * higher[j]);
-                if skylit[j] > 0.0 {
+                *e = light.sun * (sums.single[j] + share * sums.higher[j]);
+                if sums.skylit[j] > 0.0 {
                     // The blobs' mean share of the light from above, weighted as
                     // their sky light is.
-                    let inside = skylit[j] * dimming.at(skytop[j] / skylit[j]);
+                    let inside = sums.skylit[j] * dimming.at(sums.skytop[j] / sums.skylit[j]);
                     *e += inside * sky.along(ray(band * BAND * w + j));
                 }
                 *e = haze.transmittance * *e + (1.0 - t) * haze.inscatter;
             }
             if let Some(background) = background {
                 let behind = &background.pixels[band * BAND * w..band * BAND * w + pixels.len()];
-                for ((e, t), b) in pixels.iter_mut().zip(&through).zip(behind) {
+                for ((e, t), b) in pixels.iter_mut().zip(&sums.through).zip(behind) {
                     *e += *t * *b;
                 }
             }
         });
     Ok(frame)
+}
+
+/// What drawing the blobs of a frame reads, made once for the frame
+/// ([`render_with_depths`]).
+struct Blobs<'a> {
+    particles: &'a [Particle],
+    /// The particles drawn, nearest first, and their footprints on the screen: centre
+    /// and radius, pixels.
+    order: &'a [usize],
+    footprint: &'a [(f32, f32, f32)],
+    /// The frame's width, pixels.
+    width: usize,
+    /// The camera's position.
+    eye: Vec3,
+    /// Pixel `(x, y)`'s ray is `r0 + x rx + y ry` (its component along the view axis 1).
+    rays: [Vec3; 3],
+    /// The eye in the buffer's grid, and the rays' steps in it (`g0`, `gx`, `gy`).
+    grid: [Vec3; 4],
+    buffer: &'a IntensityBuffer,
+    octaves: OctaveTerms,
+    /// Per pixel (and a lane-load past the last): the cosine of its ray to the sun, and
+    /// the phase function of that.
+    cosines: &'a [f32],
+    phases: &'a [f32],
+    /// Per particle: its share of the sky's light from above.
+    top_shares: &'a [f32],
+    /// With a table, laid out for drawing, and the particles' depths out of the cloud.
+    table: Option<Cells>,
+    out: &'a [f32],
+}
+
+/// A band's sums per pixel (and a lane-load past the last): what still gets through
+/// from behind; the single-scattered and the higher octaves' light per unit sunlight
+/// (the higher kept apart until the pixel's depth is known); the share of the sky's
+/// light the blobs scatter (albedo times what each takes out of the pixel's ray), to
+/// be times the ray's sky light, and the same times each blob's share of that light
+/// from above; with a table, the optical depth in front, `-ln through` (kept as a sum).
+struct Sums {
+    through: Vec<f32>,
+    single: Vec<f32>,
+    higher: Vec<f32>,
+    skylit: Vec<f32>,
+    skytop: Vec<f32>,
+    in_front: Vec<f32>,
+}
+
+impl Sums {
+    /// Nothing drawn yet over `pixels`, `in_front` kept if `table`.
+    fn new(pixels: usize, table: bool) -> Sums {
+        let padded = pixels + LANES;
+        let zeros = || vec![0.0f32; padded];
+        Sums {
+            through: vec![1.0; padded],
+            single: zeros(),
+            higher: zeros(),
+            skylit: zeros(),
+            skytop: zeros(),
+            in_front: if table { zeros() } else { Vec::new() },
+        }
+    }
+}
+
+impl Blobs<'_> {
+    /// Draws the blobs over band `band` (rows `BAND band` on) into `sums`, nearest
+    /// first, eight pixels of a row at a time.
+    fn draw(&self, band: usize, sums: &mut Sums) {
+        let w = self.width;
+        let [r0, rx, ry] = self.rays;
+        let [g_eye, g0, gx, gy] = self.grid;
+        let Sums {
+            through,
+            single,
+            higher,
+            skylit,
+            skytop,
+            in_front,
+        } = sums;
+        let rows_in_band = (through.len() - LANES) / w;
+        let (y0, y1) = (band * BAND, (band * BAND + rows_in_band) as f32);
+        // The buffer's slope of `ln Gamma` per voxel along the light to the extinction
+        // over a standard deviation of the blob, in lanes below: times `-s / voxel`.
+        let per_voxel = -1.0 / self.buffer.voxel.y;
+        // Blocks of BLOCK columns across the band: whether one of their pixels still
+        // lets light through, kept up to date lazily (`dirty` after a particle).
+        let blocks = w.div_ceil(BLOCK);
+        let (mut open, mut dirty) = (vec![true; blocks], vec![false; blocks]);
+        for (&k, &(sx, sy, sr)) in self.order.iter().zip(self.footprint) {
+            if sy + sr < y0 as f32 || sy - sr > y1 || sx + sr < 0.0 || sx - sr > w as f32 {
+                continue;
+            }
+            // Behind pixels that are all finished: nothing to draw.
+            let b0 = (sx - sr).max(0.0) as usize / BLOCK;
+            let b1 = ((sx + sr).max(0.0) as usize / BLOCK).min(blocks - 1);
+            let mut any_open = false;
+            for b in b0..=b1 {
+                if dirty[b] {
+                    let cols = b * BLOCK..((b + 1) * BLOCK).min(w);
+                    open[b] = (0..rows_in_band).any(|r| {
+                        through[r * w + cols.start..r * w + cols.end]
+                            .iter()
+                            .any(|t| *t >= OPAQUE)
+                    });
+                    dirty[b] = false;
+                }
+                any_open |= open[b];
+            }
+            if !any_open {
+                continue;
+            }
+            dirty[b0..=b1].iter_mut().for_each(|d| *d = true);
+            let p = &self.particles[k];
+            let s = p.sigma();
+            let to_depth_per_sigma = Lanes::splat(per_voxel * s);
+            let albedo = Lanes::splat(p.albedo);
+            let top = Lanes::splat(self.top_shares[k]);
+            // The centre from the eye; its dot with a pixel's ray, affine in the pixel.
+            let d = p.position - self.eye;
+            let (d2, d0, dx, dy) = (d.length_squared(), d.dot(r0), d.dot(rx), d.dot(ry));
+            let rows =
+                ((sy - sr).floor().max(y0 as f32) as usize)..((sy + sr).ceil().min(y1) as usize);
+            // The reach widened by 1 %: the pixels' rays, affine in the pixel in
+            // single precision, stray by up to 0.3 % of it across the frame.
+            let cut = d2 as f64 - (1.01 * p.reach() as f64).powi(2);
+            for y in rows {
+                let yf = y as f32;
+                // What is affine in the pixel, at the row's start; per lane below.
+                let (r_y, t_y, g_y) = (r0 + yf * ry, d0 + yf * dy, g0 + yf * gy);
+                let Some(cols) = row_span(
+                    r_y,
+                    rx,
+                    t_y,
+                    dx,
+                    cut,
+                    (sx - sr - 0.5, (sx + sr - 0.5).min(w as f32 - 1.0)),
+                ) else {
+                    continue;
+                };
+                for x in cols.clone().step_by(LANES) {
+                    let i = (y - band * BAND) * w + x;
+                    let xf = Lanes::splat(x as f32) + LANE_OFFSETS;
+                    let t_through = Lanes::from(&through[i..i + LANES]);
+                    let mut live = xf.simd_lt(Lanes::splat(cols.end as f32))
+                        & t_through.simd_ge(Lanes::splat(OPAQUE));
+                    if live.none() {
+                        continue;
+                    }
+                    // The pixels' rays, their nearest approach to the centre (at `t`
+                    // times the ray) and the column through the blob there.
+                    let r = lanes3(r_y, rx, xf);
+                    let rr = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+                    let t = (Lanes::splat(t_y) + xf * dx) / rr;
+                    let tau =
+                        p.faded_column_lanes((Lanes::splat(d2) - t * t * rr).fast_max(Lanes::ZERO));
+                    live &= tau.simd_gt(Lanes::ZERO);
+                    if live.none() {
+                        continue;
+                    }
+                    // The sunlight at the blob's emission nodes along the ray (see
+                    // `emission_nodes`), from which the octaves integrate what the
+                    // blob sends toward the eye, with the cloud's extinction there
+                    // (the slope of `ln Gamma` along the light) and its whole depth
+                    // along the sun's ray through the nearest; the phase for this ray.
+                    let g_ray = lanes3(g_y, gx, xf);
+                    let along_scale = Lanes::splat(s) / rr.sqrt();
+                    let nodes = tabulated_emission_nodes_lanes(tau);
+                    let at = |j: usize| -> [Lanes; 3] {
+                        std::array::from_fn(|c| {
+                            Lanes::splat(g_eye[c]) + g_ray[c] * (t + nodes[j][1] * along_scale)
+                        })
+                    };
+                    let reads: [_; EMISSION_NODES] = std::array::from_fn(|j| {
+                        if j == 0 && self.octaves.needs_slab() {
+                            self.buffer.sample_lanes::<true>(at(0))
+                        } else {
+                            self.buffer.sample_lanes::<false>(at(j))
+                        }
+                    });
+                    // The blobs beside (the module doc): the others' extinction at
+                    // each node times its distance from the blob's middle.
+                    let beside = std::array::from_fn(|j| {
+                        let [_, l, phi] = nodes[j];
+                        let others =
+                            (reads[j][1] * to_depth_per_sigma - tau * phi).fast_max(Lanes::ZERO);
+                        others * l
+                    });
+                    let emission = Emission {
+                        tau,
+                        log_gamma: reads.map(|r| r[0]),
+                        beside,
+                        slab: reads[0][2],
+                    };
+                    let phase = Lanes::from(&self.phases[band * BAND * w + i..][..LANES]);
+                    let blob = self.octaves.light(phase, &emission);
+                    let lit = t_through * albedo;
+                    let add = |sums: &mut [f32], v: Lanes| {
+                        let old = Lanes::from(&sums[i..i + LANES]);
+                        let new = live.select(old + lit * v, old);
+                        sums[i..i + LANES].copy_from_slice(new.as_array());
+                    };
+                    add(single, blob.single);
+                    let absorbed = Lanes::ONE - blob.transmitted;
+                    match &self.table {
+                        None => add(higher, blob.higher),
+                        Some(cells) => {
+                            // The table's light at the emission nodes' mean depths
+                            // toward the sun and toward the eye (the cloud's in front
+                            // and theirs into the blob), the least of those and the
+                            // particle's depth out, and the ray's angle.
+                            let front = Lanes::from(&in_front[i..i + LANES]);
+                            let eye = front + weighted_lanes(|j| nodes[j][0]);
+                            let sun = -weighted_lanes(|j| emission.log_gamma[j]);
+                            let f = cells.at(
+                                sun,
+                                eye.fast_min(sun).fast_min(Lanes::splat(self.out[k])),
+                                Lanes::from(&self.cosines[band * BAND * w + i..][..LANES]),
+                                eye,
+                            );
+                            add(higher, f * absorbed);
+                            let sum = live.select(front + tau, front);
+                            in_front[i..i + LANES].copy_from_slice(sum.as_array());
+                        }
+                    }
+                    add(skylit, absorbed);
+                    add(skytop, absorbed * top);
+                    let kept = live.select(t_through * blob.transmitted, t_through);
+                    through[i..i + LANES].copy_from_slice(kept.as_array());
+                }
+            }
+        }
+    }
 }
 
 /// The pixels of a row whose rays pass within a blob's reach, of those whose centres

@@ -87,13 +87,15 @@ pub struct CloudVolume<'a> {
     entries: Vec<u32>,
 }
 
-/// A particle a ray passes: where along the ray it comes closest to the centre (m), and
-/// its Gaussian along the ray from there.
+/// A particle a ray passes: where along the ray it comes closest to the centre (m), its
+/// Gaussian along the ray from there, and that line's `erf` at the ray's origin (the
+/// depth from the origin to any `t` then costs one `erf`: [`RayThrough::depth_to`]).
 #[derive(Debug, Clone, Copy)]
 struct Crossing {
     particle: u32,
     closest: f64,
     line: Line,
+    at_origin: f64,
 }
 
 /// The particles along one ray from its origin, and the exact optical depth and
@@ -167,10 +169,12 @@ impl<'a> CloudVolume<'a> {
                     let b2 = (d - closest * dir).length_squared();
                     let r = REACH * p.sigma() as f64;
                     if b2 < r * r && closest + r > 0.0 {
+                        let line = p.line(b2);
                         crossings.push(Crossing {
                             particle: k,
                             closest,
-                            line: p.line(b2),
+                            line,
+                            at_origin: line.erf_at(-closest),
                         });
                     }
                 }
@@ -185,7 +189,7 @@ impl<'a> CloudVolume<'a> {
     /// The fraction of light from the unit direction `toward` reaching `point` with
     /// nothing scattered into its path.
     pub fn transmittance(&self, point: DVec3, toward: DVec3) -> f64 {
-        (-self.ray(point, toward).depth(0.0, f64::INFINITY)).exp()
+        (-self.ray(point, toward).depth_to(f64::INFINITY)).exp()
     }
 
     /// Calls `visit` with each grid cell the ray crosses (for `t >= 0`), in order.
@@ -287,6 +291,15 @@ impl RayThrough<'_> {
             .sum()
     }
 
+    /// Optical depth from the origin to `t >= 0` m along the ray (infinite allowed):
+    /// [`RayThrough::depth`]`(0, t)`, one `erf` a crossing.
+    pub fn depth_to(&self, t: f64) -> f64 {
+        self.crossings
+            .iter()
+            .map(|c| c.line.half_depth * (c.line.erf_at(t - c.closest) - c.at_origin))
+            .sum()
+    }
+
     /// Extinction and scattering coefficients `t` m along the ray, 1/m.
     pub fn extinction(&self, t: f64) -> (f64, f64) {
         self.crossings.iter().fold((0.0, 0.0), |(e, s), c| {
@@ -321,27 +334,13 @@ impl RayThrough<'_> {
     /// depth (Newton steps kept inside a bisection bracket), with no majorant.
     pub fn free_flight(&self, target: f64) -> Option<f64> {
         let (_, end) = self.span()?;
-        // Each crossing's `erf` at the origin, the same at every step: the depth to
-        // `t > 0` costs one `erf` a crossing.
-        let origin: Vec<f64> = self
-            .crossings
-            .iter()
-            .map(|c| c.line.erf_at(-c.closest))
-            .collect();
-        let depth_to = |t: f64| -> f64 {
-            self.crossings
-                .iter()
-                .zip(&origin)
-                .map(|(c, from)| c.line.half_depth * (c.line.erf_at(t - c.closest) - from))
-                .sum()
-        };
-        if depth_to(end) < target {
+        if self.depth_to(end) < target {
             return None;
         }
         let (mut lo, mut hi) = (0.0, end);
         let mut t = 0.5 * end;
         for _ in 0..100 {
-            let f = depth_to(t) - target;
+            let f = self.depth_to(t) - target;
             if f.abs() <= 1e-10 * target.max(1.0) {
                 break;
             }
@@ -436,7 +435,7 @@ impl<'a> ReferenceCloud<'a> {
         let phase = self.light.phase.eval(self.light.to_sun.dot(dir));
         let steps = ((b - a) / ray.finest() * steps_per_sigma).ceil().max(1.0) as usize;
         let h = (b - a) / steps as f64;
-        let mut before = (-ray.depth(0.0, a)).exp();
+        let mut before = (-ray.depth_to(a)).exp();
         let mut radiance = 0.0;
         for i in 0..steps {
             let t = a + (i as f64 + 0.5) * h;
@@ -529,7 +528,7 @@ impl<'a> ReferenceCloud<'a> {
     pub fn covered(&self, camera: &Camera) -> Vec<bool> {
         pixels(camera)
             .into_par_iter()
-            .map(|(origin, dir)| self.volume.ray(origin, dir).depth(0.0, f64::INFINITY) > 0.1)
+            .map(|(origin, dir)| self.volume.ray(origin, dir).depth_to(f64::INFINITY) > 0.1)
             .collect()
     }
 
@@ -687,7 +686,7 @@ mod tests {
             let exact = -transmittance(particles, to_sun, point).ln();
             let grid = volumes[k % 2]
                 .ray(point.as_dvec3(), to_sun.as_dvec3())
-                .depth(0.0, f64::INFINITY);
+                .depth_to(f64::INFINITY);
             assert!(
                 exact > 0.0 && (grid - exact).abs() <= 1e-4 * exact,
                 "ray {k}: {grid} through the grid, {exact} over every particle"
