@@ -5,9 +5,8 @@
 //! large and small), each seen from above, level and below, the sun 25 deg high from
 //! the front, the side and behind and 60 deg high. Fits the two models of the orders
 //! past the first: prints each view's mean of the octaves (`atmo::clouds::Octaves`)
-//! over the path tracer's (on the cloud's pixels) and its 8 x 8 blocks within 15 %,
-//! then the scores of the octaves and of the library's transfer table over all the
-//! views.
+//! and of the library's transfer table over the path tracer's (on the cloud's pixels)
+//! and their 8 x 8 blocks within 15 %, then their scores over all the views.
 //!
 //! `--clouds c200,c2000,c9382` keeps the views of the clouds named: those three are the
 //! 36 views the octaves were fitted to. With `--search`, a grid search over the
@@ -157,17 +156,24 @@ fn main() -> Result<()> {
         chosen.is_none_or(|c| c.split(',').any(|c| c == cloud))
     })?;
     let octave_scores = scores(&views, &octaves)?;
-    for (view, score) in views.iter().zip(&octave_scores) {
-        println!(
-            "{:<22} octaves / path tracer {:.3}   blocks within 15 %: {} of {} by their means, {} by their medians",
-            view.name, score.mean_ratio, score.blocks_within_15, score.blocks, score.medians_within_15
-        );
-    }
-    println!("{octaves:?}: {}", summary(&octave_scores));
     let table = views
         .iter()
         .map(|v| Ok(v.agreement(&v.rendered(Scattering::MULTIPLE)?)))
         .collect::<Result<Vec<_>>>()?;
+    for ((view, octaves), table) in views.iter().zip(&octave_scores).zip(&table) {
+        println!(
+            "{:<22} over the path tracer: octaves {:.3}, table {:.3}   blocks within 15 % by their means / medians: octaves {} / {}, table {} / {} of {}",
+            view.name,
+            octaves.mean_ratio,
+            table.mean_ratio,
+            octaves.blocks_within_15,
+            octaves.medians_within_15,
+            table.blocks_within_15,
+            table.medians_within_15,
+            table.blocks
+        );
+    }
+    println!("{octaves:?}: {}", summary(&octave_scores));
     println!("the library's transfer table: {}", summary(&table));
     if args.iter().any(|a| a == "--floor") {
         let scores = views
