@@ -16,7 +16,9 @@ struct GpuParticle {
     // (atmo::clouds::CloudDepths::out, the transfer table's tau_out; made the least of
     // itself and each pass's along an axis, the largest f32 before).
     out_depth: f32,
-    pad0: u32,
+    // The cloud's greatest optical depth through the centre along the three axes
+    // (atmo::clouds::CloudDepths::thickness; made with out_depth, 0 before).
+    thickness: f32,
     pad1: u32,
     pad2: u32,
 }

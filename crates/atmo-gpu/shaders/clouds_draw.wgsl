@@ -59,7 +59,8 @@ struct DrawParams {
 // eye, where a pixel's ray is the line (eye_scale (r . right), eye_scale (r . up), z),
 // z its depth along the view axis.
 @group(0) @binding(5) var<uniform> eye: BufferFrame;
-// The transfer table's values, [sun][out][cosine][eye] (atmo::clouds::TransferTable).
+// The transfer table's values, [thickness][sun][out][cosine][eye]
+// (atmo::clouds::TransferTable).
 @group(0) @binding(6) var<storage, read> table: array<f32>;
 
 struct Billboard {
@@ -72,8 +73,11 @@ struct Billboard {
     @location(3) @interpolate(flat) density: f32,
     // The sky's light at the particle against outside the cloud, RGB.
     @location(4) @interpolate(flat) sky_inside: vec3<f32>,
-    // The particle's depth out of the cloud (CloudDepths::out).
+    // The particle's depth out of the cloud (CloudDepths::out), and its slices of the
+    // transfer table by the cloud's thickness through it (transfer::Slices): the lower
+    // slice's node and the upper's weight.
     @location(5) @interpolate(flat) out_depth: f32,
+    @location(6) @interpolate(flat) slices: vec2<f32>,
 }
 
 struct Colours {
@@ -137,6 +141,7 @@ fn vertex(@builtin(vertex_index) v: u32, @builtin(instance_index) i: u32) -> Bil
     out.albedo = p.albedo;
     out.density = p.density;
     out.out_depth = p.out_depth;
+    out.slices = hat(p.thickness, TRANSFER_THICKNESS, TRANSFER_THICKNESS_COUNT);
     // SkyDimming::top_share and SkyDimming::at: the two-stream profile down the vertical.
     let e = params.sky_above.w;
     let top = clamp((p.sky_column - p.sky_depth + e) / (p.sky_column + 2.0 * e), 0.0, 1.0);
@@ -158,8 +163,9 @@ fn hat(v: f32, edges: array<f32, TRANSFER_NODES>, count: u32) -> vec2<f32> {
     return vec2<f32>(f32(node), share);
 }
 
-// TransferTable::at: the table multilinear between its nodes.
-fn transfer(to_sun: f32, out: f32, cosine: f32, to_eye: f32) -> f32 {
+// TransferTable::at: the table multilinear between its nodes, `slices` the particle's
+// (the lower slice's node and the upper's weight).
+fn transfer(slices: vec2<f32>, to_sun: f32, out: f32, cosine: f32, to_eye: f32) -> f32 {
     let s = hat(to_sun, TRANSFER_SUN, TRANSFER_SUN_COUNT);
     let o = hat(out, TRANSFER_OUT, TRANSFER_OUT_COUNT);
     let c = hat(cosine, TRANSFER_COSINE, TRANSFER_COSINE_COUNT);
@@ -171,14 +177,16 @@ fn transfer(to_sun: f32, out: f32, cosine: f32, to_eye: f32) -> f32 {
         TRANSFER_EYE_COUNT,
         1u,
     );
-    let base = dot(vec4<u32>(u32(s.x), u32(o.x), u32(c.x), u32(e.x)), strides);
-    var sum = 0.0;
+    let slice = TRANSFER_SUN_COUNT * strides.x;
+    let base = u32(slices.x) * slice + dot(vec4<u32>(u32(s.x), u32(o.x), u32(c.x), u32(e.x)), strides);
+    var sum = vec2<f32>(0.0);
     for (var k = 0u; k < 16u; k++) {
         let upper = (vec4<u32>(k) >> vec4<u32>(3u, 2u, 1u, 0u)) & vec4<u32>(1u);
         let w = select(vec4<f32>(1.0) - share, share, upper == vec4<u32>(1u));
-        sum += w.x * w.y * w.z * w.w * table[base + dot(upper, strides)];
+        let at = base + dot(upper, strides);
+        sum += w.x * w.y * w.z * w.w * vec2<f32>(table[at], table[at + slice]);
     }
-    return sum;
+    return mix(sum.x, sum.y, slices.y);
 }
 
 // Particle::faded_column: the column at squared distance b2 from the centre, faded to
@@ -330,7 +338,7 @@ fn shade(b: Billboard, table: bool) -> Colours {
         );
         let to_eye = -dot(EMISSION_WEIGHTS, eye_at);
         let to_sun = -dot(EMISSION_WEIGHTS, l);
-        tabled = alpha * transfer(to_sun, min(min(to_eye, to_sun), b.out_depth), cosine, to_eye);
+        tabled = alpha * transfer(b.slices, to_sun, min(min(to_eye, to_sun), b.out_depth), cosine, to_eye);
     }
     // OctaveTerms::light: the slab's diffuse light, the cloud's whole depth along the
     // sun's ray through the nearest node (IntensityBuffer::column_depth_grid).

@@ -2,7 +2,8 @@
 // read at the particle's centre, the optical depth from the lit side and the whole
 // column's, written into the particle's record (kept for the sky's light inside the
 // cloud from the vertical's pass, which runs last); and the least of its depths out
-// from either side, made the least of its own and those of the passes before.
+// from either side, made the least of its own and those of the passes before, and the
+// greatest column, its thickness (CloudDepths::thickness).
 
 @group(0) @binding(0) var<uniform> frame: BufferFrame;
 @group(0) @binding(1) var<storage, read_write> particles: array<GpuParticle>;
@@ -26,4 +27,5 @@ fn main(
     particles[k].sky_column = column;
     let out = min(depth, max(column - depth, 0.0));
     particles[k].out_depth = min(particles[k].out_depth, out);
+    particles[k].thickness = max(particles[k].thickness, column);
 }

@@ -45,7 +45,9 @@ gpu_struct! {
         /// (`atmo::clouds::CloudDepths::out`, made on the GPU), for the transfer
         /// table; `f32::MAX` until a light pass along an axis has made it.
         out_depth: f32,
-        pad0: u32,
+        /// The cloud's greatest optical depth through the centre along the three axes
+        /// (`atmo::clouds::CloudDepths::thickness`, made with `out_depth`); 0 until then.
+        thickness: f32,
         pad1: u32,
         pad2: u32,
     }
@@ -385,6 +387,7 @@ impl GpuClouds {
                 .map(|r| [r.sky_depth, r.sky_column])
                 .collect(),
             out: records.iter().map(|r| r.out_depth).collect(),
+            thickness: records.iter().map(|r| r.thickness).collect(),
         })
     }
 
@@ -836,7 +839,7 @@ fn records(particles: &[Particle]) -> Vec<GpuParticle> {
             sky_depth: 0.0,
             sky_column: 0.0,
             out_depth: f32::MAX,
-            pad0: 0,
+            thickness: 0.0,
             pad1: 0,
             pad2: 0,
         })

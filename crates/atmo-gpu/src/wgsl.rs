@@ -145,7 +145,8 @@ const FILES: &[(&str, &str)] = &[
 /// The length of the transfer table's node arrays in WGSL: its longest axis's.
 const TRANSFER_NODES: usize = 6;
 const _: () = assert!(
-    transfer::SUN.len() <= TRANSFER_NODES
+    transfer::THICKNESS.len() <= TRANSFER_NODES
+        && transfer::SUN.len() <= TRANSFER_NODES
         && transfer::OUT.len() <= TRANSFER_NODES
         && transfer::COSINE.len() <= TRANSFER_NODES
         && transfer::EYE.len() <= TRANSFER_NODES
@@ -155,7 +156,7 @@ const _: () = assert!(
 /// and the rest of [`PhaseFunction::CODES`], this module's codes, the sky model's
 /// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, the clouds' `FOOTPRINT`,
 /// `FADE_SCALE`, `EMISSION_FRACTIONS`, `EMISSION_WEIGHTS` and `OPAQUE` and their
-/// transfer table's nodes (`TRANSFER_SUN` and its `TRANSFER_SUN_COUNT`, ..., padded to
+/// transfer table's nodes (`TRANSFER_THICKNESS` and its `TRANSFER_THICKNESS_COUNT`, ..., padded to
 /// `TRANSFER_NODES`), the shadow maps' `RECEIVER_BIAS`, and the shafts' near-lamp
 /// slabs' `NEAR_LAMP`, `ANGLE_STEP` and `MAX_ANGLE_SAMPLES`.
 pub fn prelude() -> String {
@@ -191,7 +192,8 @@ pub fn prelude() -> String {
     // The clouds' transfer table's nodes, each axis padded with its last node.
     out.push_str(&format!("const TRANSFER_NODES: u32 = {TRANSFER_NODES}u;\n"));
     for (name, nodes) in [
-        ("SUN", &transfer::SUN[..]),
+        ("THICKNESS", &transfer::THICKNESS[..]),
+        ("SUN", &transfer::SUN),
         ("OUT", &transfer::OUT),
         ("COSINE", &transfer::COSINE),
         ("EYE", &transfer::EYE),

@@ -9,7 +9,7 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
 use atmo::clouds::render::{render, Haze, Lighting, Scattering};
-use atmo::clouds::transfer::{CloudDepths, TransferTable, COSINE, EYE, OUT};
+use atmo::clouds::transfer::{CloudDepths, TransferTable, COSINE, EYE, OUT, SLICE, SUN};
 use atmo::clouds::{Octaves, SkyLight};
 use atmo::image::Frame;
 use atmo::view::{Camera, Fov};
@@ -138,11 +138,12 @@ fn the_transfer_table_draws_the_cpu_picture() {
     let mut clouds = GpuClouds::new(&gpu, &particles, 48).unwrap();
     clouds.light(&gpu, to_sun(), 0.0, Splat::Pieces).unwrap();
     let buffer = IntensityBuffer::new(&particles, to_sun(), 48, 0.0, Splat::Pieces).unwrap();
-    let sun_and_angle = Box::leak(Box::new(TransferTable {
+    let sun_angle_thickness = Box::leak(Box::new(TransferTable {
         values: std::array::from_fn(|k| {
-            let sun = k / (OUT.len() * COSINE.len() * EYE.len());
+            let sun = k / (OUT.len() * COSINE.len() * EYE.len()) % SUN.len();
             let cosine = k / EYE.len() % COSINE.len();
-            0.3 / (1.0 + sun as f32) + 0.05 * cosine as f32
+            let thickness = k / SLICE;
+            0.3 / (1.0 + sun as f32) + 0.05 * cosine as f32 + 0.1 * thickness as f32
         }),
     }));
     let light = |scattering| Lighting {
@@ -168,21 +169,25 @@ fn the_transfer_table_draws_the_cpu_picture() {
             .fold(0.0f32, f32::max)
     };
     let vertical = |d: &CloudDepths| d.vertical.iter().flatten().copied().collect::<Vec<_>>();
-    let (out, down) = (
+    let (out, down, thickness) = (
         worst(&depths.out, &cpu_depths.out),
         worst(&vertical(&depths), &vertical(&cpu_depths)),
+        worst(&depths.thickness, &cpu_depths.thickness),
     );
-    eprintln!("the depths out within {out:.2e}, down the vertical {down:.2e}");
+    eprintln!("the depths out within {out:.2e}, down the vertical {down:.2e}, the thicknesses {thickness:.2e}");
     assert!(cpu_depths.out.iter().any(|d| *d > 2.0));
-    assert!(out < 1e-3 && down < 1e-3, "{out} {down}");
-    let exact = Scattering::Transfer(sun_and_angle);
+    assert!(
+        out < 1e-3 && down < 1e-3 && thickness < 1e-3,
+        "{out} {down} {thickness}"
+    );
+    let exact = Scattering::Transfer(sun_angle_thickness);
     let out = gpu_of(exact);
     assert!(mean_level(&out, 4.0) > 15.0, "the picture is dark");
     assert_close(
         &out,
         &cpu(exact).unwrap(),
         4.0,
-        "a table of the sun and angle",
+        "a table of the sun, the angle and the thickness",
     );
     let cpu_fitted = cpu(Scattering::MULTIPLE).unwrap();
     let (table, octaves) = (

@@ -544,15 +544,21 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_they_are_read() {
         "the cloud in the picture"
     );
     assert!(given.pixels == own.pixels);
-    let short = |vertical: usize, out: usize| CloudDepths {
+    let shortened = |vertical: usize, out: usize, thickness: usize| CloudDepths {
         vertical: depths.vertical[..vertical].to_vec(),
         out: depths.out[..out].to_vec(),
+        thickness: depths.thickness[..thickness].to_vec(),
     };
+    let short = |vertical: usize, out: usize| shortened(vertical, out, out);
     for (shorter, counted) in [
         (short(59, 60), "59 vertical depths given for 60 particles"),
         (
             short(60, 59),
             "59 depths out of the cloud given for 60 particles",
+        ),
+        (
+            shortened(60, 60, 59),
+            "59 thicknesses given for 60 particles",
         ),
     ] {
         let message = render_with_depths(&particles, &shorter, &buffer, &camera, &light, None)

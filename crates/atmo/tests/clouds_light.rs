@@ -202,17 +202,18 @@ fn every_order(particles: &[Particle], camera: &Camera, to_sun: Vec3) -> ([f64; 
 
 #[test]
 fn every_order_matches_the_path_tracer() {
-    // Measured at 48 x 28: the transfer table 1.065 (front), 1.078 (side), 0.998
-    // (behind) of the path tracer in the mean, within the issue's 10 %; the octaves
-    // 1.12, 1.13 and 0.84; every order is 3 to 5.5 times single scattering here. Both
-    // are fitted to many views of several clouds (docs/clouds.md), this one's among them.
+    // Measured at 48 x 28: the transfer table 1.010 (front), 1.020 (side), 1.004
+    // (behind) of the path tracer in the mean, held within 5 % (the issue asks 10 %;
+    // 1.067, 1.080 and 0.998 before the table's slices by thickness); the octaves 1.12,
+    // 1.14 and 0.84; every order is 3 to 5.3 times single scattering here. Both are
+    // fitted to many views of several clouds (docs/clouds.md), this one's among them.
     let particles = cloud();
     let camera = camera(&particles, 48, 28);
     for (name, to_sun, _) in lit(&particles) {
         let ([table, octaves], gain) = every_order(&particles, &camera, to_sun);
         eprintln!("{name}: every order, billboards / path tracer {table:.3} (octaves {octaves:.3}); path tracer / single {gain:.2}");
         assert!(gain > 2.5, "{name}: higher orders add light: {gain}");
-        assert!((table - 1.0).abs() < 0.1, "{name}: {table}");
+        assert!((table - 1.0).abs() < 0.05, "{name}: {table}");
         assert!((octaves - 1.0).abs() < 0.2, "{name}: octaves {octaves}");
     }
 }
@@ -224,7 +225,8 @@ fn every_order_holds_from_below_a_thick_cloud_against_the_sun() {
     // high behind it: the worst view of the octaves fitted to the thin clouds alone
     // (1.61 of the path tracer here, the octaves' light carried through the cloud
     // with too much of the droplets' forward lobe; 1.18 with three octaves refitted to
-    // thick clouds too). Measured at 32 x 18: the octaves 1.08, the transfer table 0.97.
+    // thick clouds too). Measured at 32 x 18: the octaves 1.11, the transfer table 0.978
+    // (held within 5 %; 0.970 before the slices by thickness).
     let particles = Cumulus {
         particles: 500,
         density: 0.04,
@@ -242,7 +244,7 @@ fn every_order_holds_from_below_a_thick_cloud_against_the_sun() {
     let to_sun = Sun::from_degrees(25.0, 20.0).unwrap().toward();
     let ([table, octaves], gain) = every_order(&particles, &camera, to_sun);
     eprintln!("thick, from below, sun behind: every order, billboards / path tracer {table:.3} (octaves {octaves:.3}); path tracer / single {gain:.2}");
-    assert!((table - 1.0).abs() < 0.1, "{table}");
+    assert!((table - 1.0).abs() < 0.05, "{table}");
     assert!((octaves - 1.0).abs() < 0.2, "octaves {octaves}");
 }
 

@@ -39,7 +39,7 @@ use super::buffer::IntensityBuffer;
 use super::octaves::{Emission, OctaveTerms, Octaves};
 use super::particles::{tabulated_emission_nodes_lanes, weighted_lanes, Particle, EMISSION_NODES};
 use super::sky_light::SkyLight;
-use super::transfer::{Cells, CloudDepths, TransferTable};
+use super::transfer::{Cells, CloudDepths, Slices, TransferTable};
 use super::{Lanes, LANES};
 use crate::atmosphere::phase::PhaseFunction;
 use crate::error::{Error, Result};
@@ -247,6 +247,14 @@ pub fn render_with_depths(
             .map(|&d| dimming.top_share(d))
             .collect()
     };
+    let slices: Vec<Slices> = match light.scattering.table() {
+        Some(_) => {
+            given("depths out of the cloud", depths.out.len())?;
+            given("thicknesses", depths.thickness.len())?;
+            depths.thickness.iter().map(|&t| Slices::of(t)).collect()
+        }
+        None => Vec::new(),
+    };
     let blobs = Blobs {
         particles,
         order: &order,
@@ -267,10 +275,8 @@ pub fn render_with_depths(
         top_shares: &top_shares,
         table: light.scattering.table().map(TransferTable::cells),
         out: &depths.out,
+        slices: &slices,
     };
-    if blobs.table.is_some() {
-        given("depths out of the cloud", depths.out.len())?;
-    }
     let table = blobs.table.is_some();
     let mut frame = Frame::new(camera.width, camera.height);
     frame
@@ -278,7 +284,7 @@ pub fn render_with_depths(
         .par_chunks_mut(BAND * w)
         .enumerate()
         .for_each(|(band, pixels)| {
-            let mut sums = Sums::new(pixels.len(), table);
+            let mut sums = Sums::new(pixels.len() / w, w, table);
             blobs.draw(band, &mut sums);
             // The sunlight by every order (the higher octaves by the cloud's depth on
             // the ray), the sky's light dimmed inside the cloud, the haze in front of the
@@ -334,9 +340,11 @@ struct Blobs<'a> {
     phases: &'a [f32],
     /// Per particle: its share of the sky's light from above.
     top_shares: &'a [f32],
-    /// With a table, laid out for drawing, and the particles' depths out of the cloud.
+    /// With a table, laid out for drawing, and the particles' depths out of the cloud
+    /// and slices of it by their thickness.
     table: Option<Cells>,
     out: &'a [f32],
+    slices: &'a [Slices],
 }
 
 /// A band's sums per pixel (and a lane-load past the last): what still gets through
@@ -346,6 +354,8 @@ struct Blobs<'a> {
 /// be times the ray's sky light, and the same times each blob's share of that light
 /// from above; with a table, the optical depth in front, `-ln through` (kept as a sum).
 struct Sums {
+    /// The band's rows.
+    rows: usize,
     through: Vec<f32>,
     single: Vec<f32>,
     higher: Vec<f32>,
@@ -355,11 +365,12 @@ struct Sums {
 }
 
 impl Sums {
-    /// Nothing drawn yet over `pixels`, `in_front` kept if `table`.
-    fn new(pixels: usize, table: bool) -> Sums {
-        let padded = pixels + LANES;
+    /// Nothing drawn yet over `rows` rows of `width` pixels, `in_front` kept if `table`.
+    fn new(rows: usize, width: usize, table: bool) -> Sums {
+        let padded = rows * width + LANES;
         let zeros = || vec![0.0f32; padded];
         Sums {
+            rows,
             through: vec![1.0; padded],
             single: zeros(),
             higher: zeros(),
@@ -378,6 +389,7 @@ impl Blobs<'_> {
         let [r0, rx, ry] = self.rays;
         let [g_eye, g0, gx, gy] = self.grid;
         let Sums {
+            rows: rows_in_band,
             through,
             single,
             higher,
@@ -385,8 +397,7 @@ impl Blobs<'_> {
             skytop,
             in_front,
         } = sums;
-        let rows_in_band = (through.len() - LANES) / w;
-        let (y0, y1) = (band * BAND, (band * BAND + rows_in_band) as f32);
+        let (y0, y1) = (band * BAND, (band * BAND + *rows_in_band) as f32);
         // The buffer's slope of `ln Gamma` per voxel along the light to the extinction
         // over a standard deviation of the blob, in lanes below: times `-s / voxel`.
         let per_voxel = -1.0 / self.buffer.voxel.y;
@@ -405,7 +416,7 @@ impl Blobs<'_> {
             for b in b0..=b1 {
                 if dirty[b] {
                     let cols = b * BLOCK..((b + 1) * BLOCK).min(w);
-                    open[b] = (0..rows_in_band).any(|r| {
+                    open[b] = (0..*rows_in_band).any(|r| {
                         through[r * w + cols.start..r * w + cols.end]
                             .iter()
                             .any(|t| *t >= OPAQUE)
@@ -520,6 +531,7 @@ impl Blobs<'_> {
                             let eye = front + weighted_lanes(|j| nodes[j][0]);
                             let sun = -weighted_lanes(|j| emission.log_gamma[j]);
                             let f = cells.at(
+                                self.slices[k],
                                 sun,
                                 eye.fast_min(sun).fast_min(Lanes::splat(self.out[k])),
                                 Lanes::from(&self.cosines[band * BAND * w + i..][..LANES]),

@@ -1,10 +1,15 @@
 //! Multiple scattering by a transfer table (atmo's model for every order of the sun's
 //! light on the CPU; docs/clouds.md, "Every order: a transfer table"). The light that
 //! the orders past the first send toward the eye from a droplet is taken as a function
-//! `F` of four things the drawing knows or can know cheaply, at the blob's emission
-//! nodes on the pixel's ray ([`super::particles::emission_nodes`]), their mean by the
-//! nodes' weights:
+//! `F` of five things the drawing knows or can know cheaply, one of the particle and
+//! four at the blob's emission nodes on the pixel's ray
+//! ([`super::particles::emission_nodes`]), their mean by the nodes' weights:
 //!
+//! - the cloud's thickness through the particle: its greatest optical depth through
+//!   the particle's centre along the three axes ([`CloudDepths::thickness`]). The
+//!   orders past the first need cloud around a droplet to scatter light back to it,
+//!   which the other four cannot tell: without it the fit read the thin clouds of few,
+//!   large blobs 11-14 % too bright and the thickest 5-7 % too dark;
 //! - `tau_sun`, the optical depth toward the sun: the intensity buffer's `-ln Gamma`
 //!   (clouds (7));
 //! - `tau_eye`, the optical depth toward the eye: the cloud's in front of the blob on
@@ -17,8 +22,8 @@
 //! - `cos`, the cosine between the directions toward the sun and of the ray's travel
 //!   (the phase function's argument).
 //!
-//! `F` is multilinear over the nodes [`SUN`], [`OUT`], [`COSINE`] and [`EYE`]
-//! (6 x 5 x 6 x 4 = 720 values, 1/sr per unit sun irradiance), and a blob adds
+//! `F` is multilinear over the nodes [`THICKNESS`], [`SUN`], [`OUT`], [`COSINE`] and
+//! [`EYE`] (3 x 6 x 5 x 6 x 4 = 2,160 values, 1/sr per unit sun irradiance), and a blob adds
 //! `albedo (1 - e^-tau) F` times what gets through in front of it, as its single
 //! scattering is added (clouds (5)). The values are fitted, at least 0, by least squares
 //! to the volumetric path tracer
@@ -30,17 +35,19 @@
 //! Why a table rather than octaves ([`super::octaves`]): octaves see only the depth
 //! toward the sun, and their light at a point cannot know how deep in the cloud the
 //! point lies the other ways, which decides the level of the diffuse light of the many
-//! orders. Over the 108 views (128 paths a pixel) the octaves' worst view is 1.33 times
-//! the path tracer, 55 views are within 10 % in the mean and 54 % of the 8 x 8 blocks
-//! within 15 %; the table's 1.20, 86 and 72 % (67 % on average over each cloud held
-//! out of the fit in turn). On the bench's view, a 60,134-particle
-//! cloud no fit has seen, from below against the sun: +4 % in the mean where the
-//! octaves are +41 %. It costs three coarse light passes once per cloud shape (not per
-//! sun) and a 16-node lookup a blob-pixel. The GPU's billboards, blended in hardware
+//! orders. Over the 108 views (128 paths a pixel) the octaves' worst view is 1.32 times
+//! the path tracer, 50 views are within 10 % in the mean and 52 % of the 8 x 8 blocks
+//! within 15 % (42 % by their medians); the table's 1.11, 107 and 80 % (67 % by
+//! medians; 76 and 64 % on average over each cloud held out of the fit in turn). On the
+//! twelve views of the bench's 60,134-particle cloud, which no fit has seen: the
+//! table's worst view 1.10, all twelve within 10 %, 64 % of blocks (57 % by medians),
+//! the octaves' 1.29, 6, 47 % (38 %). It costs three coarse light passes once per
+//! cloud shape (not per sun) and a 16-node lookup a blob-pixel in one slice of the
+//! thickness or two. The GPU's billboards, blended in hardware
 //! back to front, do not know the depth in front of a blob on its pixel: they read the
 //! depth toward the eye from a second buffer lit from the eye along each pixel's ray
-//! (`atmo_gpu::clouds`), which over the 108 views scores 66 % of blocks where the sum
-//! along the pixel scores 72 %.
+//! (`atmo_gpu::clouds`), which over the 108 views scored 66 % of blocks where the sum
+//! along the pixel scored 72 % (with the table of four axes, before the thickness).
 
 use super::particles::Particle;
 use super::sky_light::{depths_along, vertical_depths};
@@ -57,14 +64,21 @@ pub const COSINE: [f32; 6] = [-1.0, -0.5, 0.0, 0.5, 0.8, 1.0];
 /// Nodes of the optical depth from the eye to the blob's middle.
 pub const EYE: [f32; 4] = [0.0, 1.0, 3.0, 8.0];
 
-/// The table's values, `[sun][out][cosine][eye]` row-major.
-pub const VALUES: usize = SUN.len() * OUT.len() * COSINE.len() * EYE.len();
+/// Nodes of the cloud's thickness through the particle: its greatest optical depth
+/// through the particle's centre along the three axes ([`CloudDepths::thickness`]).
+pub const THICKNESS: [f32; 3] = [4.0, 16.0, 64.0];
 
-/// The light of the orders past the first, `F(tau_sun, tau_out, cos, tau_eye)`, 1/sr per
-/// unit sun irradiance (the module doc).
+/// The values of one thickness, `[sun][out][cosine][eye]` row-major.
+pub const SLICE: usize = SUN.len() * OUT.len() * COSINE.len() * EYE.len();
+
+/// The table's values, `[thickness][sun][out][cosine][eye]` row-major.
+pub const VALUES: usize = THICKNESS.len() * SLICE;
+
+/// The light of the orders past the first, `F(thickness, tau_sun, tau_out, cos,
+/// tau_eye)`, 1/sr per unit sun irradiance (the module doc).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TransferTable {
-    /// `[sun][out][cosine][eye]`, row-major.
+    /// `[thickness][sun][out][cosine][eye]`, row-major.
     pub values: [f32; VALUES],
 }
 
@@ -77,9 +91,11 @@ impl TransferTable {
     /// `F` at one point, multilinear between the nodes and held at the end nodes
     /// outside them (the table laid out anew each call: for a few points, where a
     /// picture lays it out once).
-    pub fn at(&self, tau_sun: f32, tau_out: f32, cos: f32, tau_eye: f32) -> f32 {
+    pub fn at(&self, thickness: f32, tau_sun: f32, tau_out: f32, cos: f32, tau_eye: f32) -> f32 {
         let [s, o, c, e] = [tau_sun, tau_out, cos, tau_eye].map(Lanes::splat);
-        self.cells().at(s, o, c, e).to_array()[0]
+        self.cells()
+            .at(Slices::of(thickness), s, o, c, e)
+            .to_array()[0]
     }
 
     /// [`Cells`] of this table, made once for a picture.
@@ -88,7 +104,7 @@ impl TransferTable {
         let lengths = [SUN.len(), OUT.len(), COSINE.len(), EYE.len()];
         let cells = (0..VALUES)
             .map(|base| {
-                let node = |axis: usize| base / strides[axis] % lengths[axis];
+                let node = |axis: usize| base % SLICE / strides[axis] % lengths[axis];
                 if (0..4).any(|axis| node(axis) + 1 >= lengths[axis]) {
                     return Cell::default();
                 }
@@ -113,9 +129,9 @@ const STRIDE_COSINE: usize = EYE.len();
 const STRIDE_OUT: usize = COSINE.len() * STRIDE_COSINE;
 const STRIDE_SUN: usize = OUT.len() * STRIDE_OUT;
 
-/// The table laid out for drawing ([`TransferTable::cells`]): at each node, the 16
-/// corners of the cell above it, `[sun][out][cosine][eye]` in binary (the eye's the
-/// lowest bit), in one cache line; 0 where the cell would leave the table (never a
+/// The table laid out for drawing ([`TransferTable::cells`]): at each node of each
+/// thickness, the 16 corners of the cell above it, `[sun][out][cosine][eye]` in binary
+/// (the eye's the lowest bit), in one cache line; 0 where the cell would leave the table (never a
 /// lookup's lowest corner).
 pub(crate) struct Cells(Vec<Cell>);
 
@@ -124,30 +140,73 @@ pub(crate) struct Cells(Vec<Cell>);
 #[repr(C, align(64))]
 struct Cell([Vec4; 4]);
 
+/// A particle's slices of the table by its thickness ([`THICKNESS`]): the lower's first
+/// cell and the upper's weight, 0 outside the nodes (held at the end node, whose slice
+/// alone is read).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Slices {
+    base: usize,
+    share: f32,
+}
+
+impl Slices {
+    /// The slices around `thickness`.
+    pub(crate) fn of(thickness: f32) -> Slices {
+        let node = THICKNESS.iter().take_while(|&&t| thickness >= t).count();
+        if node == 0 || node == THICKNESS.len() {
+            return Slices {
+                base: node.saturating_sub(1) * SLICE,
+                share: 0.0,
+            };
+        }
+        let (low, high) = (THICKNESS[node - 1], THICKNESS[node]);
+        Slices {
+            base: (node - 1) * SLICE,
+            share: (thickness - low) / (high - low),
+        }
+    }
+}
+
 impl Cells {
-    /// `F` in eight lanes ([`TransferTable::at`]).
+    /// `F` in eight lanes ([`TransferTable::at`]), for a particle in `slices`.
     #[inline(always)]
-    pub(crate) fn at(&self, tau_sun: Lanes, tau_out: Lanes, cos: Lanes, tau_eye: Lanes) -> Lanes {
+    pub(crate) fn at(
+        &self,
+        slices: Slices,
+        tau_sun: Lanes,
+        tau_out: Lanes,
+        cos: Lanes,
+        tau_eye: Lanes,
+    ) -> Lanes {
         let (sun, sun_share) = hat_lanes(&SUN, tau_sun);
         let (out, out_share) = hat_lanes(&OUT, tau_out);
         let (cosine, cosine_share) = hat_lanes(&COSINE, cos);
         let (eye, eye_share) = hat_lanes(&EYE, tau_eye);
         let (o, c, e) = (OUT.len() as f32, COSINE.len() as f32, EYE.len() as f32);
-        // The index of each lane's lowest corner.
+        // The index of each lane's lowest corner in the lower slice.
         let base =
             ((sun * Lanes::splat(o) + out) * Lanes::splat(c) + cosine) * Lanes::splat(e) + eye;
         let [base, fs, fo, fc, fe] =
             [base, sun_share, out_share, cosine_share, eye_share].map(|v| v.to_array());
         // A lane at a time: its cell's four quarters (sun and out) lerped in SSE, then the
-        // cosine's pair and the eye's. One cache line a lane: with the 16 corners read one
-        // by one from the table, the lookup took about 110 ms of the bench's 410 ms
-        // frame; this, about 70.
-        Lanes::new(std::array::from_fn(|lane| {
-            let Cell([s0o0, s0o1, s1o0, s1o1]) = self.0[base[lane] as usize];
+        // cosine's pair and the eye's. One cache line a lane and slice: with the 16
+        // corners read one by one from the table, the lookup took about 110 ms of the
+        // bench's 410 ms frame; this, about 70.
+        let value = |lane: usize, cell: usize| {
+            let Cell([s0o0, s0o1, s1o0, s1o1]) = self.0[cell];
             let s0 = s0o0.lerp(s0o1, fo[lane]);
             let corners = s0.lerp(s1o0.lerp(s1o1, fo[lane]), fs[lane]);
             let eyes = corners.xy().lerp(corners.zw(), fc[lane]);
             eyes.x + fe[lane] * (eyes.y - eyes.x)
+        };
+        Lanes::new(std::array::from_fn(|lane| {
+            let cell = slices.base + base[lane] as usize;
+            let lower = value(lane, cell);
+            if slices.share > 0.0 {
+                lower + slices.share * (value(lane, cell + SLICE) - lower)
+            } else {
+                lower
+            }
         }))
     }
 }
@@ -183,6 +242,9 @@ pub struct CloudDepths {
     /// The least optical depth from its centre out of the cloud along the six axes
     /// (the transfer table's `tau_out`).
     pub out: Vec<f32>,
+    /// The cloud's greatest optical depth through its centre along the three axes, the
+    /// whole column there (the transfer table's thickness, [`THICKNESS`]).
+    pub thickness: Vec<f32>,
 }
 
 impl CloudDepths {
@@ -193,16 +255,22 @@ impl CloudDepths {
     pub fn of(particles: &[Particle]) -> Result<CloudDepths> {
         let vertical = vertical_depths(particles)?;
         let mut out = vec![f32::INFINITY; particles.len()];
+        let mut thickness = vec![0.0f32; particles.len()];
         for along in [
             &vertical,
             &depths_along(particles, Vec3::X)?,
             &depths_along(particles, Vec3::Z)?,
         ] {
-            for (out, &[tau, column]) in out.iter_mut().zip(along) {
+            for ((out, thick), &[tau, column]) in out.iter_mut().zip(&mut thickness).zip(along) {
                 *out = out.min(tau).min((column - tau).max(0.0));
+                *thick = thick.max(column);
             }
         }
-        Ok(CloudDepths { vertical, out })
+        Ok(CloudDepths {
+            vertical,
+            out,
+            thickness,
+        })
     }
 }
 
@@ -211,15 +279,17 @@ mod tests {
     use super::*;
 
     /// A table whose value is a given function of the nodes.
-    fn table_of(f: impl Fn(f32, f32, f32, f32) -> f32) -> TransferTable {
+    fn table_of(f: impl Fn(f32, f32, f32, f32, f32) -> f32) -> TransferTable {
         let mut values = [0.0; VALUES];
         let mut k = 0;
-        for s in SUN {
-            for o in OUT {
-                for c in COSINE {
-                    for e in EYE {
-                        values[k] = f(s, o, c, e);
-                        k += 1;
+        for t in THICKNESS {
+            for s in SUN {
+                for o in OUT {
+                    for c in COSINE {
+                        for e in EYE {
+                            values[k] = f(t, s, o, c, e);
+                            k += 1;
+                        }
                     }
                 }
             }
@@ -231,44 +301,57 @@ mod tests {
     /// the nodes), and holds the end nodes' values outside them.
     #[test]
     fn the_lookup_is_exact_for_multilinear_functions() {
-        let f = |s: f32, o: f32, c: f32, e: f32| 1.0 + 0.3 * s - 0.2 * o * c + 0.05 * s * e + c;
+        let f = |t: f32, s: f32, o: f32, c: f32, e: f32| {
+            1.0 + 0.3 * s - 0.2 * o * c + 0.05 * s * e + c + 0.02 * t * (1.0 + c)
+        };
         let table = table_of(f);
         for k in 0..500u32 {
             let g = |a: f32| (k as f32 * a).fract();
-            let (s, o, c, e) = (
+            let (t, s, o, c, e) = (
+                4.0 + 60.0 * g(0.37),
                 30.0 * g(0.618),
                 10.0 * g(0.755),
                 2.0 * g(0.57) - 1.0,
                 8.0 * g(0.41),
             );
-            let got = table.at(s, o, c, e);
+            let got = table.at(t, s, o, c, e);
+            let want = f(t, s, o, c, e);
             assert!(
-                (got - f(s, o, c, e)).abs() < 1e-4 * f(s, o, c, e).abs().max(1.0),
-                "{s} {o} {c} {e}: {got}"
+                (got - want).abs() < 1e-4 * want.abs().max(1.0),
+                "{t} {s} {o} {c} {e}: {got}"
             );
         }
-        assert_eq!(table.at(100.0, 50.0, 1.0, 20.0), f(30.0, 10.0, 1.0, 8.0));
-        assert_eq!(table.at(-1.0, -1.0, -2.0, -1.0), f(0.0, 0.0, -1.0, 0.0));
+        assert_eq!(
+            table.at(100.0, 100.0, 50.0, 1.0, 20.0),
+            f(64.0, 30.0, 10.0, 1.0, 8.0)
+        );
+        assert_eq!(
+            table.at(0.0, -1.0, -1.0, -2.0, -1.0),
+            f(4.0, 0.0, 0.0, -1.0, 0.0)
+        );
     }
 
     /// The fitted table's light is never negative, and deep in the cloud (4 out of it
     /// every way) it falls from a droplet 4 deep toward the sun to one 30 deep, at every
-    /// angle; it is not all 0.
+    /// thickness and angle; it is not all 0.
     #[test]
     fn the_fitted_light_is_positive_and_dims_into_the_shade() {
         let t = TransferTable::FITTED;
         assert!(t.values.iter().all(|v| *v >= 0.0 && v.is_finite()));
         assert!(t.values.iter().any(|v| *v > 0.1));
-        for cos in COSINE {
-            assert!(
-                t.at(4.0, 4.0, cos, 0.0) > t.at(30.0, 4.0, cos, 0.0),
-                "{cos}"
-            );
+        for thickness in THICKNESS {
+            for cos in COSINE {
+                assert!(
+                    t.at(thickness, 4.0, 4.0, cos, 0.0) > t.at(thickness, 30.0, 4.0, cos, 0.0),
+                    "{thickness} {cos}"
+                );
+            }
         }
     }
 
     /// A lone blob lies at its own depth: its depth out is its half-column along the
-    /// axes, and the vertical's is its whole column, about the analytic one.
+    /// axes, and the vertical's is its whole column, about the analytic one, as is its
+    /// thickness.
     #[test]
     fn a_lone_blob_is_half_its_column_deep() {
         let p = Particle {
@@ -289,6 +372,11 @@ mod tests {
             (depths.out[0] - 0.5 * column).abs() < 0.05 * column,
             "{}",
             depths.out[0]
+        );
+        assert!(
+            (depths.thickness[0] - column).abs() < 0.05 * column,
+            "{}",
+            depths.thickness[0]
         );
     }
 }
