@@ -150,19 +150,19 @@ pub(crate) struct Slices {
 }
 
 impl Slices {
-    /// The slices around `thickness`.
+    /// The slices around `thickness`, by the other axes' hat; at or past the last node
+    /// (the upper's weight 1) the last slice alone.
     pub(crate) fn of(thickness: f32) -> Slices {
-        let node = THICKNESS.iter().take_while(|&&t| thickness >= t).count();
-        if node == 0 || node == THICKNESS.len() {
-            return Slices {
-                base: node.saturating_sub(1) * SLICE,
-                share: 0.0,
-            };
-        }
-        let (low, high) = (THICKNESS[node - 1], THICKNESS[node]);
+        let (node, share) = hat_lanes(&THICKNESS, Lanes::splat(thickness));
+        let (node, share) = (node.to_array()[0] as usize, share.to_array()[0]);
+        let (node, share) = if share >= 1.0 {
+            (node + 1, 0.0)
+        } else {
+            (node, share)
+        };
         Slices {
-            base: (node - 1) * SLICE,
-            share: (thickness - low) / (high - low),
+            base: node * SLICE,
+            share,
         }
     }
 }
