@@ -509,6 +509,9 @@ fn write_table(table: &TransferTable, file: &Path, how: &str) -> Result<()> {
     Ok(())
 }
 
+/// The paper's cloud, the bench's, scored only when named: no fit has seen it.
+const UNSEEN: &str = "c60134";
+
 /// The views of the clouds `chosen(name, only_named)` keeps (twelve a cloud), each with its
 /// path-traced picture (from the temporary folder when an earlier run made it).
 fn views(paths: usize, chosen: impl Fn(&str, bool) -> bool) -> Result<Vec<View>> {
@@ -522,8 +525,7 @@ fn views(paths: usize, chosen: impl Fn(&str, bool) -> bool) -> Result<Vec<View>>
         ("c20000", 20000, 0.04),
         ("c300", 300, 0.003),
         ("c8000", 8000, 0.004),
-        // The paper's cloud, the bench's, scored only when named: no fit has seen it.
-        ("c60134", 60134, 0.04),
+        (UNSEEN, 60134, 0.04),
     ];
     // Eye height (None: level with the cloud's middle) and horizontal distance, m.
     let eyes = [
@@ -540,7 +542,7 @@ fn views(paths: usize, chosen: impl Fn(&str, bool) -> bool) -> Result<Vec<View>>
     let folder = std::env::temp_dir().join("atmo-fit-clouds");
     std::fs::create_dir_all(&folder)?;
     let mut views = Vec::new();
-    for (cloud, count, density) in clouds.into_iter().filter(|c| chosen(c.0, c.0 == "c60134")) {
+    for (cloud, count, density) in clouds.into_iter().filter(|c| chosen(c.0, c.0 == UNSEEN)) {
         let particles = Cumulus {
             particles: count,
             density,

@@ -247,13 +247,17 @@ pub fn render_with_depths(
             .map(|&d| dimming.top_share(d))
             .collect()
     };
-    let slices: Vec<Slices> = match light.scattering.table() {
-        Some(_) => {
+    let table = match light.scattering.table() {
+        Some(table) => {
             given("depths out of the cloud", depths.out.len())?;
             given("thicknesses", depths.thickness.len())?;
-            depths.thickness.iter().map(|&t| Slices::of(t)).collect()
+            Some(Tabled {
+                cells: table.cells(),
+                out: &depths.out,
+                slices: depths.thickness.iter().map(|&t| Slices::of(t)).collect(),
+            })
         }
-        None => Vec::new(),
+        None => None,
     };
     let blobs = Blobs {
         particles,
@@ -273,9 +277,7 @@ pub fn render_with_depths(
         cosines: &cosines,
         phases: &phases,
         top_shares: &top_shares,
-        table: light.scattering.table().map(TransferTable::cells),
-        out: &depths.out,
-        slices: &slices,
+        table,
     };
     let table = blobs.table.is_some();
     let mut frame = Frame::new(camera.width, camera.height);
@@ -340,11 +342,16 @@ struct Blobs<'a> {
     phases: &'a [f32],
     /// Per particle: its share of the sky's light from above.
     top_shares: &'a [f32],
-    /// With a table, laid out for drawing, and the particles' depths out of the cloud
-    /// and slices of it by their thickness.
-    table: Option<Cells>,
+    /// With a table, what its lookups read.
+    table: Option<Tabled<'a>>,
+}
+
+/// The transfer table laid out for drawing, and per particle its depth out of the
+/// cloud and its slices of the table by its thickness ([`CloudDepths`]).
+struct Tabled<'a> {
+    cells: Cells,
     out: &'a [f32],
-    slices: &'a [Slices],
+    slices: Vec<Slices>,
 }
 
 /// A band's sums per pixel (and a lane-load past the last): what still gets through
@@ -522,7 +529,7 @@ impl Blobs<'_> {
                     let absorbed = Lanes::ONE - blob.transmitted;
                     match &self.table {
                         None => add(higher, blob.higher),
-                        Some(cells) => {
+                        Some(Tabled { cells, out, slices }) => {
                             // The table's light at the emission nodes' mean depths
                             // toward the sun and toward the eye (the cloud's in front
                             // and theirs into the blob), the least of those and the
@@ -531,9 +538,9 @@ impl Blobs<'_> {
                             let eye = front + weighted_lanes(|j| nodes[j][0]);
                             let sun = -weighted_lanes(|j| emission.log_gamma[j]);
                             let f = cells.at(
-                                self.slices[k],
+                                slices[k],
                                 sun,
-                                eye.fast_min(sun).fast_min(Lanes::splat(self.out[k])),
+                                eye.fast_min(sun).fast_min(Lanes::splat(out[k])),
                                 Lanes::from(&self.cosines[band * BAND * w + i..][..LANES]),
                                 eye,
                             );
