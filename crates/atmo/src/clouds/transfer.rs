@@ -51,7 +51,7 @@
 
 use super::particles::Particle;
 use super::sky_light::{depths_along, vertical_depths};
-use super::Lanes;
+use super::{first, Lanes};
 use crate::error::Result;
 use glam::{Vec3, Vec4, Vec4Swizzles};
 
@@ -93,9 +93,7 @@ impl TransferTable {
     /// picture lays it out once).
     pub fn at(&self, thickness: f32, tau_sun: f32, tau_out: f32, cos: f32, tau_eye: f32) -> f32 {
         let [s, o, c, e] = [tau_sun, tau_out, cos, tau_eye].map(Lanes::splat);
-        self.cells()
-            .at(Slices::of(thickness), s, o, c, e)
-            .to_array()[0]
+        first(self.cells().at(Slices::of(thickness), s, o, c, e))
     }
 
     /// [`Cells`] of this table, made once for a picture.
@@ -154,7 +152,7 @@ impl Slices {
     /// (the upper's weight 1) the last slice alone.
     pub(crate) fn of(thickness: f32) -> Slices {
         let (node, share) = hat_lanes(&THICKNESS, Lanes::splat(thickness));
-        let (node, share) = (node.to_array()[0] as usize, share.to_array()[0]);
+        let (node, share) = (first(node) as usize, first(share));
         let (node, share) = if share >= 1.0 {
             (node + 1, 0.0)
         } else {
