@@ -159,9 +159,13 @@ pub struct AtmosphereArgs {
     /// Embedded atmosphere: `earth` (measured coefficients) or `paper`.
     #[arg(long, default_value = "earth")]
     pub preset: String,
-    /// Switch on the atmosphere's ozone layer.
-    #[arg(long)]
+    /// Switch on the atmosphere's ozone layer where its file has it off (the embedded
+    /// `earth` has it on).
+    #[arg(long, conflicts_with = "no_ozone")]
     pub ozone: bool,
+    /// Switch the ozone layer off (with `--order 2`: the paper's model of the Earth).
+    #[arg(long)]
+    pub no_ozone: bool,
     /// The ground's Lambertian albedo, 0 (black) to 1, instead of the atmosphere's
     /// (`earth`: 0.1); it lights the ground and every scattering order above the first.
     #[arg(long, value_name = "ALBEDO")]
@@ -173,8 +177,9 @@ pub struct AtmosphereArgs {
 pub struct ShellArgs {
     /// Highest scattering order: 1 to 60 (the paper: 2), or "all" (orders are added
     /// until the next adds under 0.1 % anywhere; aerosols then scatter every order too).
-    #[arg(long, value_name = "N|all", default_value = "2")]
-    order: Order,
+    /// Default: all, or 2 with `--preset paper`.
+    #[arg(long, value_name = "N|all")]
+    order: Option<Order>,
     /// Sampling shells (paper: 40).
     #[arg(long, default_value_t = SkySettings::default().shells)]
     shells: usize,
@@ -194,11 +199,25 @@ pub struct ShellArgs {
 }
 
 impl ShellArgs {
-    /// The flags that give these settings, for a still command.
-    pub fn flags(&self) -> String {
+    /// The highest order: `--order`, else every order, or the paper's 2 for the
+    /// paper's atmosphere.
+    fn order(&self, medium: &AtmosphereArgs) -> Order {
+        self.order.unwrap_or(if medium.is_paper() {
+            SkySettings::paper().order
+        } else {
+            SkySettings::default().order
+        })
+    }
+
+    /// The flags that give these settings for the atmosphere `medium`, for a still
+    /// command.
+    pub fn flags(&self, medium: &AtmosphereArgs) -> String {
         let mut out = format!(
             "--order {} --shells {} --directions {} --scattering-directions {}",
-            self.order, self.shells, self.directions, self.scattering_directions
+            self.order(medium),
+            self.shells,
+            self.directions,
+            self.scattering_directions
         );
         if self.multiple_mie {
             out.push_str(" --multiple-mie");
@@ -209,14 +228,15 @@ impl ShellArgs {
         out
     }
 
-    /// The settings, not yet validated.
-    pub fn settings(&self) -> SkySettings {
+    /// The settings for the atmosphere `medium`, not yet validated.
+    pub fn settings(&self, medium: &AtmosphereArgs) -> SkySettings {
+        let order = self.order(medium);
         SkySettings {
             shells: self.shells,
             directions: self.directions,
             scattering_directions: self.scattering_directions,
-            order: self.order,
-            multiple_mie: self.multiple_mie || self.order == Order::All,
+            order,
+            multiple_mie: self.multiple_mie || order == Order::All,
             max_interval_m: self.max_interval,
             ..SkySettings::default()
         }
@@ -233,14 +253,17 @@ impl AtmosphereArgs {
         if self.ozone {
             out.push_str(" --ozone");
         }
+        if self.no_ozone {
+            out.push_str(" --no-ozone");
+        }
         if let Some(albedo) = self.ground_albedo {
             out.push_str(&format!(" --ground-albedo {albedo}"));
         }
         out
     }
 
-    /// The atmosphere from `--atmosphere` or `--preset`, with `--ozone` and
-    /// `--ground-albedo` applied.
+    /// The atmosphere from `--atmosphere` or `--preset`, with `--ozone`, `--no-ozone`
+    /// and `--ground-albedo` applied.
     pub fn load(&self) -> atmo::Result<Atmosphere> {
         let mut atmosphere = match &self.atmosphere {
             Some(path) => Atmosphere::from_toml_file(path)?,
@@ -258,8 +281,15 @@ impl AtmosphereArgs {
         }
         if self.ozone {
             atmosphere.with_ozone(true)
+        } else if self.no_ozone && atmosphere.ozone.is_some() {
+            atmosphere.with_ozone(false)
         } else {
             Ok(atmosphere)
         }
+    }
+
+    /// Whether this is the embedded paper's atmosphere (which takes the paper's order).
+    pub fn is_paper(&self) -> bool {
+        self.atmosphere.is_none() && self.preset == "paper"
     }
 }

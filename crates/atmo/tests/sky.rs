@@ -98,7 +98,7 @@ fn second_order_within_two_percent_of_the_reference() {
     a.ground_albedo = 0.0;
     let points = [(0, 1), (0, 32), (31, 10), (63, 1), (63, 40), (31, 63)];
     for altitude in [0.0, 13000.0] {
-        let model = SkyModel::new(&a, &SkySettings::default(), altitude).unwrap();
+        let model = SkyModel::new(&a, &SkySettings::paper(), altitude).unwrap();
         for sun in [5.0f64, 45.0] {
             let (err, at) = error_against_reference(&model, sun, &points);
             assert!(
@@ -735,4 +735,35 @@ fn froxels_equal_the_aerial_perspective_of_their_directions() {
             );
         }
     }
+}
+
+/// The default sky (every order, ozone) at sunset: a blue zenith over an orange
+/// horizon under the sun, where the paper's model (second order, no ozone) leaves the
+/// zenith greyer. Ozone's Chappuis band takes the orange out of the light that reaches
+/// the zenith along the long path at sunset.
+#[test]
+fn the_default_sunset_has_a_blue_zenith_over_an_orange_horizon() {
+    use atmo::atmosphere::spectrum::SpectrumToRgb;
+    let sun = 1f64.to_radians();
+    let directions = [(0.0, 90f64.to_radians()), (0.0, 2f64.to_radians())];
+    let colours = |atmosphere: &Atmosphere, settings: &SkySettings| {
+        let model = SkyModel::new(atmosphere, settings, 0.0).unwrap();
+        let to_rgb = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+        let l = model.radiance_along(sun, &directions);
+        (to_rgb.rgb(&l[0]), to_rgb.rgb(&l[1]))
+    };
+    let (zenith, horizon) = colours(&Atmosphere::earth(), &SkySettings::default());
+    let paper = Atmosphere::earth().with_ozone(false).unwrap();
+    let (paper_zenith, _) = colours(&paper, &SkySettings::paper());
+    eprintln!("zenith {zenith:?} horizon {horizon:?} paper zenith {paper_zenith:?}");
+    let blue = |c: [f32; 3]| c[2] / c[0];
+    assert!(blue(zenith) > 1.5, "zenith {zenith:?}");
+    assert!(
+        horizon[0] > 1.3 * horizon[2] && horizon[0] > horizon[1],
+        "horizon {horizon:?}"
+    );
+    assert!(
+        blue(zenith) > 1.2 * blue(paper_zenith),
+        "{zenith:?} {paper_zenith:?}"
+    );
 }

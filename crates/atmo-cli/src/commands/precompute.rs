@@ -87,7 +87,7 @@ pub fn run(args: PrecomputeArgs) -> Result<()> {
     let Precompute::Sky(args) = args.what;
     let atmosphere = args.medium.load()?;
     let settings = TableSettings {
-        sky: args.method.settings(),
+        sky: args.method.settings(&args.medium),
         sun_steps: args.sun_steps,
         min_sun_elevation: args.min_sun_elevation.to_radians(),
         altitude_steps: args.altitude_steps,

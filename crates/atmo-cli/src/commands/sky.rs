@@ -166,7 +166,7 @@ pub fn run(args: SkyArgs) -> Result<()> {
     }
     // Without a table: the atmosphere and the shell method's settings.
     let atmosphere = args.medium.load()?;
-    let settings = args.method.settings();
+    let settings = args.method.settings(&args.medium);
     settings.validate(&atmosphere)?;
     let start = Instant::now();
     // Light maps take 0.3 s at the defaults and seconds with --order 3 --multiple-mie.
@@ -249,7 +249,7 @@ fn environment(args: &SkyArgs, picture: &atmo_view::sky::SkyParams, sun: Sun) ->
         }
         None => {
             let atmosphere = args.medium.load()?;
-            let settings = args.method.settings();
+            let settings = args.method.settings(&args.medium);
             settings.validate(&atmosphere)?;
             let model = SkyModel::new(&atmosphere, &settings, picture.altitude_m)?;
             let sky = match args.device.open()? {

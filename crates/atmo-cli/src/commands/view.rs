@@ -214,9 +214,13 @@ fn sky_mode(args: &ViewSkyArgs) -> Result<SkyMode> {
         ),
         None => {
             let atmosphere = args.medium.load()?;
-            let settings = args.method.settings();
+            let settings = args.method.settings(&args.medium);
             settings.validate(&atmosphere)?;
-            let flags = format!("{} {}", args.medium.flags(), args.method.flags());
+            let flags = format!(
+                "{} {}",
+                args.medium.flags(),
+                args.method.flags(&args.medium)
+            );
             (
                 SkySource::Shells {
                     atmosphere: Box::new(atmosphere),

@@ -280,7 +280,7 @@ impl Atmosphere {
     }
 
     /// The measured-coefficient Earth of current sky models (Bruneton 2017, Hillaire
-    /// 2020), without ozone: the default.
+    /// 2020), with its ozone layer (off with [`Atmosphere::with_ozone`]): the default.
     pub fn earth() -> Self {
         Self::preset("earth").expect("embedded preset is valid")
     }
@@ -625,10 +625,15 @@ mod tests {
         assert_eq!(earth.bottom_radius_m, 6_360_000.0);
         assert_eq!(earth.top_radius_m, 6_420_000.0);
         assert_ne!(earth.mie.phase, paper.mie.phase);
-        assert!(earth.absorbing_ozone().is_none(), "ozone is off by default");
-        let with = earth.clone().with_ozone(true).unwrap();
+        // Ozone absorbs by default, and can be switched off for the paper's model.
+        assert!(earth
+            .clone()
+            .with_ozone(false)
+            .unwrap()
+            .absorbing_ozone()
+            .is_none());
         // Ozone absorbs most in the orange (Chappuis band), not in the blue.
-        let o = with.absorbing_ozone().unwrap();
+        let o = earth.absorbing_ozone().expect("ozone is on by default");
         let peak = o.absorption_per_m.iter().cloned().fold(0.0, f64::max);
         assert!(o.absorption_per_m[0] < 0.5 * peak && peak > 1e-6);
         assert!(Atmosphere::preset("paper")

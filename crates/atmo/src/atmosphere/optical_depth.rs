@@ -74,9 +74,12 @@ pub struct TransmittanceTable {
 }
 
 impl TransmittanceTable {
-    /// Bruneton's default resolution: 256 zenith angles by 64 altitudes.
+    /// 256 zenith angles (Bruneton's) by 128 altitudes (twice his): with the ozone
+    /// layer on (a tent peaking at 25 km) a grazing ray from 40 km was 5.4e-3 off the
+    /// exact transmittance at 64 altitudes, 8.3e-4 at 128 (more zenith angles: no
+    /// change).
     pub fn new(atmosphere: &Atmosphere) -> Self {
-        Self::with_size(atmosphere, 256, 64)
+        Self::with_size(atmosphere, 256, 128)
     }
 
     /// A table of `mu_size` x `r_size` entries, computed exactly at each.
@@ -242,7 +245,8 @@ mod tests {
                 }
             }
         }
-        assert!(worst < 2e-3, "worst absolute error {worst}");
+        // 8.3e-4 measured (with ozone, a grazing ray from 40 km).
+        assert!(worst < 1.5e-3, "worst absolute error {worst}");
     }
 
     #[test]

@@ -124,7 +124,9 @@ impl Order {
     }
 }
 
-/// Quality settings of the shell method, with the paper's values as defaults.
+/// Quality settings of the shell method. The default is the truest sky atmo makes:
+/// every scattering order, aerosols scattering them too; [`SkySettings::paper`] is the
+/// paper's second order of Rayleigh scattering.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SkySettings {
@@ -156,9 +158,21 @@ impl Default for SkySettings {
             directions: 64,
             scattering_directions: 128,
             sun_bins: 64,
+            order: Order::All,
+            multiple_mie: true,
+            max_interval_m: 10_000.0,
+        }
+    }
+}
+
+impl SkySettings {
+    /// The paper's orders: single scattering and the second order of molecules (sky
+    /// (10)-(11)), aerosols scattering only the first; the quadrature as the default's.
+    pub fn paper() -> Self {
+        SkySettings {
             order: Order::Through(2),
             multiple_mie: false,
-            max_interval_m: 10_000.0,
+            ..SkySettings::default()
         }
     }
 }
