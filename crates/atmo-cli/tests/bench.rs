@@ -42,3 +42,33 @@ fn bench_lines_report_their_peak_memory() {
         assert!(mb > 1.0 && mb < 2048.0, "{line}");
     }
 }
+
+/// docs/benchmarks.md is what `atmo bench page` makes of docs/bench/*.json: the page
+/// never says what the data does not.
+#[test]
+fn the_benchmarks_page_is_made_from_the_checked_in_data() {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+    let from = format!("{root}/docs/bench");
+    let o = atmo(&["bench", "page", "--from", &from]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let page = std::fs::read_to_string(format!("{root}/docs/benchmarks.md")).unwrap();
+    assert!(
+        String::from_utf8_lossy(&o.stdout) == page,
+        "docs/benchmarks.md differs from docs/bench/*.json: run \
+         `cargo run --release -p atmo-cli -- bench page -o docs/benchmarks.md`"
+    );
+    // Every family's file has a section, and every case a row.
+    for entry in std::fs::read_dir(&from).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "json") {
+            let family = path.file_stem().unwrap().to_string_lossy().into_owned();
+            assert!(page.contains(&format!("## {family}\n")), "{family}");
+            let text = std::fs::read_to_string(&path).unwrap();
+            for line in text.lines().filter(|l| !l.trim().is_empty()) {
+                let case: serde_json::Value = serde_json::from_str(line).unwrap();
+                let name = case["bench"].as_str().unwrap();
+                assert!(page.contains(&format!("| `{name}` |")), "{name}");
+            }
+        }
+    }
+}

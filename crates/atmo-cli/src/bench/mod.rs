@@ -1,12 +1,16 @@
-//! `atmo bench`: each method timed against its baseline in the same run, as
-//! DESIGN.md describes: medians after a warm-up, ratios, and the error between them.
+//! `atmo bench`: each method timed against its baseline in the same run: medians after
+//! a warm-up, ratios, and the error between them, one JSON object a case with
+//! `--json`. The files under docs/bench/ are its output, and `atmo bench page` makes
+//! docs/benchmarks.md from them ([`page`]).
 
 mod clouds;
+pub mod page;
 mod shafts;
 mod sky;
 mod sky_table;
 mod view;
 
+use std::io::Write as _;
 use std::time::Instant;
 
 use anyhow::Result;
@@ -41,6 +45,12 @@ pub struct BenchArgs {
     /// With --backend gpu: the adapter (part of its name, or a backend).
     #[arg(long, value_name = "NAME")]
     adapter: Option<String>,
+    /// page: the folder of `atmo bench AREA --json` files and machine.txt.
+    #[arg(long, value_name = "FOLDER", default_value = "docs/bench")]
+    from: std::path::PathBuf,
+    /// page: the Markdown file to write (docs/benchmarks.md); without it, standard output.
+    #[arg(short, long, value_name = "FILE.md")]
+    output: Option<std::path::PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -61,9 +71,24 @@ enum Area {
     /// the stage orbited; one of its lights re-aimed; the sun round a cloud) beside the
     /// still's draw of the same frame; needs a display (xvfb-run).
     View,
+    /// Times nothing: makes docs/benchmarks.md from the JSON files under --from.
+    Page,
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
+    if let Area::Page = args.area {
+        let page = page::render(&args.from)?;
+        return match &args.output {
+            Some(path) => Ok(atmo::files::write_atomically(path, |w| {
+                w.write_all(page.as_bytes())
+                    .map_err(atmo::Error::io_at(path))
+            })?),
+            None => {
+                print!("{page}");
+                Ok(())
+            }
+        };
+    }
     if let Area::View = args.area {
         let backends: &[&str] = match args.backend {
             Backend::Cpu => &["cpu"],
@@ -85,14 +110,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
             Area::SkyTable => sky_table::gpu(&gpu, args.quick, args.json),
             Area::Shafts => shafts::gpu(&gpu, args.quick, args.json, &args.scenes),
             Area::Clouds => clouds::gpu(&gpu, args.quick, args.json),
-            Area::View => unreachable!("handled above"),
+            Area::View | Area::Page => unreachable!("handled above"),
         };
     }
     match args.area {
         Area::Sky => sky::cpu(args.quick, args.json),
         Area::SkyTable => sky_table::cpu(args.quick, args.json),
         Area::Clouds => clouds::cpu(args.quick, args.json),
-        Area::View => unreachable!("handled above"),
+        Area::View | Area::Page => unreachable!("handled above"),
         Area::Shafts => {
             if let Some(dir) = &args.sweep_dir {
                 atmo::files::check_folder(&dir.join("shafts-sweep.csv"))?;
@@ -138,8 +163,8 @@ pub struct Alternated {
 /// Times `case` and `baseline` one after the other, `rounds` times: their medians and
 /// the median of each round's ratio. A round's two times see the same host, so on a
 /// shared one whose speed drifts within a run the ratio holds where two medians taken
-/// minutes apart do not (2026-12-04: the stage against the ray marcher timed a minute
-/// apart, 0.28 and 0.37 of its time in two runs seven minutes apart).
+/// minutes apart do not (the stage against the ray marcher timed a minute apart gave
+/// 0.28 and 0.37 of its time in two runs seven minutes apart).
 pub fn alternated(rounds: usize, case: impl FnMut(), baseline: impl FnMut()) -> Alternated {
     alternated_by(rounds, case, baseline, |f| time_ms(f))
 }
