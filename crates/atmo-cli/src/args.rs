@@ -281,7 +281,7 @@ impl AtmosphereArgs {
         }
         if self.ozone {
             atmosphere.with_ozone(true)
-        } else if self.no_ozone && atmosphere.ozone.is_some() {
+        } else if self.no_ozone {
             atmosphere.with_ozone(false)
         } else {
             Ok(atmosphere)

@@ -20,8 +20,11 @@ struct Family {
 /// The page for the JSON files in `folder` (one object per line, as `--json` prints),
 /// families in the order of their file names.
 pub fn render(folder: &Path) -> Result<String> {
-    let machine = std::fs::read_to_string(folder.join(MACHINE_FILE))
-        .with_context(|| format!("{}: names the machine", folder.join(MACHINE_FILE).display()))?;
+    let machine = atmo::files::read_text(
+        &folder.join(MACHINE_FILE),
+        "machine line",
+        atmo::files::TEXT_LIMIT_BYTES,
+    )?;
     let families = families(folder)?;
     if families.is_empty() {
         bail!(
@@ -195,7 +198,7 @@ fn figures(case: &Value) -> String {
         .join("; ")
 }
 
-/// A time in ms with three significant digits at most, and no more than two decimals.
+/// A time in ms to three significant digits ([`significant`]).
 fn milliseconds(ms: f64) -> String {
     format!("{} ms", significant(ms))
 }

@@ -463,7 +463,8 @@ impl Atmosphere {
         t
     }
 
-    /// Switches the ozone layer on or off (for `--ozone`); an error if there is none.
+    /// Switches the ozone layer on or off (`--ozone`, `--no-ozone`); an error only when
+    /// switching on a layer the atmosphere does not have.
     pub fn with_ozone(mut self, on: bool) -> Result<Self> {
         match self.ozone.as_mut() {
             Some(layer) => layer.enabled = on,
