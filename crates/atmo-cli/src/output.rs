@@ -6,12 +6,15 @@ use std::path::Path;
 use atmo::files::{check_folder, write_atomically, write_folder_atomically};
 use atmo::image::{Display, Frame};
 use atmo::Error;
+use indicatif::{ProgressBar, ProgressStyle};
 
 /// Writes the frames `fill` draws (given the frame number and a `size` frame to draw
 /// into) into the folder `folder` as `frame-0000.png` ... and `animation.png`, an
 /// animated PNG at `fps` frames/s. They are written into a temporary folder that becomes
 /// `folder` at the end (or whose files move into it, where it exists), so an
-/// interrupted or failed run leaves no partial frames. Returns the animation's path.
+/// interrupted or failed run leaves no partial frames. A bar on the terminal counts the
+/// frames (nothing is drawn where stderr is not a terminal). Returns the animation's
+/// path.
 pub fn write_animation(
     folder: &Path,
     frames: usize,
@@ -44,7 +47,15 @@ pub fn write_animation(
             encoder.set_frame_delay(1, fps).map_err(png_error)?;
             let mut writer = encoder.write_header().map_err(png_error)?;
             let mut frame = Frame::new(width, height);
+            let bar = ProgressBar::new(frames as u64).with_style(
+                ProgressStyle::with_template(
+                    "[{bar:32}] {pos}/{len} frames, {elapsed} elapsed, ETA {eta}",
+                )
+                .expect("valid template")
+                .progress_chars("=> "),
+            );
             for k in 0..frames {
+                bar.set_position(k as u64);
                 if let Err(e) = fill(k, &mut frame) {
                     let message = format!("frame {k}: {e:#}");
                     failed = Some(e);
@@ -59,6 +70,7 @@ pub fn write_animation(
                     .write_image_data(&frame.to_srgb8(display.exposure, display.tone))
                     .map_err(png_error)?;
             }
+            bar.finish_and_clear();
             writer.finish().map_err(png_error)
         })
     });

@@ -381,3 +381,35 @@ fn envmaps_and_lighting_for_engines() {
     assert!((1000.0..100_000.0).contains(&lux), "{lux}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The default is the truest sky (every order, ozone on); `--preset paper` takes the
+/// paper's two orders, `--no-ozone` takes the ozone out, and asking for ozone both on
+/// and off is refused.
+#[test]
+fn the_default_sky_is_every_order_with_ozone() {
+    let dir = scratch("defaults");
+    let sky = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec!["sky", "--sun-elevation", "2", "-o", out.to_str().unwrap()];
+        args.extend(SMALL);
+        args.extend(COARSE_SHELLS);
+        args.extend(extra);
+        let o = atmo(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+            std::fs::read(&out).unwrap(),
+        )
+    };
+    let (default_log, default_png) = sky("default.png", &[]);
+    assert!(default_log.contains("order all"), "{default_log}");
+    let (paper_log, _) = sky("paper.png", &["--preset", "paper"]);
+    assert!(paper_log.contains("order 2"), "{paper_log}");
+    let (_, no_ozone_png) = sky("no-ozone.png", &["--no-ozone"]);
+    assert_ne!(default_png, no_ozone_png, "ozone changes the sunset");
+    let (_, ozone_png) = sky("ozone.png", &["--ozone"]);
+    assert_eq!(default_png, ozone_png, "the default has ozone on");
+    let o = atmo(&["sky", "--ozone", "--no-ozone", "-o", "x.png"]);
+    assert_eq!(o.status.code(), Some(2));
+    std::fs::remove_dir_all(dir).unwrap();
+}

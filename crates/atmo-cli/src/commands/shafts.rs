@@ -208,8 +208,13 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
             }
         };
         atmo::error::check_range("--samples", marcher.samples as f64, 1.0, 1e6)?;
+        let spinner = indicatif::ProgressBar::new_spinner()
+            .with_message(format!("ray marching, {} samples a ray", marcher.samples));
+        spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+        let frame = marcher.render(&scene);
+        spinner.finish_and_clear();
         (
-            marcher.render(&scene),
+            frame,
             format!(
                 "reference, {} samples per ray ({:?})",
                 marcher.samples, marcher.span
