@@ -333,3 +333,74 @@ impl Mesh {
         best
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// SplitMix64 numbers in [0, 1): the same soup of triangles on every machine.
+    struct Numbers(u64);
+
+    impl Numbers {
+        fn next(&mut self) -> f32 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        }
+
+        fn point(&mut self, half: f32) -> Vec3 {
+            Vec3::new(self.next(), self.next(), self.next()) * (2.0 * half) - Vec3::splat(half)
+        }
+    }
+
+    /// The BVH finds exactly the nearest hit that testing every triangle finds: 2,000
+    /// small triangles strewn through a box (deep trees, overlapping leaves), 4,000
+    /// rays from outside and inside it, some cut short by `t_max`.
+    #[test]
+    fn the_bvh_finds_what_every_triangle_tested_finds() {
+        let mut n = Numbers(7);
+        let soup: Vec<[Vec3; 3]> = (0..2000)
+            .map(|_| {
+                let a = n.point(10.0);
+                [a, a + n.point(0.8), a + n.point(0.8)]
+            })
+            .collect();
+        let mesh = Mesh::new(soup);
+        assert!(mesh.nodes().count() > 500, "a deep tree");
+        let (mut hits, mut misses) = (0, 0);
+        for k in 0..4000 {
+            let origin = n.point(if k % 2 == 0 { 14.0 } else { 8.0 });
+            let dir = (n.point(1.0) + Vec3::splat(1e-3)).normalize();
+            let ray = Ray { origin, dir };
+            let t_max = if k % 3 == 0 { 6.0 } else { f32::INFINITY };
+            let brute = mesh
+                .triangles()
+                .iter()
+                .filter_map(|tri| triangle_hit(&ray, tri, t_max).map(|t| (t, tri)))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let bvh = mesh.intersect(&ray, t_max);
+            match (brute, bvh) {
+                (None, None) => misses += 1,
+                (Some((t, tri)), Some((t_bvh, normal))) => {
+                    assert_eq!(t, t_bvh, "ray {k}");
+                    // The normal is that of a triangle the ray meets at that distance.
+                    let same = tri[1].cross(tri[2]).normalize();
+                    assert!(
+                        normal == same
+                            || mesh.triangles().iter().any(|o| {
+                                triangle_hit(&ray, o, t_max) == Some(t)
+                                    && o[1].cross(o[2]).normalize() == normal
+                            }),
+                        "ray {k}"
+                    );
+                    hits += 1;
+                }
+                (brute, bvh) => panic!("ray {k}: every triangle {brute:?}, BVH {bvh:?}"),
+            }
+        }
+        // Both outcomes are well represented.
+        assert!(hits > 500 && misses > 500, "{hits} hits, {misses} misses");
+    }
+}
