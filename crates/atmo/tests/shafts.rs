@@ -294,14 +294,20 @@ fn the_plane_method_stays_within_one_percent_of_the_converged_reference() {
     let fast = SamplePlanes::new(&scene).render();
     let reference = RayMarcher::CONVERGED.render(&scene);
     let e = fast.level_errors(&reference, scene.display).unwrap();
-    // The bound is 1 % of 255 levels RMS; the pixel through the lamp makes
-    // the max.
-    assert!(e.rms < 2.55, "rms {} levels", e.rms);
+    // The paper's bound is 1 % of 255 levels RMS; measured 0.064 RMS and 1.78 at most
+    // (the pixel through the lamp), held within twice that.
+    assert!(
+        e.rms < 0.13 && e.max < 3.6,
+        "rms {} max {} levels",
+        e.rms,
+        e.max
+    );
     // Surfaces, the shadow's edge on the floor among them, as the reference has them
     // (the shadow map alone put the edge a texel toward the lamp: 150 levels off).
     let (surface, _) = atmo::shafts::surface::pixel_kinds(&scene);
     let es = fast.level_errors_over(&reference, scene.display, surface.iter().copied());
-    assert!(es.max < 4.0, "surface pixels: max {} levels", es.max);
+    // Measured 1.72 at most.
+    assert!(es.max < 3.5, "surface pixels: max {} levels", es.max);
     assert!(surface.len() > 10_000, "{}", surface.len());
     // The baseline (180 samples along the whole ray) is further off than the planes.
     let baseline = RayMarcher::baseline(&scene).render(&scene);
@@ -314,8 +320,9 @@ fn the_plane_method_stays_within_one_percent_of_the_converged_reference() {
         .render()
         .level_errors(&reference, scene.display)
         .unwrap();
+    // Measured 0.075 against every pixel's 0.064.
     assert!(
-        ea.rms < e.rms + 0.1,
+        ea.rms < 1.5 * e.rms,
         "adaptive {} every pixel {}",
         ea.rms,
         e.rms
@@ -347,7 +354,8 @@ fn a_measured_profile_holds_to_the_reference_as_a_drawn_beam_does() {
     let reference = RayMarcher::CONVERGED.render(&scene);
     assert_physical(&fast);
     let e = fast.level_errors(&reference, scene.display).unwrap();
-    assert!(e.rms < 2.55, "rms {} levels", e.rms);
+    // Measured 0.18 RMS.
+    assert!(e.rms < 0.36, "rms {} levels", e.rms);
     // The light is there: the picture is not dark, and it is not the round beam's.
     let lit = fast
         .pixels
@@ -553,10 +561,16 @@ field_deg = 30.0
     adaptive.planes.adaptive = true;
     let exact = SamplePlanes::new(&every).render();
     let (fast, counts) = SamplePlanes::new(&adaptive).render_counted();
-    // Every pixel as computing it gives, within a few levels (2.6 measured, the plain
-    // lamp's; with the gobo's light interpolated too, 20 at the dots' edges)...
+    // Every pixel as computing it gives, within a few levels (2.63 at most and 0.048
+    // RMS measured, the plain lamp's; with the gobo's light interpolated too, 20 at the
+    // dots' edges)...
     let e = fast.level_errors(&exact, every.display).unwrap();
-    assert!(e.max < 4.0, "rms {} max {} levels", e.rms, e.max);
+    assert!(
+        e.max < 4.0 && e.rms < 0.1,
+        "rms {} max {} levels",
+        e.rms,
+        e.max
+    );
     // ... and the plain lamp's light mostly interpolated.
     assert!(counts.computed < counts.interpolated, "{counts:?}");
     assert_physical(&fast);
