@@ -18,7 +18,7 @@ fn windowed(dir: &Path, args: &[&str]) -> Option<Output> {
             std::env::var("CI").as_deref() != Ok("true"),
             "xvfb-run is missing: install xvfb"
         );
-        eprintln!("skipped: no xvfb-run");
+        common::skip("no xvfb-run (install xvfb)");
         return None;
     }
     let output = Command::new("xvfb-run")

@@ -97,12 +97,29 @@ pub const SMALL_CLOUD: [&str; 10] = [
 ];
 
 /// Whether this machine has a GPU adapter (in CI, where the driver is installed, it
-/// must: a missing one fails here rather than skipping the GPU checks). Probed once a
+/// must: a missing one fails here rather than skipping the GPU checks); where it has
+/// none the calling test's GPU part is reported skipped ([`skip`]). Probed once a
 /// test binary: tests running side by side share the answer (and not the probe's
 /// folder, which one of them would remove under the other).
 pub fn has_gpu() -> bool {
     static FOUND: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *FOUND.get_or_init(probe_gpu)
+    let found = *FOUND.get_or_init(probe_gpu);
+    if !found {
+        skip("its GPU part: no GPU adapter (install mesa-vulkan-drivers)");
+    }
+    found
+}
+
+/// Says on the terminal, past the test harness's capture (which takes only the print
+/// macros), that the running test skipped `what`: a line `atmo-test: skipped TEST:
+/// WHY` that the test run shows and `.ci/run` counts into its closing line.
+pub fn skip(why: &str) {
+    use std::io::Write as _;
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("a test")
+        .to_string();
+    let _ = writeln!(std::io::stderr(), "atmo-test: skipped {test}: {why}");
 }
 
 fn probe_gpu() -> bool {

@@ -12,11 +12,23 @@ pub fn gpu() -> Option<Gpu> {
     match Gpu::new(None) {
         Ok(gpu) => Some(gpu),
         Err(GpuError::NoAdapter { .. }) if std::env::var("CI").as_deref() != Ok("true") => {
-            eprintln!("skipped: no GPU adapter (install mesa-vulkan-drivers)");
+            skip("no GPU adapter (install mesa-vulkan-drivers)");
             None
         }
         Err(e) => panic!("GPU setup failed: {e}"),
     }
+}
+
+/// Says on the terminal, past the test harness's capture (which takes only the print
+/// macros), that the running test skipped `what`: a line `atmo-test: skipped TEST:
+/// WHY` that the test run shows and `.ci/run` counts into its closing line.
+pub fn skip(why: &str) {
+    use std::io::Write as _;
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("a test")
+        .to_string();
+    let _ = writeln!(std::io::stderr(), "atmo-test: skipped {test}: {why}");
 }
 
 /// The bound: RMS at most 0.5 and max at most 2 levels of 255 after the same
