@@ -93,7 +93,7 @@ impl Octaves {
     /// level and below, the sun 25 deg high from the front, the side and behind and
     /// 60 deg high. A grid search over the seven; of the numbers whose worst view is
     /// within 8 % of the best worst view (1.24), the most views within 10 % in the mean
-    /// and then the most 8 x 8 blocks within 15 % (`examples/fit_clouds.rs`,
+    /// and then the most 8 x 8 blocks within 15 % (`tools/fit-clouds`,
     /// docs/clouds.md "Every order: octaves"); tests/clouds_light.rs holds them to it.
     pub const MULTIPLE: Octaves = Octaves {
         count: 2,

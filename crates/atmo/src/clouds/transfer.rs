@@ -29,7 +29,7 @@
 //! to the volumetric path tracer
 //! ([`crate::reference::clouds::ReferenceCloud::path_traced`]): its light less the
 //! billboards' own single scattering, over 108 views of nine cumulus clouds of 200 to
-//! 20,000 particles and optical depth about 3 to 55 (`examples/fit_clouds.rs
+//! 20,000 particles and optical depth about 3 to 55 (`tools/fit-clouds
 //! --transfer`, whose `--write` makes `transfer_fitted.rs`).
 //!
 //! Why a table rather than octaves ([`super::octaves`]): octaves see only the depth

@@ -1,5 +1,5 @@
 //! The transfer table fitted to the path tracer ([`super::transfer`]), written by
-//! `cargo run --release -p atmo --example fit_clouds -- --paths 128 --transfer --smooth 0.00001 --write`:
+//! `cargo run --release -p atmo-fit-clouds -- --paths 128 --transfer --smooth 0.00001 --write`:
 //! `[thickness][sun][out][cosine][eye]`, 1/sr per unit sun irradiance.
 
 /// The fitted values.

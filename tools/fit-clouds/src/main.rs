@@ -24,12 +24,14 @@
 //! neighbouring values' differences, default 1e-4); `--write` writes the table fitted
 //! to every view into the library (`src/clouds/transfer_fitted.rs`). About twelve minutes.
 //!
-//! `cargo run --release -p atmo --example fit_clouds -- [--paths N] [--clouds A,B]
+//! `cargo run --release -p atmo-fit-clouds -- [--paths N] [--clouds A,B]
 //! [--search] [--floor] [--oracle] [--transfer [--smooth S] [--write]] [--octaves
 //! COUNT,A,B,C,K,D,E]` (the fields of `Octaves` in order). The path-traced pictures
-//! (48 x 28, N paths a pixel, default 32: about half an hour on two cores for the 108
-//! views, 128 paths about two hours, before the path tracer's mailboxes of 2026-12-05
-//! made it 1.7-2.1 times faster) are kept in the system's temporary folder and reused.
+//! (48 x 28, N paths a pixel, default 32; 128 paths take about 75 minutes on two cores
+//! for the 108 views) are kept in the system's temporary folder and reused.
+//!
+//! A tool of atmo's own, not a user's example: it makes the data the library ships
+//! (`Octaves::MULTIPLE`, `transfer_fitted.rs`) and the figures in docs/clouds.md.
 
 use std::path::Path;
 
@@ -195,9 +197,10 @@ fn main() -> Result<()> {
         let smooth = value("--smooth").map_or(1e-4, |v| v.parse().expect("--smooth S"));
         let table = transfer(&views, smooth)?;
         if args.iter().any(|a| a == "--write") {
-            let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/clouds/transfer_fitted.rs");
+            let file = Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../crates/atmo/src/clouds/transfer_fitted.rs");
             let how = format!(
-                "cargo run --release -p atmo --example fit_clouds -- --paths {paths} --transfer --smooth {smooth} --write"
+                "cargo run --release -p atmo-fit-clouds -- --paths {paths} --transfer --smooth {smooth} --write"
             );
             write_table(&table, &file, &how)?;
             println!(
