@@ -1,26 +1,21 @@
 //! `--backend` and `--adapter`: where a method runs, chosen once at the edge.
 
 use anyhow::Result;
+pub use atmo_gpu::Backend;
 use atmo_gpu::{Gpu, GpuError};
-use clap::{Args, ValueEnum};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use clap::Args;
 
-/// Where to run.
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Backend {
-    /// A hardware GPU when there is one, else the CPU (a software adapter such as
-    /// llvmpipe is slower than atmo's own CPU path; `--backend gpu` still uses it).
-    Auto,
-    /// The GPU (wgpu); an error when there is none.
-    Gpu,
-    /// The CPU (rayon over both cores).
-    Cpu,
+/// `--backend`'s parser: the names of [`Backend`], offered as clap's possible values.
+pub fn backend_parser() -> impl TypedValueParser<Value = Backend> {
+    PossibleValuesParser::new(Backend::NAMES).map(|name| name.parse().expect("one of NAMES"))
 }
 
 #[derive(Args)]
 pub struct BackendArgs {
     /// Where to run the method: auto (a hardware GPU when there is one, else the CPU),
     /// gpu (any adapter, software ones too) or cpu.
-    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    #[arg(long, value_parser = backend_parser(), default_value_t = Backend::Auto)]
     pub backend: Backend,
     /// The GPU adapter: part of its name (`llvmpipe`) or a backend (`vulkan`, `metal`,
     /// `dx12`); default: WGPU_ADAPTER_NAME, else the fastest there is.
@@ -29,34 +24,17 @@ pub struct BackendArgs {
 }
 
 impl BackendArgs {
-    /// The GPU to run on, or `None` for the CPU; prints which device runs, in one line.
+    /// The GPU to run on, or `None` for the CPU; prints which device runs, in one line
+    /// (not for the CPU asked for by name).
     pub fn open(&self) -> Result<Option<Gpu>> {
-        if self.backend == Backend::Cpu {
-            return Ok(None);
+        let opened = self
+            .backend
+            .open(self.adapter.as_deref())
+            .map_err(gpu_error)?;
+        if self.backend != Backend::Cpu {
+            eprintln!("{}", opened.notice);
         }
-        match Gpu::new(self.adapter.as_deref()) {
-            Ok(gpu)
-                if gpu.is_software() && self.backend == Backend::Auto && self.adapter.is_none() =>
-            {
-                eprintln!(
-                    "atmo: only a software GPU adapter ({}) found; running on the CPU, which \
-                     is faster (--backend gpu to use it)",
-                    gpu.describe()
-                );
-                Ok(None)
-            }
-            Ok(gpu) => {
-                eprintln!("atmo: running on the GPU: {}", gpu.describe());
-                Ok(Some(gpu))
-            }
-            Err(GpuError::NoAdapter { .. })
-                if self.backend == Backend::Auto && self.adapter.is_none() =>
-            {
-                eprintln!("atmo: no GPU adapter found; running on the CPU");
-                Ok(None)
-            }
-            Err(e) => Err(gpu_error(e)),
-        }
+        Ok(opened.gpu)
     }
 }
 

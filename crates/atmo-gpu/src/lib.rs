@@ -114,7 +114,9 @@
 //! declared once with [`gpu_struct!`], `#[repr(C)]` and `Pod`, and mirrored in WGSL; a
 //! test checks each against naga's layout of the shader's struct.
 
+pub mod backend;
 pub mod clouds;
+pub mod cloudscape;
 pub mod device;
 pub mod display;
 pub mod layout;
@@ -122,6 +124,7 @@ pub mod shafts;
 pub mod sky;
 pub mod wgsl;
 
+pub use backend::Backend;
 pub use device::Gpu;
 /// The wgpu atmo-gpu is built on, for a caller to name its types by the same version.
 pub use wgpu;

@@ -21,7 +21,7 @@ use winit::window::{Window, WindowId};
 use crate::input::{Input, Key};
 use crate::layer::PanelLayer;
 use crate::pixels::WindowPixels;
-use crate::{Backend, Mode, Options, Picture};
+use crate::{Mode, Options, Picture};
 
 /// Opens the window and runs until it is closed or [`Options::frames`] are drawn. Bad
 /// input found before the window is up (a script naming a parameter the mode lacks,
@@ -304,11 +304,7 @@ fn open(
     let adapter =
         choose_adapter(&instance, options.adapter.as_deref(), Some(&surface)).map_err(opening)?;
     let gpu = Gpu::open(&adapter).map_err(opening)?;
-    let on_gpu = match options.backend {
-        Backend::Cpu => false,
-        Backend::Gpu => true,
-        Backend::Auto => !gpu.is_software(),
-    };
+    let on_gpu = options.backend.runs_on(&gpu);
     eprintln!(
         "atmo: the window on {}; the picture drawn on the {}",
         gpu.describe(),

@@ -31,6 +31,7 @@ mod pixels;
 pub mod sky;
 pub mod stage;
 
+pub use atmo_gpu::Backend;
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
@@ -104,18 +105,6 @@ pub fn orbit(
     look_at + direction * (distance * scale)
 }
 
-/// Where the method runs; the window itself always shows through the GPU's surface.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Backend {
-    /// A hardware GPU's method when the window's adapter is one, else the CPU's (a
-    /// software adapter such as llvmpipe is slower than atmo's CPU path).
-    Auto,
-    /// The GPU's method, on any adapter.
-    Gpu,
-    /// The CPU's method (rayon over every core); the frame is uploaded and shown.
-    Cpu,
-}
-
 /// How the viewer runs.
 #[derive(Debug, Clone)]
 pub struct Options {
@@ -127,6 +116,8 @@ pub struct Options {
     pub screenshot: Option<PathBuf>,
     /// Inputs replayed at given frames.
     pub script: Script,
+    /// Where the method runs; the window itself always shows through the GPU's surface
+    /// ([`Backend::runs_on`] its adapter).
     pub backend: Backend,
     /// The adapter, by part of its name or a backend (see `atmo_gpu::Gpu::new`).
     pub adapter: Option<String>,

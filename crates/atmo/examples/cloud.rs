@@ -1,52 +1,39 @@
-//! A cloud (the clouds paper): a generated cumulus lit by the sun through the 3-D
-//! intensity buffer, drawn as billboards, with sunlight and skylight from the sky
-//! module's atmosphere.
-//!
+//! A cumulus in front of the sky, lit and hazed by the Earth's atmosphere, every order:
 //! `cargo run --release -p atmo --example cloud -- cloud.png`
 
-use atmo::atmosphere::PhaseFunction;
-use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Scattering, SkyLight, Splat};
-use atmo::sky::{Daylight, SkySettings};
+use atmo::clouds::{Cumulus, Scattering, Splat};
+use atmo::cloudscape::{Ambient, Cloudscape, CpuClouds};
 use atmo::view::{Camera, Fov, Sun};
-use atmo::Atmosphere;
 use glam::Vec3;
 
 fn main() -> atmo::Result<()> {
-    let out = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "cloud.png".into());
-    let particles = Cumulus {
+    let out = std::env::args().nth(1).unwrap_or("cloud.png".into());
+    let calm = Cumulus {
         particles: 20_000,
         ..Cumulus::default()
     }
     .generate();
-    let sun = Sun::from_degrees(25.0, 40.0)?;
-    // The sun's transmittance inside the cloud, in a 128^3 buffer oriented to the sun.
-    let buffer = IntensityBuffer::new(&particles, sun.toward(), 128, 0.0, Splat::Pieces)?;
-    // The sky's light at the cloud's height.
-    let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
-    let daylight = Daylight::new(
-        &Atmosphere::earth(),
-        &SkySettings::default(),
-        centre.y as f64,
-    )?;
-    let light = Lighting {
-        to_sun: sun.toward(),
-        sun: daylight.sunlight(sun),
-        ambient: SkyLight::from_harmonics(&daylight.skylight(sun)),
-        phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
-        // Every order of scattering (Scattering::SINGLE: the paper's single scattering).
-        scattering: Scattering::MULTIPLE,
+    let scene = Cloudscape {
+        calm,
+        resolution: 128,
+        forward: 0.0,
+        splat: Splat::Pieces,
+        phase: atmo::atmosphere::PhaseFunction::CloudMie,
+        scattering: Scattering::MULTIPLE, // every order; Scattering::SINGLE is the paper's
+        ambient: Ambient::Sky,
+        sky: true,
+        ground_albedo: None,
     };
+    let particles = scene.blown(0.0);
+    let centre = Cloudscape::centre_of(&particles);
     let eye = centre + Vec3::new(-1500.0, -300.0, 2500.0);
     let camera = Camera::look_at(eye, centre, Vec3::Y, Fov::Vertical(40.0), (960, 540))?;
-    let frame = render(&particles, &buffer, &camera, &light, None)?;
-    frame.write(
-        std::path::Path::new(&out),
-        0.15,
-        atmo::image::ToneMap::Exponential,
-    )?;
-    println!("wrote {out}");
-    Ok(())
+    let sun = Sun::from_degrees(25.0, 40.0)?;
+    let mut clouds = CpuClouds::new(scene.resolution);
+    clouds.light(&particles, sun.toward(), scene.forward, scene.splat)?;
+    let sky = scene.sky_around(&particles, &camera)?;
+    let shadow = scene.shadow(&particles, sun, 256)?;
+    let (light, behind) = scene.lighting(sky.as_ref(), shadow.as_ref(), sun, &camera)?;
+    let frame = clouds.draw(&particles, &camera, &light, behind.as_ref())?;
+    frame.write(out.as_ref(), 0.15, atmo::image::ToneMap::Exponential)
 }

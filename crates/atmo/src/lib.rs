@@ -5,8 +5,9 @@
 //! The three methods stand side by side on a shared floor: [`view`] (the world frame,
 //! the [`Sun`](view::Sun), the [`Camera`](view::Camera)), [`atmosphere`] (the medium and
 //! every phase function), [`geometry`] (rays, boxes, meshes) and [`image`] (frames,
-//! tone maps, files). None of the methods imports another; docs/architecture.md draws
-//! the layers.
+//! tone maps, files). None of the methods imports another; [`cloudscape`] puts the
+//! clouds in the sky's sky, the one place two meet, above both. docs/architecture.md
+//! draws the layers.
 //!
 //! # The sky ([`sky`]): Iwasaki, Yanagita, Dobashi, Nishita 2004, cited `sky (n)`
 //!
@@ -74,6 +75,7 @@
 pub mod atmosphere;
 pub mod budget;
 pub mod clouds;
+pub mod cloudscape;
 pub mod error;
 pub mod fast;
 pub mod files;

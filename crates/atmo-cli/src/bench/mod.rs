@@ -18,7 +18,7 @@ use atmo_gpu::{Gpu, GpuError};
 use clap::{Args, ValueEnum};
 use serde_json::{json, Value};
 
-use crate::backend::{gpu_error, Backend, BackendArgs};
+use crate::backend::{backend_parser, gpu_error, Backend, BackendArgs};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -40,7 +40,7 @@ pub struct BenchArgs {
     sweep_dir: Option<std::path::PathBuf>,
     /// cpu: each method against its baseline; gpu: each GPU pipeline beside the same
     /// method on the CPU.
-    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    #[arg(long, value_parser = backend_parser(), default_value_t = Backend::Cpu)]
     backend: Backend,
     /// With --backend gpu: the adapter (part of its name, or a backend).
     #[arg(long, value_name = "NAME")]

@@ -14,7 +14,7 @@ use atmo_view::{Mode, Options, Script};
 use clap::{Args, Subcommand};
 
 use crate::args::{AtmosphereArgs, ShellArgs, SkyPictureArgs};
-use crate::backend::{Backend, BackendArgs};
+use crate::backend::BackendArgs;
 use crate::bench::percentile;
 use crate::commands::clouds::{Cloud, CloudStill, WindowClouds};
 
@@ -181,11 +181,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
         frames: window.frames,
         screenshot: window.screenshot,
         script,
-        backend: match device.backend {
-            Backend::Auto => atmo_view::Backend::Auto,
-            Backend::Gpu => atmo_view::Backend::Gpu,
-            Backend::Cpu => atmo_view::Backend::Cpu,
-        },
+        backend: device.backend,
         adapter: device.adapter,
         preview: window.preview,
     };
