@@ -28,6 +28,12 @@ use glam::Vec3;
 use crate::wgsl;
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
+mod frames;
+mod pass;
+
+use frames::*;
+pub use pass::CloudsPass;
+
 gpu_struct! {
     /// A particle as the shaders read it (32 bytes).
     pub struct GpuParticle in "clouds_common.wgsl" {
@@ -763,71 +769,6 @@ gpu_struct! {
     }
 }
 
-/// The cloud drawn into a caller's colour target of one format: a full-screen
-/// triangle that puts the picture [`GpuClouds::prepare`] recorded (with its higher
-/// octaves) over what the target holds, pixel for pixel from [`CloudsPass::corner`],
-/// times [`CloudsPass::exposure`]. It keeps the two targets the billboards are drawn
-/// into between frames of one size.
-pub struct CloudsPass {
-    pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
-    params: wgpu::Buffer,
-    group: Option<wgpu::BindGroup>,
-    /// The picture's and the higher octaves' targets, and their size.
-    targets: Option<((u32, u32), [wgpu::Texture; 2])>,
-    /// Multiplies the radiance written.
-    pub exposure: f32,
-    /// The target's pixel where the picture's (0, 0) goes.
-    pub corner: [u32; 2],
-}
-
-impl CloudsPass {
-    /// The pass for colour targets of `format` (blendable): refused by name where the
-    /// device cannot render to it.
-    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Result<Self, GpuError> {
-        let module = wgsl::module(gpu, "screen.wgsl clouds_composite.wgsl")?;
-        // Premultiplied "over": the cloud, then (1 - its coverage) of what is behind.
-        let over = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let target = wgpu::ColorTargetState {
-            format,
-            blend: Some(wgpu::BlendState {
-                color: over,
-                alpha: over,
-            }),
-            write_mask: wgpu::ColorWrites::ALL,
-        };
-        let (layout, pipeline_layout) = crate::display::picture_layout(gpu, "the clouds", 2);
-        let pipeline = gpu.screen_pipeline(
-            "the clouds' composite",
-            &module,
-            Some(&pipeline_layout),
-            &[Some(target)],
-            None,
-        )?;
-        Ok(CloudsPass {
-            pipeline,
-            layout,
-            params: gpu.uniform(
-                "the clouds' composite",
-                &<CompositeParams as bytemuck::Zeroable>::zeroed(),
-            ),
-            group: None,
-            targets: None,
-            exposure: 1.0,
-            corner: [0, 0],
-        })
-    }
-
-    /// Records the cloud into `pass` (nothing before a [`GpuClouds::prepare`]).
-    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
-        crate::display::draw_screen(pass, &self.pipeline, self.group.as_ref());
-    }
-}
-
 /// The particles as the shaders read them.
 fn records(particles: &[Particle]) -> Vec<GpuParticle> {
     particles
@@ -900,74 +841,4 @@ pub(crate) fn target_texture(
 pub fn shadow_texture(gpu: &Gpu, shadow: &CloudShadow) -> wgpu::Texture {
     let n = shadow.resolution as u32;
     gpu.float_texture("the cloud's shadow", &shadow.depth, n, n)
-}
-
-/// The frame of a light pass of `particles` lit from `to_sun` into a `resolution`^3
-/// grid.
-fn frame_of(
-    particles: &[Particle],
-    to_sun: Vec3,
-    forward: f32,
-    splat: Splat,
-    resolution: u32,
-) -> Result<BufferFrame, GpuError> {
-    let light = LightFrame::new(particles, to_sun, forward)?;
-    let voxel = (light.max - light.min) / resolution as f32;
-    let row = |v: Vec3| [v.x, v.y, v.z, 0.0];
-    let m = light.from_world;
-    Ok(BufferFrame {
-        x_axis: row(m.row(0)),
-        y_axis: row(m.row(1)),
-        z_axis: row(m.row(2)),
-        min: row(light.min),
-        voxel: row(voxel),
-        resolution,
-        particles: particles.len() as u32,
-        pieces: (splat == Splat::Pieces) as u32,
-        forward_bits: forward.to_bits(),
-    })
-}
-
-/// The particles as seen from `camera`, in a space where its rays are parallel (to -z):
-/// a point `d` from the eye goes to `(s (d . right) / z, s (d . up) / z, z)`, `z = d .
-/// forward`, `s` the depth of the particles' mean (returned). Each particle keeps its
-/// column along every ray: its radius across is scaled by `s / z` at its centre and its
-/// density by `z / s` (only its spread along the ray, now `s / z` of its own, is not
-/// kept). The light pass of these lit from -z is the optical depth toward the eye along
-/// each pixel's own ray, where a pass lit along one direction from the eye reads, near
-/// a blob, the depth in front of its neighbours (a blob-sized mottle wherever the rays
-/// leave that direction). Particles not wholly in front of the eye weigh nothing.
-fn seen_from(particles: &[Particle], camera: &Camera) -> (Vec<Particle>, f32) {
-    let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
-    let s = camera.depth(centre).max(1.0);
-    let warped = particles
-        .iter()
-        .map(|p| {
-            let d = p.position - camera.position;
-            let z = d.dot(camera.forward);
-            if z <= p.reach() {
-                return Particle {
-                    position: Vec3::new(0.0, 0.0, s),
-                    density: 0.0,
-                    ..*p
-                };
-            }
-            Particle {
-                position: Vec3::new(s * d.dot(camera.right) / z, s * d.dot(camera.up) / z, z),
-                radius: p.radius * s / z,
-                density: p.density * z / s,
-                albedo: p.albedo,
-            }
-        })
-        .collect();
-    (warped, s)
-}
-
-/// The `n`^3 grid of f32 starting `offset` bytes into `cells`.
-fn grid(cells: &wgpu::Buffer, offset: u64, n: u32) -> wgpu::BufferBinding<'_> {
-    wgpu::BufferBinding {
-        buffer: cells,
-        offset,
-        size: std::num::NonZeroU64::new((n as u64).pow(3) * 4),
-    }
 }

@@ -1,0 +1,267 @@
+//! The files a scene names, read through the bounded reader: photometric profiles
+//! (IES, EULUMDAT), gobo images and OBJ meshes.
+
+use super::*;
+
+/// The farthest off the axis a measured profile is drawn, degrees: the field of a
+/// spotlight's square light map and shadow map must stay below 90 (`field_deg` below
+/// 180); light a file gives beyond it is left out.
+pub const MEASURED_REACH_DEG: f32 = 85.0;
+
+/// A photometric file: IES LM-63, or EULUMDAT when `eulumdat`.
+pub(super) fn load_photometry(path: &Path, eulumdat: bool) -> Result<Photometry> {
+    let what = if eulumdat {
+        "EULUMDAT file"
+    } else {
+        "IES file"
+    };
+    let text = crate::files::read_text(path, what, crate::files::TEXT_LIMIT_BYTES)?;
+    let origin = path.display().to_string();
+    if eulumdat {
+        Photometry::from_eulumdat(&text, &origin)
+    } else {
+        Photometry::from_ies(&text, &origin)
+    }
+}
+
+/// The largest gobo image, pixels a side: four times a projector's finest gobo, and
+/// 50 MB as texels.
+pub const GOBO_MAX_SIDE: u32 = 4096;
+
+/// A gobo from an image file (through the bounded reader).
+pub(super) fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
+    let bytes = crate::files::read_bounded(path, "gobo image", crate::files::DATA_LIMIT_BYTES)?;
+    gobo_from_image(&bytes, &path.display().to_string(), sampling)
+}
+
+/// A gobo from the bytes of an image file (PNG, or what the build's image features
+/// read); `origin` names it in messages. The size is read from the header and checked
+/// before anything is decoded: a small file can claim a huge image.
+pub fn gobo_from_image(bytes: &[u8], origin: &str, sampling: Sampling) -> Result<Gobo> {
+    use image::ImageDecoder as _;
+    let bad = |e: image::ImageError| Error::Invalid(format!("gobo {origin}: {e}"));
+    let decoder = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| Error::Invalid(format!("gobo {origin}: {e}")))?
+        .into_decoder()
+        .map_err(bad)?;
+    let (width, height) = decoder.dimensions();
+    if width.max(height) > GOBO_MAX_SIDE {
+        return Err(Error::Invalid(format!(
+            "gobo {origin}: {width} x {height} pixels is above the limit of {GOBO_MAX_SIDE} a \
+             side; scale the image down"
+        )));
+    }
+    // Decoding holds the image as the file stores it (up to 8 bytes a pixel), its
+    // 8-bit RGB copy and the texels kept, 3 bytes a pixel each.
+    crate::budget::check(
+        &format!("gobo {origin} ({width} x {height})"),
+        decoder.total_bytes() + 6 * width as u64 * height as u64,
+        "the gobo image's size",
+    )?;
+    let image = image::DynamicImage::from_decoder(decoder)
+        .map_err(bad)?
+        .to_rgb8();
+    Ok(Gobo::new(
+        image.width() as usize,
+        image.height() as usize,
+        image.pixels().map(|p| p.0).collect(),
+        sampling,
+    ))
+}
+
+impl ObjectSpec {
+    pub(super) fn validate(&self, at: &str, folder: &Path) -> Result<Object> {
+        let field = |name: &str| format!("{at}.{name}");
+        let (shape, a) = match self {
+            ObjectSpec::Plane {
+                point,
+                normal,
+                albedo,
+            } => (
+                Shape::Plane {
+                    point: vec3(&field("point"), *point)?,
+                    normal: unit_vector(&field("normal"), *normal)?,
+                },
+                albedo,
+            ),
+            ObjectSpec::Rect {
+                corner,
+                edge_a,
+                edge_b,
+                albedo,
+            } => {
+                let (ea, eb) = (
+                    vec3(&field("edge_a"), *edge_a)?,
+                    vec3(&field("edge_b"), *edge_b)?,
+                );
+                if ea.cross(eb).length() < 1e-9 {
+                    return Err(Error::Invalid(format!(
+                        "{at}: edge_a and edge_b are zero or parallel: the rectangle has no area"
+                    )));
+                }
+                (
+                    Shape::Rect {
+                        corner: vec3(&field("corner"), *corner)?,
+                        edge_a: ea,
+                        edge_b: eb,
+                    },
+                    albedo,
+                )
+            }
+            ObjectSpec::Sphere {
+                center,
+                radius,
+                albedo,
+            } => {
+                check_positive(&field("radius"), *radius as f64, 1e6)?;
+                (
+                    Shape::Sphere {
+                        center: vec3(&field("center"), *center)?,
+                        radius: *radius,
+                    },
+                    albedo,
+                )
+            }
+            ObjectSpec::Box { min, max, albedo } => {
+                let (min, max) = (vec3(&field("min"), *min)?, vec3(&field("max"), *max)?);
+                if !min.cmplt(max).all() {
+                    return Err(Error::out_of_range(
+                        &field("max"),
+                        format!("{max:?}"),
+                        &format!("greater than {at}.min = {min:?} on every axis"),
+                    ));
+                }
+                (Shape::Box(Aabb { min, max }), albedo)
+            }
+            ObjectSpec::Mesh {
+                file,
+                scale,
+                rotate_y_deg,
+                translate,
+                albedo,
+            } => {
+                check_positive(&field("scale"), *scale as f64, 1e6)?;
+                check_range(&field("rotate_y_deg"), *rotate_y_deg as f64, -360.0, 360.0)?;
+                let translate = vec3(&field("translate"), *translate)?;
+                let rotation = glam::Mat3::from_rotation_y(rotate_y_deg.to_radians());
+                let mesh = load_obj(&folder.join(file), |p| rotation * (p * *scale) + translate)?;
+                (Shape::Mesh(mesh), albedo)
+            }
+        };
+        Ok(Object {
+            shape,
+            albedo: albedo(&field("albedo"), *a)?,
+        })
+    }
+}
+
+/// The triangles of an OBJ file (all its objects; polygons fanned into triangles;
+/// materials ignored), each vertex mapped by `place`. Degenerate triangles are dropped;
+/// a file without any triangle, with indices out of range or with non-finite
+/// coordinates is an error, never a panic.
+#[cfg(feature = "obj")]
+pub fn load_obj(path: &Path, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
+    let bytes = crate::files::read_bounded(path, "OBJ file", crate::files::DATA_LIMIT_BYTES)?;
+    mesh_from_obj(&bytes, &path.display().to_string(), place)
+}
+
+/// [`load_obj`] from the bytes of an OBJ file; `origin` names it in messages.
+#[cfg(feature = "obj")]
+pub fn mesh_from_obj(bytes: &[u8], origin: &str, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
+    let fail = |why: String| Error::Invalid(format!("OBJ file {origin}: {why}"));
+    // The parsed lists, the triangles and their hierarchy hold a few times the text.
+    crate::budget::check(
+        &format!("the mesh of OBJ file {origin}"),
+        4 * bytes.len() as u64,
+        "the mesh's size",
+    )?;
+    let text = std::str::from_utf8(bytes).map_err(|e| fail(format!("not UTF-8 text ({e})")))?;
+    check_obj_indices(text).map_err(fail)?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ..Default::default()
+    };
+    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| fail(e.to_string()))?;
+    let mut triangles = Vec::new();
+    for model in &models {
+        let (p, idx) = (&model.mesh.positions, &model.mesh.indices);
+        let vertex = |i: u32| -> Result<Vec3> {
+            let i = i as usize * 3;
+            let v = p
+                .get(i..i + 3)
+                .ok_or_else(|| fail(format!("vertex index {} out of range", i / 3 + 1)))?;
+            let v = place(Vec3::new(v[0], v[1], v[2]));
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(fail(format!(
+                    "vertex {} is not finite where it is placed",
+                    i / 3 + 1
+                )))
+            }
+        };
+        for t in idx.chunks_exact(3) {
+            let [a, b, c] = [vertex(t[0])?, vertex(t[1])?, vertex(t[2])?];
+            if (b - a).cross(c - a).length_squared() > 1e-20 {
+                triangles.push([a, b, c]);
+            }
+        }
+    }
+    if triangles.is_empty() {
+        return Err(fail("no triangles".into()));
+    }
+    Ok(Mesh::new(triangles))
+}
+
+/// Checks every index of the face and line elements (`f`, `l`) against the vertices,
+/// texture coordinates and normals given before it, as OBJ counts them (from 1, or
+/// back from the last with a minus sign): tobj turns an index out of range into an
+/// arithmetic overflow (found by fuzzing: a panic in debug builds, a wrapped index in
+/// release ones), so none reaches it. The message names the line.
+#[cfg(feature = "obj")]
+pub(super) fn check_obj_indices(text: &str) -> std::result::Result<(), String> {
+    let mut counts = [0i64; 3]; // positions, texture coordinates, normals
+    for (k, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some("f") | Some("l") => {
+                for word in words {
+                    for (kind, index) in word.split('/').enumerate().take(3) {
+                        if index.is_empty() {
+                            continue;
+                        }
+                        let n = counts[kind];
+                        let ok = index
+                            .parse::<i64>()
+                            .is_ok_and(|i| (1..=n).contains(&i) || (-n..=-1).contains(&i));
+                        if !ok {
+                            let what = ["vertex", "texture coordinate", "normal"][kind];
+                            return Err(format!(
+                                "line {}: {what} index {index} is out of range: {n} given before it",
+                                k + 1
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Without atmo's `obj` feature, OBJ meshes are refused with a message saying so.
+#[cfg(not(feature = "obj"))]
+pub fn load_obj(path: &Path, _place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
+    Err(Error::Invalid(format!(
+        "OBJ file {}: meshes need atmo's `obj` feature, which this build leaves out",
+        path.display()
+    )))
+}

@@ -1,0 +1,217 @@
+//! The scene file: camera, haze, spotlights and objects in physical units (TOML, see
+//! docs/shafts.md for every key and convention). Parsed with `deny_unknown_fields` so a
+//! misspelt key is an error with its line and column, validated once here into the
+//! types the renderers use, with messages naming the field and its allowed range.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use super::gdtf;
+use super::haze::Haze;
+use super::objects::{Object, Objects};
+use super::photometry::Photometry;
+use super::show::{profile_solid_angle, Change, Cue, Fixture, Prism, Show, State, CHANNELS};
+use super::spotlight::{light_frame, Falloff, Gobo, Profile, Sampling, Spotlight};
+use super::PlaneSettings;
+use crate::atmosphere::phase::PhaseFunction;
+use crate::atmosphere::spectrum::blackbody_srgb;
+use crate::error::{check_positive, check_range, from_toml, Error, Result};
+use crate::geometry::{Aabb, Mesh, Shape};
+use crate::image::{Display, ToneMap};
+use crate::view::{Camera, Fov};
+
+mod assets;
+mod build;
+mod spec;
+
+#[cfg(feature = "obj")]
+pub use assets::mesh_from_obj;
+use assets::*;
+pub use assets::{gobo_from_image, load_obj, GOBO_MAX_SIDE, MEASURED_REACH_DEG};
+use build::*;
+use spec::*;
+
+/// A validated scene: everything a renderer needs.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The camera: a pinhole, as scene files make it (the sample planes are parallel to
+    /// its screen, shafts 4.2).
+    pub camera: Camera,
+    /// The haze.
+    pub haze: Haze,
+    /// The spotlights.
+    pub lights: Vec<Spotlight>,
+    /// The opaque objects.
+    pub objects: Objects,
+    /// Sample planes, sub-planes and shadow maps of the plane method.
+    pub planes: PlaneSettings,
+    /// How the picture is shown in 8-bit files.
+    pub display: Display,
+    /// The unit of the lights' intensities, and so of the pixels' radiance.
+    pub unit: IntensityUnit,
+    /// The files the scene names (gobo images, meshes, photometric files) as they
+    /// were read, so that a command does not write over one of them.
+    pub files: Vec<PathBuf>,
+    /// The moving heads and their cues; the heads are the last lights of
+    /// [`Scene::lights`], posed at [`Scene::time_s`].
+    pub show: Show,
+    /// The show's time the heads are posed at, s ([`Scene::at_time`]; 0 as loaded).
+    pub time_s: f32,
+}
+
+/// What a light's `intensity` means; pixels are radiance in the same unit per m^2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+pub enum IntensityUnit {
+    /// Luminous intensity, candela: pixels in cd/m^2 (nits).
+    #[serde(rename = "cd")]
+    Candela,
+    /// Radiant intensity, W/sr: pixels in W/(sr m^2).
+    #[serde(rename = "W/sr")]
+    WattPerSteradian,
+}
+
+impl IntensityUnit {
+    /// The unit of a pixel's radiance.
+    pub fn radiance_unit(self) -> &'static str {
+        match self {
+            IntensityUnit::Candela => "cd/m^2",
+            IntensityUnit::WattPerSteradian => "W/(sr m^2)",
+        }
+    }
+}
+
+impl Scene {
+    /// Loads and validates the scene file at `path`; gobo and OBJ paths in it are
+    /// relative to its folder.
+    pub fn from_file(path: &Path) -> Result<Scene> {
+        Scene::from_text_at(&Scene::read_text(path)?, path)
+    }
+
+    /// The text of the scene file at `path` (through the bounded reader).
+    pub fn read_text(path: &Path) -> Result<String> {
+        crate::files::read_text(path, "scene file", crate::files::TEXT_LIMIT_BYTES)
+    }
+
+    /// The scene of `text` as if it were the file at `path` (named so in messages, its
+    /// relative paths from its folder): a file edited before it is read.
+    pub fn from_text_at(text: &str, path: &Path) -> Result<Scene> {
+        let folder = path.parent().unwrap_or(Path::new("."));
+        Scene::from_toml_str(text, &path.display().to_string(), folder)
+    }
+
+    /// The camera of scene TOML `text` alone, parsed and validated as
+    /// [`Scene::from_toml_str`] does (`origin` names the text in messages), the rest of
+    /// the text unread: what a viewer whose edit moved only the camera reads again,
+    /// without the objects' and the lights' files.
+    pub fn camera_from_toml_str(text: &str, origin: &str) -> Result<Camera> {
+        /// The camera table of a scene; the other tables are the whole scene's to check.
+        #[derive(Deserialize)]
+        struct CameraOnly {
+            camera: CameraSpec,
+        }
+        let spec: CameraOnly = from_toml(text, origin)?;
+        spec.camera.validate()
+    }
+
+    /// Parses and validates scene TOML; `origin` names it in messages, `folder` is where
+    /// relative gobo and OBJ paths start.
+    pub fn from_toml_str(text: &str, origin: &str, folder: &Path) -> Result<Scene> {
+        let spec: SceneSpec = from_toml(text, origin)?;
+        let camera = spec.camera.validate()?;
+        let haze = spec.haze.validate()?;
+        let planes = PlaneSettings {
+            planes: spec.render.planes,
+            sub_planes: spec.render.sub_planes,
+            shadow_map: spec.render.shadow_map,
+            adaptive: spec.render.adaptive,
+        };
+        check_positive("display.exposure", spec.display.exposure as f64, 1e12)?;
+        let display = Display {
+            exposure: spec.display.exposure,
+            tone: match spec.display.tone_map {
+                ToneMapSpec::Exponential => ToneMap::Exponential,
+                ToneMapSpec::Aces => ToneMap::Aces,
+                ToneMapSpec::Clamp => ToneMap::Clamp,
+            },
+        };
+        let unit = spec
+            .spotlight
+            .first()
+            .map_or(IntensityUnit::Candela, |l| l.intensity_unit);
+        let lights = spec
+            .spotlight
+            .iter()
+            .enumerate()
+            .map(|(i, l)| l.validate(&format!("spotlight[{i}]"), unit, folder))
+            .collect::<Result<Vec<_>>>()?;
+        let list = spec
+            .object
+            .iter()
+            .enumerate()
+            .map(|(i, o)| o.validate(&format!("object[{i}]"), folder))
+            .collect::<Result<Vec<_>>>()?;
+        let show = show(&spec, unit, folder)?;
+        let mut lights = lights;
+        lights.extend(show.pose(0.0));
+        let wheels = spec
+            .fixture
+            .iter()
+            .flat_map(|f| f.gobo_wheel.iter().flatten().chain(f.gdtf.iter()));
+        let gobos = spec.spotlight.iter().flat_map(|l| {
+            let profile = l
+                .profile
+                .as_ref()
+                .and_then(|p| p.ies.as_ref().or(p.ldt.as_ref()));
+            l.gobo.iter().chain(profile)
+        });
+        let meshes = spec.object.iter().filter_map(|o| match o {
+            ObjectSpec::Mesh { file, .. } => Some(file),
+            _ => None,
+        });
+        let scene = Scene {
+            camera,
+            haze,
+            lights,
+            objects: Objects { list },
+            planes,
+            display,
+            unit,
+            files: gobos
+                .chain(wheels)
+                .chain(meshes)
+                .map(|f| folder.join(f))
+                .collect(),
+            show,
+            time_s: 0.0,
+        };
+        scene.validate_planes()?;
+        Ok(scene)
+    }
+
+    /// The scene at `time_s` seconds into its show: its moving heads posed as its cues
+    /// have them then (the other lights do not change).
+    pub fn at_time(&mut self, time_s: f32) {
+        let first = self.lights.len() - self.show.light_count(self.time_s);
+        self.lights.truncate(first);
+        self.lights.extend(self.show.pose(time_s));
+        self.time_s = time_s;
+    }
+
+    /// Checks the plane settings, and that the shadow maps they make for these lights
+    /// fit the run's memory budget ([`crate::budget`]); again after a caller changes
+    /// them.
+    pub fn validate_planes(&self) -> Result<()> {
+        self.planes.validate()?;
+        // Each light's shadow map, 4 bytes a texel, on the CPU or on the GPU, at the
+        // time of the show with the most (every prism in).
+        let most = self.lights.len() - self.show.light_count(self.time_s) + self.show.most_lights();
+        let texels = most as u64 * (self.planes.shadow_map as u64).pow(2);
+        crate::budget::check(
+            &format!("{most} shadow maps of {}^2", self.planes.shadow_map),
+            4 * texels,
+            "render.shadow_map (--shadow-map) or the number of spotlights",
+        )
+    }
+}
