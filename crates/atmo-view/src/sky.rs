@@ -10,7 +10,7 @@ use atmo::sky::table::SkylightTable;
 use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::{Atmosphere, Error};
-use atmo_gpu::sky::{GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget};
+use atmo_gpu::sky::{Prepared, SkyRenderer, SkySource as RenderedFrom};
 use atmo_gpu::Gpu;
 use glam::Vec3;
 
@@ -177,17 +177,6 @@ impl Default for SkyParams {
     }
 }
 
-/// What draws the sky: the CPU method or its GPU twin, from the table or a model
-/// (one a run: the sizes of the variants do not matter).
-#[allow(clippy::large_enum_variant)]
-enum Drawer {
-    CpuTable(Arc<SkylightTable>),
-    /// The model, built at its altitude.
-    CpuShells(SkyModel),
-    GpuTable(GpuSkyTable<Arc<SkylightTable>>, SkyPass),
-    GpuShells(GpuSkyModel<SkyModel>, SkyPass),
-}
-
 /// The sky mode: parameters, how they change, and the drawer.
 pub struct SkyMode {
     pub params: SkyParams,
@@ -199,7 +188,7 @@ pub struct SkyMode {
     pub step_m: f64,
     /// The time-of-day animation: the sun sets by `SUNSET_STEP_DEG` a frame.
     pub animate: bool,
-    drawer: Option<Drawer>,
+    drawer: Option<SkyRenderer>,
     on_gpu: bool,
 }
 
@@ -263,28 +252,17 @@ impl SkyMode {
         Ok(())
     }
 
-    fn make_drawer(&self, gpu: &Gpu) -> Result<Drawer> {
-        let pass = || SkyPass::new(gpu, SkyTarget::HEADLESS);
-        Ok(match (&self.source, self.on_gpu) {
-            (SkySource::Table(t), false) => Drawer::CpuTable(t.clone()),
-            (SkySource::Table(t), true) => {
-                Drawer::GpuTable(GpuSkyTable::new(gpu, t.clone())?, pass()?)
-            }
-            (
-                SkySource::Shells {
-                    atmosphere,
-                    settings,
-                },
-                on_gpu,
-            ) => {
-                let model = SkyModel::new(atmosphere, settings, self.params.altitude_m)?;
-                if on_gpu {
-                    Drawer::GpuShells(GpuSkyModel::new(gpu, model)?, pass()?)
-                } else {
-                    Drawer::CpuShells(model)
-                }
-            }
-        })
+    /// The renderer of the mode's source on its backend: a model built at the
+    /// parameters' altitude (the shell method).
+    fn make_drawer(&self, gpu: &Gpu) -> Result<SkyRenderer> {
+        let source = match &self.source {
+            SkySource::Table(t) => RenderedFrom::Table(t.clone()),
+            SkySource::Shells {
+                atmosphere,
+                settings,
+            } => RenderedFrom::Model(SkyModel::new(atmosphere, settings, self.params.altitude_m)?),
+        };
+        Ok(SkyRenderer::new(self.on_gpu.then_some(gpu), source)?)
     }
 }
 
@@ -356,31 +334,19 @@ impl Mode for SkyMode {
         let p = &self.params;
         let (sun, view) = (p.sun()?, p.view(picture.size)?);
         let stale = match &self.drawer {
-            Some(Drawer::CpuShells(m)) => m.altitude_m() != p.altitude_m,
-            Some(Drawer::GpuShells(m, _)) => m.model().altitude_m() != p.altitude_m,
-            Some(_) => false,
+            Some(drawer) => drawer
+                .model_altitude()
+                .is_some_and(|altitude| altitude != p.altitude_m),
             None => true,
         };
         if stale {
             self.drawer = Some(self.make_drawer(gpu)?);
         }
-        let altitude = p.altitude_m;
-        match self.drawer.as_mut().expect("made above") {
-            Drawer::CpuTable(table) => {
-                let sky = SkyPicture::from_table(table, sun, altitude)?;
-                draw_cpu(&sky, &view, self.display(), picture);
-            }
-            Drawer::CpuShells(model) => {
-                draw_cpu(&SkyPicture::new(model, sun), &view, self.display(), picture);
-            }
-            Drawer::GpuTable(sky, pass) => {
-                sky.prepare(gpu, encoder, pass, sun, altitude, &view)?;
-                picture.draw(encoder, |render| pass.draw(render));
-            }
-            Drawer::GpuShells(sky, pass) => {
-                sky.prepare(gpu, encoder, pass, sun, &view)?;
-                picture.draw(encoder, |render| pass.draw(render));
-            }
+        let display = self.display();
+        let drawer = self.drawer.as_mut().expect("made above");
+        match drawer.prepare(encoder, sun, p.altitude_m, &view)? {
+            Prepared::Cpu(sky) => draw_cpu(&sky, &view, display, picture),
+            Prepared::Gpu(pass) => picture.draw(encoder, |render| pass.draw(render)),
         }
         Ok(true)
     }

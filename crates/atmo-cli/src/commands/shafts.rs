@@ -9,8 +9,8 @@ use atmo::files::check_folder;
 use atmo::image::{Frame, ImageKind};
 use atmo::reference::shafts::RayMarcher;
 use atmo::shafts::edits::Edit;
-use atmo::shafts::{SamplePlanes, Scene};
-use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPipelines};
+use atmo::shafts::Scene;
+use atmo_gpu::shafts::{ShaftsMethod, ShaftsRenderer};
 use clap::{Args, ValueEnum};
 
 use crate::args::ToneMapArg;
@@ -180,25 +180,7 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         return animate(&args, scene, display, gpu.as_ref());
     }
     let start = Instant::now();
-    let (frame, method): (Frame, String) = if let Some(gpu) = &gpu {
-        let shafts = GpuShafts::new(gpu, &scene).map_err(gpu_error)?;
-        let rendered = shafts
-            .render(gpu, args.gpu_method.into())
-            .map_err(gpu_error)?;
-        (
-            rendered.frame,
-            format!(
-                "{} planes x {} sub-planes, {}^2 shadow maps on the GPU ({:?}{})",
-                scene.planes.planes,
-                scene.planes.sub_planes,
-                scene.planes.shadow_map,
-                ShaftsMethod::from(args.gpu_method),
-                rendered
-                    .gpu_ms
-                    .map_or(String::new(), |ms| format!(", {ms:.1} ms of GPU time"))
-            ),
-        )
-    } else if args.reference {
+    let (frame, method): (Frame, String) = if args.reference {
         let marcher = if args.baseline {
             RayMarcher::baseline(&scene)
         } else {
@@ -221,24 +203,33 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
             ),
         )
     } else {
-        let planes = SamplePlanes::new(&scene);
-        let prepared_ms = start.elapsed().as_secs_f64() * 1e3;
-        let (frame, counts) = planes.render_counted();
-        let adaptive = if scene.planes.adaptive {
-            format!(
-                ", scattered light computed at {:.1} % of the pixels",
-                100.0 * counts.computed_share()
-            )
-        } else {
-            String::new()
-        };
-        (
-            frame,
-            format!(
-                "{} planes x {} sub-planes, {}^2 shadow maps (built in {prepared_ms:.1} ms){adaptive}",
-                scene.planes.planes, scene.planes.sub_planes, scene.planes.shadow_map
+        let method = ShaftsMethod::from(args.gpu_method);
+        let drawn = ShaftsRenderer::new(gpu.as_ref(), method)
+            .and_then(|mut shafts| shafts.draw(&scene))
+            .map_err(gpu_error)?;
+        let planes = format!(
+            "{} planes x {} sub-planes, {}^2 shadow maps",
+            scene.planes.planes, scene.planes.sub_planes, scene.planes.shadow_map
+        );
+        let how = match (&drawn.counts, drawn.gpu_ms) {
+            (Some(counts), _) => format!(
+                " (built in {:.1} ms){}",
+                drawn.prepared_ms,
+                if scene.planes.adaptive {
+                    format!(
+                        ", scattered light computed at {:.1} % of the pixels",
+                        100.0 * counts.computed_share()
+                    )
+                } else {
+                    String::new()
+                }
             ),
-        )
+            (None, gpu_ms) => format!(
+                " on the GPU ({method:?}{})",
+                gpu_ms.map_or(String::new(), |ms| format!(", {ms:.1} ms of GPU time"))
+            ),
+        };
+        (drawn.frame, planes + &how)
     };
     let ms = start.elapsed().as_secs_f64() * 1e3;
     frame.write(&args.output, display.exposure, display.tone)?;
@@ -275,11 +266,8 @@ fn animate(
     let frames = (duration * args.fps as f32).ceil() as usize + 1;
     let camera = &scene.camera;
     let size = (camera.width, camera.height);
-    let mut maps = atmo::shafts::planes::ShadowMaps::default();
-    // On the GPU the passes are compiled once; each frame uploads its lights.
-    let pipelines = gpu
-        .map(|gpu| ShaftsPipelines::new(gpu).map_err(gpu_error))
-        .transpose()?;
+    let mut shafts =
+        ShaftsRenderer::new(gpu, ShaftsMethod::from(args.gpu_method)).map_err(gpu_error)?;
     // Shadow maps rebuilt and lights drawn over the frames (a prism in or out changes
     // the count).
     let (mut rebuilt, mut lights, start) = (0, 0, Instant::now());
@@ -292,21 +280,9 @@ fn animate(
         |k, frame| {
             scene.at_time(k as f32 / args.fps as f32);
             lights += scene.lights.len();
-            *frame = match gpu.zip(pipelines.as_ref()) {
-                Some((gpu, pipelines)) => {
-                    let shafts = GpuShafts::with_pipelines(gpu, &scene, pipelines.clone())
-                        .map_err(gpu_error)?;
-                    shafts
-                        .render(gpu, args.gpu_method.into())
-                        .map_err(gpu_error)?
-                        .frame
-                }
-                None => {
-                    let frame = maps.render(&scene);
-                    rebuilt += maps.rebuilt;
-                    frame
-                }
-            };
+            let drawn = shafts.draw(&scene).map_err(gpu_error)?;
+            rebuilt += drawn.maps_rebuilt;
+            *frame = drawn.frame;
             Ok(())
         },
     )?;

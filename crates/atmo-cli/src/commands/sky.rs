@@ -1,6 +1,7 @@
 //! `atmo sky`: a picture of the sky, or its radiance along given directions.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Result;
@@ -10,12 +11,12 @@ use atmo::sky::lighting::Lighting;
 use atmo::sky::{SkyModel, SkyPicture, SkylightTable};
 use atmo::view::Sun;
 use atmo::Atmosphere;
-use atmo_gpu::sky::{GpuSkyModel, SkyPass, SkyTarget};
+use atmo_gpu::sky::{GpuSkyModel, SkyRenderer, SkySource};
 use clap::{Args, ValueEnum};
 use indicatif::ProgressBar;
 use serde_json::json;
 
-use super::sky_table::{self, Animate, Animation, TableDrawer};
+use super::sky_table::{self, Animate, Animation};
 use crate::args::{AtmosphereArgs, ShellArgs, SkyPictureArgs};
 use crate::backend::{gpu_error, BackendArgs};
 
@@ -143,15 +144,16 @@ pub fn run(args: SkyArgs) -> Result<()> {
         None => None,
     };
     if let (Some(table), Some(view), Some(path)) = (&args.table, &view, &args.output) {
-        let table = SkylightTable::read(table)?;
+        let table = Arc::new(SkylightTable::read(table)?);
         let display = Display {
             exposure: picture.exposure,
             tone: picture.tone,
         };
         let gpu = args.device.open()?;
-        let drawer = TableDrawer::new(&table, gpu.as_ref())?;
+        let source = SkySource::Table(table.clone());
+        let mut drawer = SkyRenderer::new(gpu.as_ref(), source).map_err(gpu_error)?;
         return match args.animate {
-            None => sky_table::draw(&drawer, sun, picture.altitude_m, view, display, path),
+            None => sky_table::draw(&mut drawer, sun, picture.altitude_m, view, display, path),
             Some(what) => {
                 let frames = Animation {
                     what,
@@ -160,7 +162,7 @@ pub fn run(args: SkyArgs) -> Result<()> {
                     altitude_m: picture.altitude_m,
                     day: args.picture.place.place_and_time(picture.altitude_m)?,
                 };
-                sky_table::animate(&drawer, &table, &frames, view, display, path)
+                sky_table::animate(&mut drawer, &table, &frames, view, display, path)
             }
         };
     }
@@ -181,16 +183,11 @@ pub fn run(args: SkyArgs) -> Result<()> {
     let (Some(view), Some(path)) = (view, &args.output) else {
         unreachable!("clap requires -o without --probe")
     };
-    let frame = match args.device.open()? {
-        Some(gpu) => {
-            let sky = GpuSkyModel::new(&gpu, &model).map_err(gpu_error)?;
-            let mut pass = SkyPass::new(&gpu, SkyTarget::HEADLESS).map_err(gpu_error)?;
-            sky.render(&gpu, &mut pass, sun, &view)
-                .map_err(gpu_error)?
-                .frame
-        }
-        None => SkyPicture::new(&model, sun).render(&view),
-    };
+    let gpu = args.device.open()?;
+    let mut sky = SkyRenderer::new(gpu.as_ref(), SkySource::Model(model)).map_err(gpu_error)?;
+    let frame = sky
+        .frame(sun, picture.altitude_m, &view)
+        .map_err(gpu_error)?;
     frame.write(path, picture.exposure, picture.tone)?;
     eprintln!(
         "atmo: {} ({}x{}, {}, order {}) in {:.0} ms",

@@ -5,16 +5,14 @@ use std::time::Instant;
 
 use anyhow::Result;
 use atmo::error::check_range;
-use atmo::image::{Display, Frame};
-use atmo::sky::{SkyPicture, SkylightTable, View};
+use atmo::image::Display;
+use atmo::sky::{SkylightTable, View};
 use atmo::view::place::Place;
 use atmo::view::Sun;
 use atmo::Error;
-use atmo_gpu::sky::{GpuSkyTable, SkyPass, SkyTarget};
-use atmo_gpu::Gpu;
+use atmo_gpu::sky::SkyRenderer;
 use chrono::{DateTime, FixedOffset};
 use clap::ValueEnum;
-use std::cell::RefCell;
 
 use crate::backend::gpu_error;
 use crate::output::write_animation;
@@ -31,48 +29,9 @@ pub enum Animate {
     Day,
 }
 
-/// Draws pictures from a table, on the CPU or on the GPU.
-pub enum TableDrawer<'a> {
-    Cpu(&'a SkylightTable),
-    /// The pass is the headless one, reused frame to frame.
-    Gpu(
-        &'a Gpu,
-        Box<(GpuSkyTable<&'a SkylightTable>, RefCell<SkyPass>)>,
-    ),
-}
-
-impl<'a> TableDrawer<'a> {
-    /// On `gpu` when given (the table uploaded), else on the CPU.
-    pub fn new(table: &'a SkylightTable, gpu: Option<&'a Gpu>) -> Result<Self> {
-        Ok(match gpu {
-            Some(gpu) => TableDrawer::Gpu(
-                gpu,
-                Box::new((
-                    GpuSkyTable::new(gpu, table).map_err(gpu_error)?,
-                    RefCell::new(SkyPass::new(gpu, SkyTarget::HEADLESS).map_err(gpu_error)?),
-                )),
-            ),
-            None => TableDrawer::Cpu(table),
-        })
-    }
-
-    /// The picture of `view` for `sun` seen from `altitude_m`.
-    fn frame(&self, sun: Sun, altitude_m: f64, view: &View) -> Result<Frame> {
-        Ok(match self {
-            TableDrawer::Cpu(table) => SkyPicture::from_table(table, sun, altitude_m)?.render(view),
-            TableDrawer::Gpu(gpu, drawer) => {
-                let (sky, pass) = drawer.as_ref();
-                sky.render(gpu, &mut pass.borrow_mut(), sun, altitude_m, view)
-                    .map_err(gpu_error)?
-                    .frame
-            }
-        })
-    }
-}
-
 /// One picture of the table for `sun` at `altitude_m`, written to `path`.
 pub fn draw(
-    drawer: &TableDrawer,
+    drawer: &mut SkyRenderer,
     sun: Sun,
     altitude_m: f64,
     view: &View,
@@ -80,7 +39,7 @@ pub fn draw(
     path: &Path,
 ) -> Result<()> {
     let start = Instant::now();
-    let frame = drawer.frame(sun, altitude_m, view)?;
+    let frame = drawer.frame(sun, altitude_m, view).map_err(gpu_error)?;
     let total_ms = start.elapsed().as_secs_f64() * 1e3;
     frame.write(path, display.exposure, display.tone)?;
     eprintln!(
@@ -149,7 +108,7 @@ impl Animation {
 /// Writes `frame-0000.png` ... and `animation.png` (animated PNG, 30 frames/s) into the
 /// folder `folder`, creating it. Everything is checked before the first file.
 pub fn animate(
-    drawer: &TableDrawer,
+    drawer: &mut SkyRenderer,
     table: &SkylightTable,
     animation: &Animation,
     view: &View,
@@ -173,7 +132,7 @@ pub fn animate(
     let size = (view.camera.width, view.camera.height);
     let apng = write_animation(folder, animation.frames, 30, size, display, |k, frame| {
         let (sun, altitude) = frames[k];
-        *frame = drawer.frame(sun, altitude, view)?;
+        *frame = drawer.frame(sun, altitude, view).map_err(gpu_error)?;
         Ok(())
     })?;
     eprintln!(

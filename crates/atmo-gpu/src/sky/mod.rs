@@ -25,10 +25,12 @@ use crate::wgsl;
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
 mod aerial;
+mod renderer;
 mod shells;
 mod table;
 
 pub use aerial::{AerialTextures, GpuAerial};
+pub use renderer::{Prepared, SkyRenderer, SkySource};
 pub use shells::GpuSkyModel;
 pub use table::GpuSkyTable;
 

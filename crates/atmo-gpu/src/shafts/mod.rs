@@ -23,6 +23,10 @@ use crate::wgsl::{
 };
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
+mod renderer;
+
+pub use renderer::{Drawn, ShaftsRenderer};
+
 gpu_struct! {
     /// The scene's camera, haze and sizes (see shafts_common.wgsl).
     pub struct ShaftsParams in "shafts_writable.wgsl shafts_common.wgsl" {
