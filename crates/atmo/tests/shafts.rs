@@ -1073,3 +1073,66 @@ fn every_shipped_stage_scene_reads() {
     }
     assert!(read >= 6, "{read}");
 }
+
+/// A scene built in Rust is the scene of a file of the same values: the same picture to
+/// the bit, and a bad value refused with the same message naming its key.
+#[test]
+fn a_built_scene_is_the_file_of_the_same_values() {
+    use atmo::shafts::SpotlightBuilder;
+    use glam::Vec3;
+    let text = r#"
+        camera = { position = [0, 1.5, 6], look_at = [0, 1, 0], fov_deg = 50, width = 48, height = 32 }
+        haze = { extinction = 0.1, albedo = 0.9 }
+        [[spotlight]]
+        position = [0, 4, 0]
+        aim = [0, 0, 0]
+        intensity = 1500.0
+        beam_deg = 24.0
+        field_deg = 34.0
+        kelvin = 3200
+        [[object]]
+        kind = "sphere"
+        center = [0, 1, 0]
+        radius = 0.5
+        albedo = 0.6
+        [[object]]
+        kind = "plane"
+        point = [0, 0, 0]
+        normal = [0, 1, 0]
+        albedo = 0.3
+    "#;
+    let file = Scene::from_toml_str(text, "a file", std::path::Path::new(".")).unwrap();
+    let light = |beam: f32| {
+        SpotlightBuilder::new(Vec3::new(0.0, 4.0, 0.0), Vec3::ZERO)
+            .intensity(1500.0)
+            .beam(beam, 34.0)
+            .kelvin(3200.0)
+    };
+    let built = |beam: f32| {
+        Scene::builder(
+            Vec3::new(0.0, 1.5, 6.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            50.0,
+            (48, 32),
+        )
+        .haze(0.1, 0.9)
+        .spotlight(light(beam))
+        .sphere(Vec3::new(0.0, 1.0, 0.0), 0.5, 0.6)
+        .plane(Vec3::ZERO, Vec3::Y, 0.3)
+        .build()
+    };
+    let a = SamplePlanes::new(&file).render();
+    let b = SamplePlanes::new(&built(24.0).unwrap()).render();
+    assert!(a.pixels.iter().any(|p| p.x > 0.0));
+    assert!(a.pixels == b.pixels, "the builder's picture is the file's");
+    let e = built(40.0).unwrap_err().to_string();
+    let from_file = Scene::from_toml_str(
+        &text.replace("beam_deg = 24.0", "beam_deg = 40.0"),
+        "a file",
+        std::path::Path::new("."),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("spotlight[0]"), "{e}");
+    assert_eq!(e, from_file);
+}

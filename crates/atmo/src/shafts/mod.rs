@@ -46,7 +46,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 pub use planes::SamplePlanes;
-pub use scene::Scene;
+pub use scene::{Scene, SceneBuilder, SpotlightBuilder};
 
 use crate::error::{check_range, Result};
 use crate::fast::interleaved_offset;

@@ -24,6 +24,7 @@ use crate::view::{Camera, Fov};
 
 mod assets;
 mod build;
+mod builder;
 mod spec;
 
 #[cfg(feature = "obj")]
@@ -31,6 +32,7 @@ pub use assets::mesh_from_obj;
 use assets::*;
 pub use assets::{gobo_from_image, load_obj, GOBO_MAX_SIDE, MEASURED_REACH_DEG};
 use build::*;
+pub use builder::{SceneBuilder, SpotlightBuilder};
 use spec::*;
 
 /// A validated scene: everything a renderer needs.
@@ -118,7 +120,12 @@ impl Scene {
     /// Parses and validates scene TOML; `origin` names it in messages, `folder` is where
     /// relative gobo and OBJ paths start.
     pub fn from_toml_str(text: &str, origin: &str, folder: &Path) -> Result<Scene> {
-        let spec: SceneSpec = from_toml(text, origin)?;
+        Scene::from_spec(from_toml(text, origin)?, folder)
+    }
+
+    /// The scene a file's values describe, checked (each message names the key), its
+    /// relative paths from `folder`: what a file and a [`SceneBuilder`] both become.
+    fn from_spec(spec: SceneSpec, folder: &Path) -> Result<Scene> {
         let camera = spec.camera.validate()?;
         let haze = spec.haze.validate()?;
         let planes = PlaneSettings {
