@@ -5,7 +5,7 @@
 //! camera's height, the particles where the wind took them) and redoes only what does.
 //! `atmo clouds` and `atmo view clouds` both draw through it.
 
-use atmo::clouds::render::Lighting;
+use atmo::clouds::render::CloudLight;
 use atmo::clouds::shadow::CloudShadow;
 use atmo::clouds::{Particle, Splat};
 use atmo::cloudscape::{Cloudscape, CpuClouds, SkyAround};
@@ -79,7 +79,7 @@ impl CloudRenderer {
         &self,
         particles: &[Particle],
         camera: &Camera,
-        light: &Lighting,
+        light: &CloudLight,
         background: Option<&Frame>,
     ) -> Result<Frame, GpuError> {
         Ok(match self {
@@ -222,7 +222,7 @@ impl CloudFrames {
         sun: Sun,
         camera: &Camera,
         coarse: bool,
-    ) -> Result<(Lighting, Option<Frame>), GpuError> {
+    ) -> Result<(CloudLight, Option<Frame>), GpuError> {
         self.sky(camera)?;
         let scene = &self.scene;
         let sky = self.sky.as_ref().and_then(|(_, sky)| sky.as_ref());

@@ -8,7 +8,7 @@ use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::{render, Haze, Lighting, Scattering};
+use atmo::clouds::render::{render, AerialHaze, CloudLight, Scattering};
 use atmo::clouds::transfer::{CloudDepths, TransferTable, COSINE, EYE, OUT, SLICE, SUN};
 use atmo::clouds::{Octaves, SkyLight};
 use atmo::image::Frame;
@@ -74,19 +74,19 @@ fn camera() -> Camera {
 /// Sunlight, sky light and air in front of the cloud (the GPU hazes it as the CPU).
 /// The sky is brighter above, bluer toward +x and has some of every band, so that the
 /// GPU's harmonics are held to the CPU's in every term.
-fn lighting(phase: PhaseFunction, scattering: Octaves) -> Lighting {
+fn lighting(phase: PhaseFunction, scattering: Octaves) -> CloudLight {
     let mut harmonics = [[0.0f64; 3]; 9];
     for (k, h) in harmonics.iter_mut().enumerate() {
         let scale = if k == 0 { 0.2 } else { 0.03 / k as f64 };
         *h = [scale, 1.3 * scale, 2.0 * scale];
     }
     harmonics[3][2] = 0.08;
-    Lighting {
+    CloudLight {
         to_sun: to_sun(),
         sun: Vec3::ONE,
         ambient: SkyLight::from_harmonics(&harmonics),
         phase,
-        haze: Haze {
+        haze: AerialHaze {
             transmittance: Vec3::new(0.8, 0.85, 0.9),
             inscatter: Vec3::new(0.01, 0.02, 0.04),
         },
@@ -146,7 +146,7 @@ fn the_transfer_table_draws_the_cpu_picture() {
             0.3 / (1.0 + sun as f32) + 0.05 * cosine as f32 + 0.1 * thickness as f32
         }),
     }));
-    let light = |scattering| Lighting {
+    let light = |scattering| CloudLight {
         scattering,
         ..lighting(PhaseFunction::CloudMie, Octaves::MULTIPLE)
     };
@@ -214,7 +214,7 @@ fn the_transfer_table_draws_the_cpu_picture() {
 fn the_tables_buffers_follow_the_camera_and_the_particles() {
     let Some(gpu) = gpu() else { return };
     let particles = cloud();
-    let light = Lighting {
+    let light = CloudLight {
         scattering: Scattering::MULTIPLE,
         ..lighting(PhaseFunction::CloudMie, Octaves::MULTIPLE)
     };
@@ -334,12 +334,12 @@ fn drawing_before_the_light_pass_and_oversized_buffers_are_refused() {
         (8, 8),
     )
     .unwrap();
-    let light = Lighting {
+    let light = CloudLight {
         to_sun: to_sun(),
         sun: Vec3::ONE,
         ambient: SkyLight::NONE,
         phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
+        haze: AerialHaze::CLEAR,
         scattering: Scattering::SINGLE,
     };
     let err = clouds.render(&gpu, &camera, &light, None).err().unwrap();

@@ -47,7 +47,7 @@ use glam::Vec3;
 
 use crate::atmosphere::PhaseFunction;
 use crate::clouds::buffer::{IntensityBuffer, Splat};
-use crate::clouds::render::{needs_depths, render_with_depths, Haze, Lighting, Scattering};
+use crate::clouds::render::{needs_depths, render_with_depths, AerialHaze, CloudLight, Scattering};
 use crate::clouds::shadow::{CloudShadow, Ground};
 use crate::clouds::{CloudDepths, Particle, SkyLight};
 use crate::error::Result;
@@ -155,9 +155,11 @@ impl Cloudscape {
         shadow: Option<&CloudShadow>,
         sun: Sun,
         camera: &Camera,
-    ) -> Result<(Lighting, Option<Frame>)> {
+    ) -> Result<(CloudLight, Option<Frame>)> {
         let (sunlight, ambient, haze, mut background) = match (sky, self.ambient) {
-            (None, Ambient::Rgb(rgb)) => (Vec3::ONE, SkyLight::uniform(rgb), Haze::CLEAR, None),
+            (None, Ambient::Rgb(rgb)) => {
+                (Vec3::ONE, SkyLight::uniform(rgb), AerialHaze::CLEAR, None)
+            }
             (None, Ambient::Sky) => {
                 return Err(crate::Error::Invalid(
                     "the sky's light on the cloud (ambient = sky) needs the sky".into(),
@@ -190,7 +192,7 @@ impl Cloudscape {
             let frame = background.get_or_insert_with(|| Frame::new(camera.width, camera.height));
             shadow.shade_ground(frame, camera, &ground);
         }
-        let light = Lighting {
+        let light = CloudLight {
             to_sun: sun.toward(),
             sun: sunlight,
             ambient,
@@ -252,12 +254,12 @@ impl SkyAround {
 
     /// The air between `camera` and the cloud's centre for `sun`: the aerial
     /// perspective at that distance and direction (every order the model carries).
-    fn haze(&self, sun: Sun, camera: &Camera) -> Result<Haze> {
+    fn haze(&self, sun: Sun, camera: &Camera) -> Result<AerialHaze> {
         let to_cloud = self.centre - camera.position;
         let distance = to_cloud.length() as f64;
         let light = self.at_camera.aerial_along(sun, to_cloud, &[distance])?;
         let (transmittance, inscatter) = light[0].rgb(self.at_camera.atmosphere());
-        Ok(Haze {
+        Ok(AerialHaze {
             transmittance,
             inscatter,
         })
@@ -266,7 +268,7 @@ impl SkyAround {
     /// For `sun`: the sun's irradiance at the cloud (RGB, through the atmosphere), the
     /// sky's radiance all around it (its ambient light), the air in front of the cloud,
     /// and the sky behind it as `camera` sees it.
-    fn at(&self, sun: Sun, camera: &Camera) -> Result<(Vec3, SkyLight, Haze, Frame)> {
+    fn at(&self, sun: Sun, camera: &Camera) -> Result<(Vec3, SkyLight, AerialHaze, Frame)> {
         let view = View {
             camera: camera.clone(),
             sun_disc: true,
@@ -334,7 +336,7 @@ impl CpuClouds {
         &self,
         particles: &[Particle],
         camera: &Camera,
-        light: &Lighting,
+        light: &CloudLight,
         background: Option<&Frame>,
     ) -> Result<Frame> {
         let buffer = self.buffer.as_ref().ok_or_else(|| {

@@ -48,16 +48,16 @@
 //!
 //! ```
 //! use atmo::atmosphere::PhaseFunction;
-//! use atmo::clouds::{render, Cumulus, Haze, IntensityBuffer, Lighting, Scattering, SkyLight, Splat};
+//! use atmo::clouds::{render, Cumulus, AerialHaze, IntensityBuffer, CloudLight, Scattering, SkyLight, Splat};
 //! use atmo::view::{Camera, Fov, Sun};
 //! use glam::Vec3;
 //!
 //! let particles = Cumulus { particles: 300, ..Cumulus::default() }.generate();
 //! let sun = Sun::from_degrees(30.0, 40.0)?;
 //! let buffer = IntensityBuffer::new(&particles, sun.toward(), 32, 0.0, Splat::Pieces)?;
-//! let light = Lighting { to_sun: sun.toward(), sun: Vec3::ONE,
+//! let light = CloudLight { to_sun: sun.toward(), sun: Vec3::ONE,
 //!                        ambient: SkyLight::uniform(Vec3::splat(0.05)),
-//!                        phase: PhaseFunction::CloudMie, haze: Haze::CLEAR,
+//!                        phase: PhaseFunction::CloudMie, haze: AerialHaze::CLEAR,
 //!                        scattering: Scattering::MULTIPLE };
 //! let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
 //! let camera = Camera::look_at(centre + Vec3::new(0.0, 0.0, 4000.0), centre, Vec3::Y,

@@ -327,7 +327,7 @@ fn axis_camera() -> atmo::view::Camera {
 #[test]
 fn billboards_composite_as_clouds_five_each_blob_taking_its_absorbed_share() {
     use atmo::atmosphere::PhaseFunction;
-    use atmo::clouds::render::{render, Haze, Lighting};
+    use atmo::clouds::render::{render, AerialHaze, CloudLight};
     use atmo::image::Frame;
     // Two particles on the camera's axis, the pixel at the image centre looking through
     // both; only ambient light, so each source is a (1 - e^-tau) ambient (clouds (6)'s
@@ -343,12 +343,12 @@ fn billboards_composite_as_clouds_five_each_blob_taking_its_absorbed_share() {
     // The same sky from everywhere: what a droplet scatters of it is the same
     // whichever way it is seen.
     let sky = Vec3::new(1.0, 0.5, 0.25);
-    let light = Lighting {
+    let light = CloudLight {
         to_sun: Vec3::Y,
         sun: Vec3::ZERO,
         ambient: atmo::clouds::SkyLight::uniform(sky),
         phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
+        haze: AerialHaze::CLEAR,
         scattering: atmo::clouds::Scattering::SINGLE,
     };
     let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.5, Splat::Pieces).unwrap();
@@ -383,17 +383,17 @@ fn billboards_composite_as_clouds_five_each_blob_taking_its_absorbed_share() {
 #[test]
 fn billboards_drawn_eight_pixels_at_a_time_keep_each_pixel_its_own() {
     use atmo::atmosphere::PhaseFunction;
-    use atmo::clouds::render::{render, Haze, Lighting};
+    use atmo::clouds::render::{render, AerialHaze, CloudLight};
     let camera = axis_camera();
     // The sun straight above: the light is symmetric about the vertical plane x = 0,
     // to the buffer's rounding (the rim's faint pixels differ by up to 15 % of
     // themselves, a millionth of the brightest, with the pixels drawn one at a time).
-    let light = Lighting {
+    let light = CloudLight {
         to_sun: Vec3::Y,
         sun: Vec3::ONE,
         ambient: atmo::clouds::SkyLight::NONE,
         phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
+        haze: AerialHaze::CLEAR,
         scattering: atmo::clouds::Scattering::MULTIPLE,
     };
     let draw = |x: f32| {
@@ -439,7 +439,7 @@ fn billboards_drawn_eight_pixels_at_a_time_keep_each_pixel_its_own() {
 #[test]
 fn a_billboard_lights_every_pixel_within_its_reach_and_no_other() {
     use atmo::atmosphere::PhaseFunction;
-    use atmo::clouds::render::{render, Haze, Lighting};
+    use atmo::clouds::render::{render, AerialHaze, CloudLight};
     use atmo::view::{Camera, Lens};
     // 113 deg across, 90 deg high.
     let camera = Camera {
@@ -451,12 +451,12 @@ fn a_billboard_lights_every_pixel_within_its_reach_and_no_other() {
         height: 64,
         ..axis_camera()
     };
-    let light = Lighting {
+    let light = CloudLight {
         to_sun: Vec3::Y,
         sun: Vec3::ZERO,
         ambient: atmo::clouds::SkyLight::uniform(Vec3::ONE),
         phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
+        haze: AerialHaze::CLEAR,
         scattering: atmo::clouds::Scattering::SINGLE,
     };
     // Near the corner and the top, large; and small ones, a few pixels across, placed
@@ -510,7 +510,7 @@ fn a_billboard_lights_every_pixel_within_its_reach_and_no_other() {
 fn depths_given_to_the_drawing_are_one_per_particle_where_they_are_read() {
     use atmo::atmosphere::PhaseFunction;
     use atmo::clouds::render::{
-        dims_the_sky, needs_depths, render, render_with_depths, Haze, Lighting, Scattering,
+        dims_the_sky, needs_depths, render, render_with_depths, AerialHaze, CloudLight, Scattering,
     };
     use atmo::clouds::{CloudDepths, Octaves, SkyLight};
     let particles = cloud(60);
@@ -527,12 +527,12 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_they_are_read() {
     let mut sh = [[0.0; 3]; 9];
     sh[0] = [1.0; 3];
     sh[1] = [0.8; 3];
-    let light = Lighting {
+    let light = CloudLight {
         to_sun: Vec3::Y,
         sun: Vec3::ONE,
         ambient: SkyLight::from_harmonics(&sh),
         phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
+        haze: AerialHaze::CLEAR,
         scattering: Scattering::MULTIPLE,
     };
     assert!(dims_the_sky(&light));
@@ -567,13 +567,13 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_they_are_read() {
         assert!(message.contains(counted), "{message}");
     }
     // A sky alike all round is not dimmed: the table alone reads the depths out.
-    let flat = Lighting {
+    let flat = CloudLight {
         ambient: SkyLight::uniform(Vec3::ONE),
         ..light
     };
     assert!(!dims_the_sky(&flat) && needs_depths(&flat));
     render_with_depths(&particles, &short(0, 60), &buffer, &camera, &flat, None).unwrap();
-    let octaves = Lighting {
+    let octaves = CloudLight {
         scattering: Scattering::Octaves(Octaves::MULTIPLE),
         ..flat
     };

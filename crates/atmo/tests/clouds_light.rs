@@ -5,7 +5,7 @@
 
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
-use atmo::clouds::render::{render, Haze, Lighting};
+use atmo::clouds::render::{render, AerialHaze, CloudLight};
 use atmo::clouds::{CloudShadow, Cumulus, Octaves, Particle, Scattering, SkyLight};
 use atmo::image::Frame;
 use atmo::reference::clouds::{Agreement, PathSettings, ReferenceCloud, ReferenceLight};
@@ -71,12 +71,12 @@ fn reference(particles: &[Particle], to_sun: Vec3) -> ReferenceCloud<'_> {
 /// transmittance, unit sunlight, no ambient light.
 fn fast(particles: &[Particle], camera: &Camera, to_sun: Vec3, scattering: Scattering) -> Vec<f64> {
     let buffer = IntensityBuffer::new(particles, to_sun, 128, 0.0, Splat::Pieces).unwrap();
-    let light = Lighting {
+    let light = CloudLight {
         to_sun,
         sun: Vec3::ONE,
         ambient: SkyLight::NONE,
         phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
+        haze: AerialHaze::CLEAR,
         scattering,
     };
     let frame = render(particles, &buffer, camera, &light, None).unwrap();
@@ -331,12 +331,12 @@ fn the_sky_light_matches_the_path_tracer_in_the_mean() {
         let (lit, dark) = (traced(1.0), traced(0.0));
         let sky: Vec<f64> = lit.iter().zip(&dark).map(|(a, b)| a.0 - b.0).collect();
         let billboards = |ambient: SkyLight| -> Vec<f64> {
-            let light = Lighting {
+            let light = CloudLight {
                 to_sun,
                 sun: Vec3::ZERO,
                 ambient,
                 phase: PhaseFunction::CloudMie,
-                haze: Haze::CLEAR,
+                haze: AerialHaze::CLEAR,
                 scattering: Scattering::MULTIPLE,
             };
             let frame = render(&particles, &buffer, &camera, &light, None).unwrap();

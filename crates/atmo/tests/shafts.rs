@@ -134,7 +134,7 @@ fn the_example_scenes_load_with_their_gobo_and_mesh() {
     let rows: Vec<usize> = photometric
         .lights
         .iter()
-        .map(|l| l.light_map.rows)
+        .map(|l| l.intensity_map.rows)
         .collect();
     assert_eq!(rows, [1, 144, 1]);
     // The PAR (EULUMDAT): 900 cd/klm of a 1,500 lm lamp on the axis, dimmed to 0.8.
@@ -349,7 +349,7 @@ fn a_measured_profile_holds_to_the_reference_as_a_drawn_beam_does() {
             "dimmer = 0.2\nup = [0.0, 1.0, 1.0]\nprofile = { ies = \"photometry/oval-wash.ies\" }",
         );
     let scene = parse(&text).unwrap();
-    assert_eq!(scene.lights[0].light_map.rows, 144);
+    assert_eq!(scene.lights[0].intensity_map.rows, 144);
     let fast = SamplePlanes::new(&scene).render();
     let reference = RayMarcher::CONVERGED.render(&scene);
     assert_physical(&fast);

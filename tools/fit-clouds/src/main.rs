@@ -38,8 +38,8 @@ use std::path::Path;
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::transfer::{self, CloudDepths, TransferTable};
 use atmo::clouds::{
-    render_with_depths, Cumulus, Haze, IntensityBuffer, Lighting, Octaves, Scattering, SkyLight,
-    Splat,
+    render_with_depths, AerialHaze, CloudLight, Cumulus, IntensityBuffer, Octaves, Scattering,
+    SkyLight, Splat,
 };
 use atmo::reference::clouds::{Agreement, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
@@ -108,12 +108,12 @@ impl View {
     /// The cloud drawn by the billboards with `octaves`, the red channel (the sun is
     /// white).
     fn rendered(&self, scattering: Scattering) -> atmo::error::Result<Vec<f64>> {
-        let light = Lighting {
+        let light = CloudLight {
             to_sun: self.to_sun,
             sun: Vec3::ONE,
             ambient: SkyLight::NONE,
             phase: PhaseFunction::CloudMie,
-            haze: Haze::CLEAR,
+            haze: AerialHaze::CLEAR,
             scattering,
         };
         let frame = render_with_depths(

@@ -10,7 +10,7 @@ use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::{Cumulus, SplitMix64};
 use atmo::clouds::harris::light_per_particle;
-use atmo::clouds::render::{render_with_depths, Haze, Lighting};
+use atmo::clouds::render::{render_with_depths, AerialHaze, CloudLight};
 use atmo::clouds::{CloudDepths, CloudShadow, Octaves, Scattering, SkyLight};
 use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::clouds::{
@@ -251,7 +251,7 @@ fn timed_render(
     depths: &CloudDepths,
     buffer: &IntensityBuffer,
     camera: &Camera,
-    light: &Lighting,
+    light: &CloudLight,
     runs: usize,
 ) -> (f64, Frame) {
     let mut frame = Frame::new(1, 1);
@@ -269,13 +269,13 @@ fn timed_render(
 }
 
 /// The benches' light: unit sunlight from `to_sun`, `scattering`, no ambient light.
-fn lighting(to_sun: Vec3, scattering: Scattering) -> Lighting {
-    Lighting {
+fn lighting(to_sun: Vec3, scattering: Scattering) -> CloudLight {
+    CloudLight {
         to_sun,
         sun: Vec3::ONE,
         ambient: SkyLight::NONE,
         phase: PhaseFunction::CloudMie,
-        haze: Haze::CLEAR,
+        haze: AerialHaze::CLEAR,
         scattering,
     }
 }

@@ -17,7 +17,7 @@ use std::cell::{Cell, RefCell};
 
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::Lighting;
+use atmo::clouds::render::CloudLight;
 use atmo::clouds::shadow::CloudShadow;
 use atmo::clouds::sky_light::{SkyDimming, VERTICAL_RESOLUTION};
 use atmo::clouds::transfer::{CloudDepths, TransferTable};
@@ -479,7 +479,7 @@ impl GpuClouds {
         &self,
         gpu: &Gpu,
         camera: &Camera,
-        light: &Lighting,
+        light: &CloudLight,
         background: Option<&Frame>,
     ) -> Result<Rendered, GpuError> {
         let (w, h) = (camera.width, camera.height);
@@ -519,7 +519,7 @@ impl GpuClouds {
         encoder: &mut wgpu::CommandEncoder,
         pass: &mut CloudsPass,
         camera: &Camera,
-        light: &Lighting,
+        light: &CloudLight,
     ) -> Result<(), GpuError> {
         light.scattering.validate()?;
         let dimming = light.ambient.dimming(&light.scattering.octaves());
@@ -599,7 +599,7 @@ impl GpuClouds {
         &self,
         gpu: &Gpu,
         camera: &Camera,
-        light: &Lighting,
+        light: &CloudLight,
         dimming: &SkyDimming,
     ) -> Result<Billboards, GpuError> {
         let frame = self.frame.ok_or_else(|| {

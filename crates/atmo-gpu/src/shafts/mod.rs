@@ -13,7 +13,7 @@
 
 use atmo::geometry::Shape;
 use atmo::shafts::spotlight::{Falloff, Profile, Sampling};
-use atmo::shafts::tables::{AttenuationTable, LightMap, PhaseTable};
+use atmo::shafts::tables::{AttenuationTable, IntensityMap, PhaseTable};
 use atmo::shafts::Scene;
 use glam::Vec3;
 
@@ -286,7 +286,7 @@ impl GpuShafts {
             nodes_at: geometry.nodes_at,
             triangles_at: geometry.triangles_at,
             phase_size: PhaseTable::SIZE as u32,
-            light_map_size: LightMap::SIZE as u32,
+            light_map_size: IntensityMap::SIZE as u32,
             attenuation_size: AttenuationTable::SIZE as u32,
             pad0: 0,
             pad1: 0,
@@ -309,19 +309,19 @@ impl GpuShafts {
         let mut maps: Vec<f32> = scene
             .lights
             .iter()
-            .flat_map(|l| l.light_map.values.iter().copied())
+            .flat_map(|l| l.intensity_map.values.iter().copied())
             .collect();
         if maps.is_empty() {
-            maps = vec![0.0; LightMap::SIZE];
+            maps = vec![0.0; IntensityMap::SIZE];
         }
-        let map_rows = (maps.len() / LightMap::SIZE) as u32;
+        let map_rows = (maps.len() / IntensityMap::SIZE) as u32;
         gpu.check_texture_side(
             "the lights' maps (rows)",
             map_rows,
             "the number of lights with measured profiles that are not rotationally symmetric",
         )?;
         let map_texture =
-            gpu.float_texture("the light maps", &maps, LightMap::SIZE as u32, map_rows);
+            gpu.float_texture("the light maps", &maps, IntensityMap::SIZE as u32, map_rows);
         let target = gpu.texture_2d(
             "the planes",
             (w, h),
@@ -700,7 +700,7 @@ impl Geometry {
                         (sampling, at, w as u32, h as u32)
                     }
                 };
-                let map = &light.light_map;
+                let map = &light.intensity_map;
                 let m = light.light_from_world;
                 let (beam_half, falloff) = match &light.profile {
                     Profile::Beam {

@@ -26,7 +26,7 @@ pub use generator::Cumulus;
 pub use octaves::Octaves;
 pub use particles::Particle;
 pub use render::{
-    dims_the_sky, needs_depths, render, render_with_depths, Haze, Lighting, Scattering,
+    dims_the_sky, needs_depths, render, render_with_depths, AerialHaze, CloudLight, Scattering,
 };
 pub use shadow::CloudShadow;
 pub use sky_light::{vertical_depths, SkyDimming, SkyLight};

@@ -48,7 +48,7 @@ use crate::view::Camera;
 
 /// How the cloud is lit.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Lighting {
+pub struct CloudLight {
     /// Unit vector toward the sun.
     pub to_sun: Vec3,
     /// Sunlight arriving at the cloud, RGB (irradiance in any units: pixels come out in
@@ -65,7 +65,7 @@ pub struct Lighting {
     /// Single scattering, or every order.
     pub scattering: Scattering,
     /// The air between the eye and the cloud.
-    pub haze: Haze,
+    pub haze: AerialHaze,
 }
 
 /// How the sun's light scattered more than once is drawn.
@@ -122,14 +122,14 @@ impl Scattering {
 /// light reaches the eye times `transmittance`, and the air in front of it adds
 /// `inscatter` where the cloud hides what is behind (RGB).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Haze {
+pub struct AerialHaze {
     pub transmittance: Vec3,
     pub inscatter: Vec3,
 }
 
-impl Haze {
+impl AerialHaze {
     /// No air between the eye and the cloud.
-    pub const CLEAR: Haze = Haze {
+    pub const CLEAR: AerialHaze = AerialHaze {
         transmittance: Vec3::ONE,
         inscatter: Vec3::ZERO,
     };
@@ -147,7 +147,7 @@ pub fn render(
     particles: &[Particle],
     buffer: &IntensityBuffer,
     camera: &Camera,
-    light: &Lighting,
+    light: &CloudLight,
     background: Option<&Frame>,
 ) -> Result<Frame> {
     let depths = if needs_depths(light) {
@@ -160,14 +160,14 @@ pub fn render(
 
 /// Whether `light` dims the sky's light inside the cloud, and so needs the particles'
 /// depths down the vertical ([`CloudDepths::vertical`]).
-pub fn dims_the_sky(light: &Lighting) -> bool {
+pub fn dims_the_sky(light: &CloudLight) -> bool {
     !light.ambient.dimming(&light.scattering.octaves()).is_flat()
 }
 
 /// Whether drawing with `light` reads the particles' [`CloudDepths`]: where the sky's
 /// light is dimmed inside the cloud ([`dims_the_sky`]) or a transfer table draws the
 /// orders past the first (its `tau_out`).
-pub fn needs_depths(light: &Lighting) -> bool {
+pub fn needs_depths(light: &CloudLight) -> bool {
     dims_the_sky(light) || light.scattering.table().is_some()
 }
 
@@ -180,7 +180,7 @@ pub fn render_with_depths(
     depths: &CloudDepths,
     buffer: &IntensityBuffer,
     camera: &Camera,
-    light: &Lighting,
+    light: &CloudLight,
     background: Option<&Frame>,
 ) -> Result<Frame> {
     let (w, h) = (camera.width as usize, camera.height as usize);

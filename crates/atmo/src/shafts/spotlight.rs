@@ -15,7 +15,7 @@ use std::sync::Arc;
 use glam::{DVec3, Mat3, Vec3};
 
 use super::photometry::Photometry;
-use super::tables::LightMap;
+use super::tables::IntensityMap;
 use crate::fast::fast_atan;
 
 /// How the intensity falls from full at the beam edge to zero at the field edge.
@@ -218,7 +218,7 @@ pub struct Spotlight {
     /// Projected pattern, if any.
     pub gobo: Option<Gobo>,
     /// The profile tabulated for the plane method (built once with the light).
-    pub light_map: LightMap,
+    pub intensity_map: IntensityMap,
     /// `tan(field / 2)`.
     tan_field: f32,
     /// `tan(beam / 2)` (0 for a measured profile: no region of constant intensity).
@@ -252,12 +252,12 @@ impl Spotlight {
             field_half,
             profile,
             gobo,
-            light_map: LightMap::empty(),
+            intensity_map: IntensityMap::empty(),
             tan_field: field_half.tan(),
             tan_beam,
             inv_peak,
         };
-        light.light_map = LightMap::new(&light);
+        light.intensity_map = IntensityMap::new(&light);
         light
     }
 
@@ -301,7 +301,7 @@ impl Spotlight {
     }
 
     /// The profile at `(u, v)`, exactly (the plane method looks up
-    /// [`Spotlight::light_map`] instead): for a beam 1 inside it, 0 outside the field,
+    /// [`Spotlight::intensity_map`] instead): for a beam 1 inside it, 0 outside the field,
     /// the falloff between; for a measured profile the file's candela over its peak at
     /// the direction's vertical angle and half-plane, 0 outside the field.
     #[inline(always)]

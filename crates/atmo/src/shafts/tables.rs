@@ -58,16 +58,17 @@ fn lerp_1d(values: &[f32], x: f32) -> f32 {
     values[i] + f * (values[i + 1] - values[i])
 }
 
-/// A spotlight's profile as the paper's light map (shafts 4.1), tabulated over
-/// `q = u^2 + v^2` in [0, 1] (the square of the off-axis tangent over the field's) and,
+/// A spotlight's profile as the paper's light map (shafts 4.1; named `IntensityMap`
+/// here, as the sky's light map is another thing), tabulated over `q = u^2 + v^2` in
+/// [0, 1] (the square of the off-axis tangent over the field's) and,
 /// for a measured profile that is not rotationally symmetric, over the half-plane
 /// angle `C`: looked up at every sub-sample where the exact profile needs square roots
 /// and arc-tangents (and for a measured one a search through the file's angles). A
 /// beam's table starts at its edge (inside it the profile is 1); a measured one's at
 /// the axis. The gobo, if any, stays an image.
 #[derive(Debug, Clone, PartialEq)]
-pub struct LightMap {
-    /// `rows` rows of [`LightMap::SIZE`] entries: row `r` is the half-plane at
+pub struct IntensityMap {
+    /// `rows` rows of [`IntensityMap::SIZE`] entries: row `r` is the half-plane at
     /// `C = 360 r / rows` degrees, entry `k` the profile at `q = q_beam + k / scale`.
     pub values: Arc<[f32]>,
     /// Rows: 1 for a profile the same in every half-plane.
@@ -78,7 +79,7 @@ pub struct LightMap {
     pub scale: f32,
 }
 
-impl LightMap {
+impl IntensityMap {
     /// Entries along `q` in each row.
     pub const SIZE: usize = 1024;
 
@@ -87,8 +88,8 @@ impl LightMap {
     pub const MEASURED_ROWS: usize = 144;
 
     /// A table of nothing, for a light's map before it is built.
-    pub(crate) fn empty() -> LightMap {
-        LightMap {
+    pub(crate) fn empty() -> IntensityMap {
+        IntensityMap {
             values: Arc::new([]),
             rows: 0,
             q_beam: 0.0,
@@ -97,7 +98,7 @@ impl LightMap {
     }
 
     /// The table of `light`'s profile ([`Spotlight::profile_at`]).
-    pub fn new(light: &Spotlight) -> LightMap {
+    pub fn new(light: &Spotlight) -> IntensityMap {
         let (q_beam, rows) = match &light.profile {
             Profile::Beam { .. } => {
                 let ratio = light.tan_beam() / light.tan_field();
@@ -115,7 +116,7 @@ impl LightMap {
                 light.profile_at(q.sqrt() * c.cos(), q.sqrt() * c.sin())
             })
             .collect();
-        LightMap {
+        IntensityMap {
             values,
             rows,
             q_beam,
@@ -206,7 +207,7 @@ mod tests {
     use crate::atmosphere::phase::PhaseFunction;
 
     #[test]
-    fn the_light_map_matches_the_exact_profile() {
+    fn the_intensity_map_matches_the_exact_profile() {
         use crate::shafts::spotlight::{light_frame, Falloff};
         for falloff in [Falloff::Linear, Falloff::Smooth] {
             let light = Spotlight::new(
@@ -220,7 +221,7 @@ mod tests {
                 },
                 None,
             );
-            let map = &light.light_map;
+            let map = &light.intensity_map;
             for k in 0..=2000 {
                 let r = k as f32 / 1900.0;
                 let want = light.profile_at(r, 0.0);
@@ -234,7 +235,7 @@ mod tests {
     }
 
     #[test]
-    fn a_measured_light_map_matches_the_exact_profile_in_every_half_plane() {
+    fn a_measured_intensity_map_matches_the_exact_profile_in_every_half_plane() {
         use crate::shafts::photometry::Photometry;
         use crate::shafts::spotlight::light_frame;
         // An oval: 30 degrees wide along C = 0, 15 along C = 90, planes 10 degrees apart
@@ -265,8 +266,8 @@ mod tests {
             Profile::Measured(Arc::new(photometry)),
             None,
         );
-        let map = &light.light_map;
-        assert_eq!(map.rows, LightMap::MEASURED_ROWS);
+        let map = &light.intensity_map;
+        assert_eq!(map.rows, IntensityMap::MEASURED_ROWS);
         // The profile peaks at 1 on the axis; 10 degrees off it (tan 0.176) it is
         // lower along C = 90 than along C = 0.
         let t = 10f32.to_radians().tan() / light.tan_field();

@@ -198,8 +198,8 @@ impl Lookups {
     pub(super) fn weight(self, light: &Spotlight, shadow: &ShadowMap, [u, v, z]: [f32; 3]) -> f32 {
         match self {
             Lookups::None | Lookups::Core => 1.0,
-            Lookups::Profile => light.light_map.get(u, v),
-            Lookups::Both => shadow.lit_at(u, v, z) as u8 as f32 * light.light_map.get(u, v),
+            Lookups::Profile => light.intensity_map.get(u, v),
+            Lookups::Both => shadow.lit_at(u, v, z) as u8 as f32 * light.intensity_map.get(u, v),
         }
     }
 
@@ -240,7 +240,7 @@ impl Lookups {
         let (lo, hi) = (lo.map(|x| margin(x, -1.0)), hi.map(|x| margin(x, 1.0)));
         match shadow.region(lo, hi) {
             Stretch::Dark => Lookups::None,
-            Stretch::Lit if margin(q_max, 1.0) < light.light_map.q_beam => Lookups::Core,
+            Stretch::Lit if margin(q_max, 1.0) < light.intensity_map.q_beam => Lookups::Core,
             Stretch::Lit => Lookups::Profile,
             Stretch::Mixed => Lookups::Both,
         }

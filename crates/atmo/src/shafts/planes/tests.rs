@@ -160,7 +160,7 @@ fn lookups_left_out_are_those_that_would_give_the_values_assumed() {
                             }
                             let [u, v, z] = lanes.project(l, k);
                             let lit = planes.shadow.lit_at(u, v, z);
-                            let profile = light.light_map.get(u, v);
+                            let profile = light.intensity_map.get(u, v);
                             let fine = match lookups {
                                 Lookups::None => !lit,
                                 Lookups::Core => lit && profile == 1.0,

@@ -273,7 +273,7 @@ impl SkylightMap {
 /// serves), the light map of sunlight and the scattered light of the higher orders
 /// arriving at the shells. One serves the [`SkyModel`]s of many altitudes (a skylight
 /// table's), which then only add their view rays.
-pub struct SkyLight {
+pub struct ShellLight {
     atmosphere: Atmosphere,
     settings: SkySettings,
     transmittance: Arc<TransmittanceTable>,
@@ -286,7 +286,7 @@ pub struct SkyLight {
     orders: u32,
 }
 
-impl SkyLight {
+impl ShellLight {
     /// The light for viewpoints at `altitudes_m` (each in [0, top)), with a given
     /// transmittance table.
     pub fn new(
@@ -314,7 +314,7 @@ impl SkyLight {
         } else {
             (None, 1)
         };
-        Ok(SkyLight {
+        Ok(ShellLight {
             atmosphere: atmosphere.clone(),
             settings: settings.clone(),
             transmittance,
@@ -328,7 +328,7 @@ impl SkyLight {
 
 /// Everything about the sky at one viewpoint altitude that does not depend on the sun.
 pub struct SkyModel {
-    light: Arc<SkyLight>,
+    light: Arc<ShellLight>,
     altitude_m: f64,
     /// The shell through the viewpoint.
     viewpoint: usize,
@@ -360,13 +360,13 @@ impl SkyModel {
         altitude_m: f64,
         min_elevation: f64,
     ) -> Result<Self> {
-        let light = SkyLight::new(atmosphere, transmittance, settings, &[altitude_m])?;
+        let light = ShellLight::new(atmosphere, transmittance, settings, &[altitude_m])?;
         Self::with_light(Arc::new(light), altitude_m, min_elevation)
     }
 
     /// The model at `altitude_m`, one of `light`'s viewpoints, with a skylight grid
     /// starting at `min_elevation` rad.
-    pub fn with_light(light: Arc<SkyLight>, altitude_m: f64, min_elevation: f64) -> Result<Self> {
+    pub fn with_light(light: Arc<ShellLight>, altitude_m: f64, min_elevation: f64) -> Result<Self> {
         let atmosphere = &light.atmosphere;
         let shells = &light.shells;
         let viewpoint = shells.index_of(atmosphere, altitude_m).ok_or_else(|| {
@@ -422,7 +422,7 @@ impl SkyModel {
     }
 
     /// The light the model reads, shared with other altitudes' models.
-    pub fn light(&self) -> &Arc<SkyLight> {
+    pub fn light(&self) -> &Arc<ShellLight> {
         &self.light
     }
 

@@ -35,7 +35,7 @@ pub use error_bound::ErrorBound;
 pub use factors::TableFactors;
 
 use super::grid::DirectionGrid;
-use super::{SkyLight, SkyModel, SkySettings};
+use super::{ShellLight, SkyModel, SkySettings};
 use crate::atmosphere::geometry::horizon_dip;
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::{Atmosphere, TransmittanceTable};
@@ -212,7 +212,7 @@ impl SkylightTable {
         // The light at the shells once, with a shell through every altitude: the
         // altitudes' models share it (the higher orders would cost seconds each).
         let altitudes: Vec<f64> = (0..altitude.count()).map(|a| altitude.value(a)).collect();
-        let light = Arc::new(SkyLight::new(
+        let light = Arc::new(ShellLight::new(
             atmosphere,
             transmittance,
             &settings.sky,
@@ -348,12 +348,12 @@ impl SkylightTable {
 
     /// The light of the shell method with the table's shells (one through each of its
     /// altitudes) and one through each of `extra_altitudes_m`.
-    fn direct_light(&self, extra_altitudes_m: &[f64]) -> Result<Arc<SkyLight>> {
+    fn direct_light(&self, extra_altitudes_m: &[f64]) -> Result<Arc<ShellLight>> {
         let axis = self.settings.altitude_axis();
         let mut altitudes: Vec<f64> = (0..axis.count()).map(|a| axis.value(a)).collect();
         altitudes.extend_from_slice(extra_altitudes_m);
         let transmittance = Arc::new(TransmittanceTable::new(&self.atmosphere));
-        Ok(Arc::new(SkyLight::new(
+        Ok(Arc::new(ShellLight::new(
             &self.atmosphere,
             transmittance,
             &self.settings.sky,
@@ -423,7 +423,7 @@ impl SkylightTable {
 fn shared_model(
     atmosphere: &Atmosphere,
     settings: &TableSettings,
-    light: Arc<SkyLight>,
+    light: Arc<ShellLight>,
     altitude_m: f64,
 ) -> Result<SkyModel> {
     let min_elevation = direction_grid(atmosphere, settings, altitude_m).elevation_min;
