@@ -97,6 +97,22 @@ const FILES: &[(&str, &str)] = &[
         include_str!("../shaders/shafts_common.wgsl"),
     ),
     (
+        "shafts_objects.wgsl",
+        include_str!("../shaders/shafts_objects.wgsl"),
+    ),
+    (
+        "shafts_spotlight.wgsl",
+        include_str!("../shaders/shafts_spotlight.wgsl"),
+    ),
+    (
+        "shafts_tables.wgsl",
+        include_str!("../shaders/shafts_tables.wgsl"),
+    ),
+    (
+        "shafts_sampling.wgsl",
+        include_str!("../shaders/shafts_sampling.wgsl"),
+    ),
+    (
         "shafts_writable.wgsl",
         include_str!("../shaders/shafts_writable.wgsl"),
     ),

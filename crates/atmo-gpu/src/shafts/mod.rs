@@ -23,6 +23,11 @@ use crate::wgsl::{
 };
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
+/// The WGSL every shafts pass shares, after its bindings' file (writable or readable)
+/// and before its own.
+pub const COMMON: &str =
+    "shafts_common.wgsl shafts_objects.wgsl shafts_spotlight.wgsl shafts_tables.wgsl shafts_sampling.wgsl";
+
 mod renderer;
 
 pub use renderer::{Drawn, ShaftsRenderer};
@@ -140,19 +145,15 @@ impl ShaftsPipelines {
             });
         // Compute passes see the working buffers writable, the planes' render pass
         // read-only: the same declarations in two files (see shafts_common.wgsl).
-        let module = |pass: &str| {
-            wgsl::module(
-                gpu,
-                &format!("shafts_writable.wgsl shafts_common.wgsl {pass}"),
-            )
-        };
+        let module =
+            |pass: &str| wgsl::module(gpu, &format!("shafts_writable.wgsl {COMMON} {pass}"));
         let shadow = module("shafts_shadow.wgsl")?;
         let prepare = module("shafts_prepare.wgsl")?;
         let surface = module("shafts_surface.wgsl")?;
         let compute = module("shafts_compute.wgsl")?;
         let planes = wgsl::module(
             gpu,
-            "shafts_readable.wgsl shafts_common.wgsl shafts_planes.wgsl",
+            &format!("shafts_readable.wgsl {COMMON} shafts_planes.wgsl"),
         )?;
         let composite = wgsl::module(gpu, "shafts_composite.wgsl")?;
         let with = Some(&compute_pipeline_layout);
