@@ -245,7 +245,7 @@ fn the_shell_method_maps_equal_the_cpu_maps() {
         (&paper, 1, 500.0, 60.0),
     ] {
         let model = model(atmosphere, order, altitude);
-        let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+        let colour = SpectrumToRgb::for_atmosphere(atmosphere);
         let sky = GpuSkyModel::new(&gpu, &model).unwrap();
         let sun = sun_deg.to_radians();
         let [sky_map, ground_map] = sky.maps(&gpu, sun).unwrap();

@@ -279,7 +279,7 @@ fn aerial(model: &SkyModel, quick: bool, json: bool) -> Result<()> {
             .collect(),
     );
     let froxels = rays.froxels(model, sun(0), &camera);
-    let colour = atmo::atmosphere::spectrum::SpectrumToRgb::new(&model.atmosphere().wavelengths_nm);
+    let colour = atmo::atmosphere::spectrum::SpectrumToRgb::for_atmosphere(model.atmosphere());
     let basis = camera.pixel_basis();
     let columns: Vec<(u32, u32)> = (0..16).map(|k| ((k * 7) % size, (k * 13) % size)).collect();
     let start = Instant::now();

@@ -139,7 +139,7 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
             )
         };
         let module = wgsl::module(gpu, "sky_shells.wgsl")?;
-        let to_rgb = SpectrumToRgb::new(&model.borrow().atmosphere().wavelengths_nm);
+        let to_rgb = SpectrumToRgb::for_atmosphere(model.borrow().atmosphere());
         Ok(GpuSkyModel {
             to_rgb,
             model,

@@ -21,8 +21,12 @@ pub use phase::PhaseFunction;
 pub const CONSTITUENTS: usize = 3;
 
 /// Names and TOML texts of the embedded presets; the first is the default.
-const PRESETS: [(&str, &str); 2] = [
+const PRESETS: [(&str, &str); 3] = [
     ("earth", include_str!("../../presets/earth.toml")),
+    (
+        "earth-spectral",
+        include_str!("../../presets/earth-spectral.toml"),
+    ),
     ("paper", include_str!("../../presets/paper.toml")),
 ];
 
@@ -95,6 +99,18 @@ struct AtmosphereSpec {
     rayleigh: SpeciesSpec,
     mie: SpeciesSpec,
     ozone: Option<OzoneSpec>,
+    #[serde(default)]
+    colour: Option<ColourSpec>,
+}
+
+/// A fitted map from the sampled spectrum to CIE XYZ, one weight a wavelength for each
+/// of X, Y and Z (see [`Atmosphere::colour`]).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ColourSpec {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    z: Vec<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -259,6 +275,11 @@ pub struct Atmosphere {
     pub mie: Species,
     /// Ozone, absorbing only; `None` when absent. See [`Atmosphere::absorbing_ozone`].
     pub ozone: Option<OzoneLayer>,
+    /// Where given (`[colour]`), the weights that take the radiance at
+    /// [`Atmosphere::wavelengths_nm`] to CIE XYZ (X, Y, Z rows), fitted to the same
+    /// atmosphere sampled at many wavelengths; else the spectrum is taken as piecewise
+    /// linear between the samples ([`spectrum::SpectrumToRgb::for_atmosphere`]).
+    pub colour: Option<[Vec<f64>; 3]>,
 }
 
 impl Atmosphere {
@@ -407,7 +428,22 @@ impl Atmosphere {
                 s.mie.single_scattering_albedo,
             )?),
         };
+        let colour = match s.colour {
+            None => None,
+            Some(c) => {
+                for (name, row) in [("colour.x", &c.x), ("colour.y", &c.y), ("colour.z", &c.z)] {
+                    if row.len() != s.wavelengths_nm.len() || row.iter().any(|w| !w.is_finite()) {
+                        return Err(Error::Invalid(format!(
+                            "{name} must hold one finite weight for each of the {} wavelengths",
+                            s.wavelengths_nm.len()
+                        )));
+                    }
+                }
+                Some([c.x, c.y, c.z])
+            }
+        };
         Ok(Atmosphere {
+            colour,
             rayleigh,
             mie: species("mie", &s.mie, from_visibility)?,
             name: s.name,
@@ -459,6 +495,10 @@ impl Atmosphere {
             let _ = writeln!(t, "absorption_per_m = {}", list(&o.absorption_per_m));
             let _ = writeln!(t, "center_altitude_m = {:?}", o.center_altitude_m);
             let _ = writeln!(t, "half_width_m = {:?}", o.half_width_m);
+        }
+        if let Some([x, y, z]) = &self.colour {
+            let _ = writeln!(t, "\n[colour]");
+            let _ = writeln!(t, "x = {}\ny = {}\nz = {}", list(x), list(y), list(z));
         }
         t
     }

@@ -101,6 +101,26 @@ impl SpectrumToRgb {
         SpectrumToRgb { weights }
     }
 
+    /// The map for `atmosphere`'s spectrum: its fitted weights to XYZ where it has them
+    /// ([`crate::Atmosphere::colour`]), else the piecewise-linear spectrum of
+    /// [`SpectrumToRgb::new`].
+    pub fn for_atmosphere(atmosphere: &crate::Atmosphere) -> Self {
+        match &atmosphere.colour {
+            None => SpectrumToRgb::new(&atmosphere.wavelengths_nm),
+            Some(xyz) => {
+                let n = atmosphere.wavelengths_nm.len();
+                let weights = std::array::from_fn(|rgb| {
+                    (0..n)
+                        .map(|i| {
+                            (0..3).map(|c| XYZ_TO_SRGB[rgb][c] * xyz[c][i]).sum::<f64>() as f32
+                        })
+                        .collect()
+                });
+                SpectrumToRgb { weights }
+            }
+        }
+    }
+
     /// Linear sRGB of the spectrum `radiance` (one value a wavelength).
     #[inline]
     pub fn rgb(&self, radiance: &[f32]) -> [f32; 3] {

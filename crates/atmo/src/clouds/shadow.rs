@@ -233,7 +233,7 @@ impl Ground {
         let h = eye_altitude_m.max(1.0);
         let r = atmosphere.bottom_radius_m;
         let vertical = column_densities(atmosphere, r, 1.0, 0.0, h, 8);
-        let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+        let colour = SpectrumToRgb::for_atmosphere(atmosphere);
         let distances = Ground::distances_m();
         let sunlit = std::array::from_fn(|k| {
             let slant = distances[k] as f64 / h;
@@ -403,7 +403,7 @@ mod tests {
         let ground = Ground::seen_through(&atmosphere, h, sun);
         let near = ground.sunlit_at(10.0);
         let e = atmosphere.direct_sunlight(0.0, sun.elevation());
-        let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+        let colour = SpectrumToRgb::for_atmosphere(&atmosphere);
         let reflected = (atmosphere.ground_albedo / std::f64::consts::PI * 0.5) as f32;
         let e_rgb = Vec3::from(colour.rgb(&e.iter().map(|v| *v as f32).collect::<Vec<_>>()));
         assert!(

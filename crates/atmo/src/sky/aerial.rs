@@ -50,7 +50,7 @@ struct AerialColour {
 
 impl AerialColour {
     fn new(atmosphere: &Atmosphere) -> Self {
-        let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+        let colour = SpectrumToRgb::for_atmosphere(atmosphere);
         let solar: Vec<f32> = atmosphere
             .solar_irradiance
             .iter()

@@ -29,7 +29,7 @@ impl Daylight {
     pub fn new(atmosphere: &Atmosphere, settings: &SkySettings, altitude_m: f64) -> Result<Self> {
         Ok(Daylight {
             model: SkyModel::new(atmosphere, settings, altitude_m)?,
-            colour: SpectrumToRgb::new(&atmosphere.wavelengths_nm),
+            colour: SpectrumToRgb::for_atmosphere(atmosphere),
         })
     }
 

@@ -140,7 +140,7 @@ pub struct SkyPicture {
 impl SkyPicture {
     /// Computes the maps of `model` for `sun`.
     pub fn new(model: &SkyModel, sun: Sun) -> Self {
-        let colour = SpectrumToRgb::new(&model.atmosphere().wavelengths_nm);
+        let colour = SpectrumToRgb::for_atmosphere(model.atmosphere());
         let sky = model.skylight_map(sun.elevation());
         let ground = model.ground_map(sun.elevation());
         Self::of_model_maps(
@@ -166,7 +166,7 @@ impl SkyPicture {
 
     fn of_model_maps(model: &SkyModel, sun: Sun, sky: RgbGrid, ground: RgbGrid) -> Self {
         let atmosphere = model.atmosphere();
-        let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+        let colour = SpectrumToRgb::for_atmosphere(atmosphere);
         let mut sun_spectrum = vec![0.0; atmosphere.channels()];
         model.sun_radiance(sun.elevation(), &mut sun_spectrum);
         Self::with_maps(
@@ -434,7 +434,7 @@ pub fn disc_cover(d: Vec3, sun: Vec3, radius: f32, pixel: f32) -> f32 {
 /// The linear sRGB radiance of the sun's disc at `sun_elevation` rad seen from
 /// `altitude_m` (no limb darkening), through the atmosphere.
 pub fn sun_disc_rgb(atmosphere: &Atmosphere, altitude_m: f64, sun_elevation: f64) -> [f32; 3] {
-    let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+    let colour = SpectrumToRgb::for_atmosphere(atmosphere);
     let mut sun_spectrum = vec![0.0; atmosphere.channels()];
     let r = atmosphere.bottom_radius_m + altitude_m;
     transmittance_to_sun(atmosphere, r, sun_elevation.sin(), &mut sun_spectrum);

@@ -109,7 +109,7 @@ impl Sunlight {
     /// through the transmittance along the sun's ray, times the disc's visible part.
     pub fn at(atmosphere: &Atmosphere, altitude_m: f64, sun: Sun) -> Self {
         let spectrum = atmosphere.direct_sunlight(altitude_m, sun.elevation());
-        let rgb = SpectrumToRgb::new(&atmosphere.wavelengths_nm)
+        let rgb = SpectrumToRgb::for_atmosphere(atmosphere)
             .rgb(&spectrum.iter().map(|&e| e as f32).collect::<Vec<_>>())
             .map(f64::from);
         let y = srgb_luminance(rgb);

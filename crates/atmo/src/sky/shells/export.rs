@@ -134,7 +134,7 @@ impl SkyModel {
         let lanes_of =
             |v: &[crate::sky::shells::maps::Lane]| v.iter().map(|x| x.to_array()).collect();
         let table = &light.sunlight.table;
-        let colour = SpectrumToRgb::new(&a.wavelengths_nm);
+        let colour = SpectrumToRgb::for_atmosphere(a);
         let mut to_rgb = vec![[[0.0f32; 3]; 4]; l];
         for c in 0..n {
             for (rgb, weights) in colour.weights.iter().enumerate() {

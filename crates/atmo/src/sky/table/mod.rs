@@ -206,7 +206,7 @@ impl SkylightTable {
         settings.validate(atmosphere)?;
         let (sun, altitude) = (settings.sun_axis(), settings.altitude_axis());
         let transmittance = Arc::new(TransmittanceTable::new(atmosphere));
-        let colour = SpectrumToRgb::new(&atmosphere.wavelengths_nm);
+        let colour = SpectrumToRgb::for_atmosphere(atmosphere);
         let total = sun.count() * altitude.count();
         let done = AtomicUsize::new(0);
         // The light at the shells once, with a shell through every altitude: the
@@ -409,7 +409,7 @@ impl SkylightTable {
     /// The skylight map computed directly by `model` for a sun at `sun_elevation` rad,
     /// in the table's channels.
     pub fn direct_map(&self, model: &SkyModel, sun_elevation: f64) -> Vec<Vec3> {
-        let colour = SpectrumToRgb::new(&self.atmosphere.wavelengths_nm);
+        let colour = SpectrumToRgb::for_atmosphere(&self.atmosphere);
         model
             .skylight_map(sun_elevation)
             .to_rgb(&colour)
