@@ -12,17 +12,15 @@
 //! on top, and a bad file is shown as an error while the last good scene stays.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::{Instant, SystemTime};
 
 use anyhow::{Context, Result};
 use atmo::geometry::Ray;
 use atmo::image::Display;
 use atmo::shafts::edits::{merged, Document, Edit};
-use atmo::shafts::planes::ShadowMaps;
 use atmo::shafts::Scene;
 use atmo::Error;
-use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPass, ShaftsPipelines};
+use atmo_gpu::shafts::{ShaftsMethod, ShaftsPass, ShaftsRenderer};
 use atmo_gpu::Gpu;
 use glam::Vec3;
 
@@ -59,9 +57,11 @@ pub struct StageMode {
     pub step_deg: f32,
     /// The light the panel shows and a right-button drag aims.
     selected: usize,
-    maps: ShadowMaps,
-    /// The GPU's passes, compiled once the first frame is drawn there.
-    passes: Option<(Arc<ShaftsPipelines>, ShaftsPass)>,
+    /// The renderer on the mode's backend (made at the first frame drawn there; on the
+    /// CPU it keeps the shadow maps of lights that did not move), and on the GPU the
+    /// pass that draws into the window's picture.
+    renderer: Option<ShaftsRenderer>,
+    pass: Option<ShaftsPass>,
     on_gpu: bool,
     /// The scene changed since the picture was last drawn.
     dirty: bool,
@@ -92,8 +92,8 @@ impl StageMode {
             playing: false,
             step_deg: 5.0,
             selected: 0,
-            maps: ShadowMaps::default(),
-            passes: None,
+            renderer: None,
+            pass: None,
             on_gpu: false,
             dirty: true,
             coarse: false,
@@ -154,7 +154,9 @@ impl StageMode {
         } else {
             let scene = load(&self.path, &edited, &self.size_edits(), self.time_s)?;
             if !same_file || solid.0 != solid.1 {
-                self.maps = ShadowMaps::default();
+                self.renderer
+                    .iter_mut()
+                    .for_each(ShaftsRenderer::objects_changed);
             }
             self.scene = scene;
         }
@@ -478,6 +480,7 @@ impl Mode for StageMode {
     fn draw_on_gpu(&mut self, on_gpu: bool) {
         if on_gpu != self.on_gpu {
             self.on_gpu = on_gpu;
+            self.renderer = None;
             self.dirty = true;
         }
     }
@@ -533,27 +536,30 @@ impl Mode for StageMode {
         if !self.dirty && !self.coarse {
             return Ok(false);
         }
+        let renderer = match &mut self.renderer {
+            Some(renderer) => renderer,
+            slot => slot.insert(ShaftsRenderer::new(
+                self.on_gpu.then_some(gpu),
+                ShaftsMethod::Planes,
+            )?),
+        };
         if self.on_gpu {
-            let (pipelines, pass) = match &mut self.passes {
-                Some(passes) => passes,
-                None => self.passes.insert((
-                    ShaftsPipelines::new(gpu)?,
-                    ShaftsPass::new(gpu, picture.texture.format())?,
-                )),
+            let pass = match &mut self.pass {
+                Some(pass) => pass,
+                slot => slot.insert(ShaftsPass::new(gpu, picture.texture.format())?),
             };
-            let shafts = GpuShafts::with_pipelines(gpu, &self.scene, pipelines.clone())?;
-            shafts.prepare(gpu, encoder, pass, ShaftsMethod::Planes)?;
+            renderer.prepare(encoder, pass, &self.scene)?;
             picture.draw(encoder, |render| pass.draw(render));
         } else {
             // A preview is the same scene through a camera of fewer pixels (the lens
             // keeps its angles); the shadow maps do not depend on the camera.
-            let (scene, maps) = (&mut self.scene, &mut self.maps);
+            let scene = &mut self.scene;
             self.coarse = picture.draw_cpu(self.dirty, |(width, height)| {
                 let whole = (scene.camera.width, scene.camera.height);
                 (scene.camera.width, scene.camera.height) = (width, height);
-                let frame = maps.render(scene);
+                let drawn = renderer.draw(scene);
                 (scene.camera.width, scene.camera.height) = whole;
-                Ok(frame)
+                Ok(drawn?.frame)
             })?;
         }
         self.dirty = false;
@@ -696,8 +702,14 @@ mod tests {
         let path = stage_copy("maps");
         let mut mode = small(&path);
         let lights = mode.scene.lights.len();
-        mode.maps.render(&mode.scene);
-        assert_eq!(mode.maps.rebuilt, lights);
+        // The CPU's renderer draws the scene: how many shadow maps it rebuilt.
+        let rebuilt = |mode: &mut StageMode| {
+            let renderer = mode.renderer.get_or_insert_with(|| {
+                ShaftsRenderer::new(None, ShaftsMethod::Planes).expect("the CPU's")
+            });
+            renderer.draw(&mode.scene).unwrap().maps_rebuilt
+        };
+        assert_eq!(rebuilt(&mut mode), lights);
         let look_at = mode.point("camera.look_at").unwrap();
         let distance = |m: &StageMode| (m.point("camera.position").unwrap() - look_at).length();
         let before = distance(&mode);
@@ -708,16 +720,13 @@ mod tests {
         let fresh = load(&path, &mode.edited, &mode.size_edits(), 0.0).unwrap();
         assert_eq!(mode.scene.camera, fresh.camera);
         assert_ne!(mode.scene.camera, small(&path).scene.camera);
-        mode.maps.render(&mode.scene);
-        assert_eq!(mode.maps.rebuilt, 0, "the camera moved: no map rebuilt");
+        assert_eq!(rebuilt(&mut mode), 0, "the camera moved: no map rebuilt");
         mode.apply(&Input::Set("spotlight[2].aim".into(), "[1, 0, 1]".into()))
             .unwrap();
-        mode.maps.render(&mode.scene);
-        assert_eq!(mode.maps.rebuilt, 1, "one light moved");
+        assert_eq!(rebuilt(&mut mode), 1, "one light moved");
         mode.apply(&Input::Set("object[0].albedo".into(), "0.5".into()))
             .unwrap();
-        mode.maps.render(&mode.scene);
-        assert_eq!(mode.maps.rebuilt, lights, "the objects changed");
+        assert_eq!(rebuilt(&mut mode), lights, "the objects changed");
         std::fs::remove_dir_all(path.parent().unwrap()).unwrap();
     }
 

@@ -9,7 +9,7 @@ use atmo::shafts::adaptive::Counts;
 use atmo::shafts::planes::ShadowMaps;
 use atmo::shafts::{SamplePlanes, Scene};
 
-use super::{GpuShafts, ShaftsMethod, ShaftsPipelines};
+use super::{GpuShafts, ShaftsMethod, ShaftsPass, ShaftsPipelines};
 use crate::{Gpu, GpuError};
 
 /// Where the shafts are drawn, and what is kept from frame to frame there (one a
@@ -54,6 +54,35 @@ impl ShaftsRenderer {
     /// Whether it draws on a GPU.
     pub fn on_gpu(&self) -> bool {
         matches!(self.on, On::Gpu(..))
+    }
+
+    /// Forgets the kept shadow maps: the objects changed (a map is kept by its light's
+    /// pose alone).
+    pub fn objects_changed(&mut self) {
+        if let On::Cpu(maps) = &mut self.on {
+            *maps = ShadowMaps::default();
+        }
+    }
+
+    /// On the GPU: records `scene`'s passes into `encoder` and sets `pass` (made for
+    /// the caller's target) to draw the picture, with no read-back. On the CPU: an
+    /// error, as there is nothing to record ([`ShaftsRenderer::draw`] draws there).
+    pub fn prepare(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: &mut ShaftsPass,
+        scene: &Scene,
+    ) -> Result<(), GpuError> {
+        match &self.on {
+            On::Gpu(gpu, pipelines, method) => {
+                let shafts = GpuShafts::with_pipelines(gpu, scene, pipelines.clone())?;
+                shafts.prepare(gpu, encoder, pass, *method)
+            }
+            On::Cpu(_) => Err(atmo::Error::Invalid(
+                "the shafts' passes were asked of the CPU's renderer".into(),
+            )
+            .into()),
+        }
     }
 
     /// `scene`'s picture (read back from the GPU where it runs there).
