@@ -7,9 +7,10 @@
 //! window's edits, and "save scene" writes them into the file with its comments kept.
 //! Only what changed is redone: the picture is drawn again only when the scene
 //! changed, and on the CPU a light's shadow map is rebuilt only when that light moved
-//! or its field changed ([`ShadowMaps`]), so orbiting the camera reuses every map. The
-//! file is watched: when it changes on disk it is read again with the window's edits
-//! on top, and a bad file is shown as an error while the last good scene stays.
+//! or its field changed ([`atmo::shafts::planes::ShadowMaps`]), so orbiting the camera
+//! reuses every map. The file is watched: when it changes on disk it is read again with
+//! the window's edits on top, and a bad file is shown as an error while the last good
+//! scene stays.
 
 use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
