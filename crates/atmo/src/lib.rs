@@ -81,6 +81,7 @@ pub mod fast;
 pub mod files;
 pub mod geometry;
 pub mod image;
+pub mod lanes;
 pub mod quadrature;
 pub mod reference;
 pub mod shafts;

@@ -22,8 +22,8 @@ use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 
 use super::particles::{erf_table, Particle};
-use super::{first, Lanes, LANES};
 use crate::error::{check_range, Error, Result};
+use crate::lanes::{first, Lanes, LANES};
 
 /// How each particle's factor goes into the buffer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

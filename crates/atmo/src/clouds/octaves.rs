@@ -50,7 +50,7 @@
 
 use super::particles::{weighted_lanes, EMISSION_NODES};
 use super::render::OPAQUE;
-use super::{exp_lanes, first, Lanes};
+use crate::lanes::{exp_lanes, first, Lanes};
 
 /// The octaves of the approximation: octave 0 is single scattering.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -18,7 +18,7 @@
 use glam::Vec3;
 
 use super::buffer::FOOTPRINT;
-use super::{exp_lanes, first, Lanes, LANES};
+use crate::lanes::{exp_lanes, first, Lanes, LANES};
 
 /// `FOOTPRINT^2 / 2`: the Gaussian's exponent at the billboards' cut.
 const CUT_EXPONENT: f32 = FOOTPRINT * FOOTPRINT / 2.0;

@@ -40,10 +40,10 @@ use super::octaves::{Emission, OctaveTerms, Octaves};
 use super::particles::{tabulated_emission_nodes_lanes, weighted_lanes, Particle, EMISSION_NODES};
 use super::sky_light::SkyLight;
 use super::transfer::{Cells, CloudDepths, Slices, TransferTable};
-use super::{Lanes, LANES};
 use crate::atmosphere::phase::PhaseFunction;
 use crate::error::{Error, Result};
 use crate::image::Frame;
+use crate::lanes::{Lanes, LANES};
 use crate::view::Camera;
 
 /// How the cloud is lit.

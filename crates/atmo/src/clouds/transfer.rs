@@ -51,8 +51,8 @@
 
 use super::particles::Particle;
 use super::sky_light::{depths_along, vertical_depths};
-use super::{first, Lanes};
 use crate::error::Result;
+use crate::lanes::{first, Lanes};
 use glam::{Vec3, Vec4, Vec4Swizzles};
 
 /// Nodes of the optical depth toward the sun.

@@ -19,7 +19,7 @@ pub(super) fn lanes_of(
 }
 
 /// Pixels that go through the sub-samples together: the width of the vector loops.
-pub const LANES: usize = 16;
+pub const LANES: usize = crate::lanes::LANES_OF_RAYS;
 
 /// What [`SamplePlanes::scattered`] needs of up to [`LANES`] camera rays for one light.
 pub(super) struct Lanes {

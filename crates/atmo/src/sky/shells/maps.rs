@@ -27,36 +27,10 @@ use crate::quadrature::gauss_legendre;
 /// Most wavelengths a spectrum may have (validated in `Atmosphere`); sizes stack buffers.
 pub const MAX_CHANNELS: usize = 64;
 
-/// Spectra in the per-sample loops are packed four wavelengths to a SIMD lane, the last
-/// lane padded with zeros: with a channel count known only at run time the compiler
-/// emits scalar code otherwise (measured: the order-2 skylight map 7.0 -> 5.0 ms).
-pub type Lane = glam::Vec4;
-
 /// Lanes of the longest spectrum.
 pub const MAX_LANES: usize = MAX_CHANNELS / 4;
 
-/// Lanes that hold `channels` wavelengths.
-pub fn lanes(channels: usize) -> usize {
-    channels.div_ceil(4)
-}
-
-/// Packs `values` (one a channel) into `out` lanes, padding with zeros.
-pub fn pack(values: &[f32], out: &mut [Lane]) {
-    for (lane, chunk) in out.iter_mut().zip(values.chunks(4)) {
-        let mut v = [0.0; 4];
-        v[..chunk.len()].copy_from_slice(chunk);
-        *lane = Lane::from_array(v);
-    }
-}
-
-/// Adds packed `lanes` to `out` (one value a channel).
-pub fn unpack_add(lanes: &[Lane], out: &mut [f32]) {
-    for (chunk, lane) in out.chunks_mut(4).zip(lanes) {
-        for (o, v) in chunk.iter_mut().zip(lane.to_array()) {
-            *o += v;
-        }
-    }
-}
+pub use crate::lanes::{lanes, pack, unpack_add, Lane};
 
 /// A sample's scattering weight below which its higher orders are not evaluated.
 const NEGLIGIBLE_WEIGHT: f32 = 1e-8;
