@@ -702,7 +702,7 @@ mod tests {
     fn orbiting_keeps_every_shadow_map_and_editing_a_light_rebuilds_only_its_own() {
         let path = stage_copy("maps");
         let mut mode = small(&path);
-        let lights = mode.scene.lights.len();
+        let lights = mode.scene.light_count();
         // The CPU's renderer draws the scene: how many shadow maps it rebuilt.
         let rebuilt = |mode: &mut StageMode| {
             let renderer = mode.renderer.get_or_insert_with(|| {
@@ -742,7 +742,7 @@ mod tests {
         let ray = camera.ray(20.0, 30.0).normalize();
         let toward = (aim - camera.position).normalize();
         assert!(aim.y.abs() < 1e-4 && toward.dot(ray) > 1.0 - 1e-6, "{aim}");
-        let light = &mode.scene.lights[1];
+        let light = &mode.scene.spotlights[1];
         let axis = (aim - light.position).normalize();
         assert!((light.light_from_world * axis - Vec3::Z).length() < 1e-5);
         // Over the sky there is nothing to aim at; a moving head is not aimed so.
@@ -777,7 +777,7 @@ mod tests {
             "{pan} {tilt}"
         );
         // The light drawn at the show's start is that head so aimed.
-        assert!((mode.scene.lights[2].light_from_world * beam - Vec3::Z).length() < 1e-4);
+        assert!((mode.scene.spotlights[2].light_from_world * beam - Vec3::Z).length() < 1e-4);
         // Beyond the head's tilt: refused, the aim kept.
         let reach = tilt.abs() + 1.0;
         let narrow = Input::Set(
@@ -797,14 +797,14 @@ mod tests {
         let mut mode = small(&path);
         mode.apply(&Input::Set("spotlight[0].dimmer".into(), "0.5".into()))
             .unwrap();
-        let before = mode.scene.lights[0].intensity;
+        let before = mode.scene.spotlights[0].intensity;
         let text = std::fs::read_to_string(&path).unwrap();
         let brighter = text.replace("intensity = 3000.0", "intensity = 6000.0");
         std::fs::write(&path, &brighter).unwrap();
         mode.watched -= std::time::Duration::from_secs(1);
         mode.update().unwrap();
         // Twice the intensity, still at the window's half dimmer.
-        let after = mode.scene.lights[0].intensity;
+        let after = mode.scene.spotlights[0].intensity;
         assert!(
             (after - 2.0 * before).length() < 1e-3 * after.length(),
             "{after}"
@@ -814,7 +814,10 @@ mod tests {
         mode.watched -= std::time::Duration::from_secs(1);
         let e = mode.update().unwrap_err();
         assert!(format!("{e:#}").contains("refused"), "{e:#}");
-        assert_eq!(mode.scene.lights[0].intensity, after, "the last good scene");
+        assert_eq!(
+            mode.scene.spotlights[0].intensity, after,
+            "the last good scene"
+        );
         std::fs::remove_dir_all(path.parent().unwrap()).unwrap();
     }
 }

@@ -72,16 +72,16 @@ fn error_of(text: &str) -> String {
 fn the_example_scenes_load_with_their_gobo_and_mesh() {
     let fig6 = Scene::from_file(&scenes().join("spotlight-sphere.toml")).unwrap();
     assert_eq!((fig6.camera.width, fig6.camera.height), (720, 480));
-    assert_eq!(fig6.lights.len(), 1);
+    assert_eq!(fig6.light_count(), 1);
     assert_eq!((fig6.planes.planes, fig6.planes.sub_planes), (30, 6));
     // A 3200 K lamp of 1500 cd: luminance of the colour times the intensity.
-    let i = fig6.lights[0].intensity;
+    let i = fig6.spotlights[0].intensity;
     let luminance = 0.2126 * i.x + 0.7152 * i.y + 0.0722 * i.z;
     assert!((luminance - 1500.0).abs() < 0.5 && i.x > i.z, "{i:?}");
 
     let stage = Scene::from_file(&scenes().join("stage.toml")).unwrap();
-    assert_eq!(stage.lights.len(), 5);
-    let gobo = stage.lights[0]
+    assert_eq!(stage.light_count(), 5);
+    let gobo = stage.spotlights[0]
         .gobo
         .as_ref()
         .expect("the first light has the dotted gobo");
@@ -112,8 +112,7 @@ fn the_example_scenes_load_with_their_gobo_and_mesh() {
     // the colour times the dimmer times the file's peak.
     let photometric = Scene::from_file(&scenes().join("photometric.toml")).unwrap();
     let fields: Vec<f32> = photometric
-        .lights
-        .iter()
+        .lights()
         .map(|l| l.field_half.to_degrees())
         .collect();
     // The spot is cut at 30 degrees, the oval's widest half-plane ends at 24 (the next
@@ -121,7 +120,7 @@ fn the_example_scenes_load_with_their_gobo_and_mesh() {
     for (got, want) in fields.iter().zip([30.0, 25.0, 45.0]) {
         assert!((got - want).abs() < 1e-3, "{fields:?}");
     }
-    let spot = &photometric.lights[0];
+    let spot = &photometric.spotlights[0];
     let luminance =
         0.2126 * spot.intensity.x + 0.7152 * spot.intensity.y + 0.0722 * spot.intensity.z;
     assert!(
@@ -131,14 +130,10 @@ fn the_example_scenes_load_with_their_gobo_and_mesh() {
     );
     assert!(matches!(spot.profile, Profile::Measured(_)));
     // Rotationally symmetric files need one row of light map; the oval 144.
-    let rows: Vec<usize> = photometric
-        .lights
-        .iter()
-        .map(|l| l.intensity_map.rows)
-        .collect();
+    let rows: Vec<usize> = photometric.lights().map(|l| l.intensity_map.rows).collect();
     assert_eq!(rows, [1, 144, 1]);
     // The PAR (EULUMDAT): 900 cd/klm of a 1,500 lm lamp on the axis, dimmed to 0.8.
-    let par = &photometric.lights[2];
+    let par = &photometric.spotlights[2];
     let luminance = 0.2126 * par.intensity.x + 0.7152 * par.intensity.y + 0.0722 * par.intensity.z;
     assert!(
         (luminance - 0.8 * 1350.0).abs() < 1.0,
@@ -349,7 +344,7 @@ fn a_measured_profile_holds_to_the_reference_as_a_drawn_beam_does() {
             "dimmer = 0.2\nup = [0.0, 1.0, 1.0]\nprofile = { ies = \"photometry/oval-wash.ies\" }",
         );
     let scene = parse(&text).unwrap();
-    assert_eq!(scene.lights[0].intensity_map.rows, 144);
+    assert_eq!(scene.spotlights[0].intensity_map.rows, 144);
     let fast = SamplePlanes::new(&scene).render();
     let reference = RayMarcher::CONVERGED.render(&scene);
     assert_physical(&fast);
@@ -392,7 +387,7 @@ fn without_a_gobo_there_is_no_light_outside_the_beam() {
     // Every pixel computed: adaptive sampling interpolates traces (below its floor)
     // into pixels beside the beam's edge.
     scene.planes.adaptive = false;
-    let light = &scene.lights[0];
+    let light = &scene.spotlights[0];
     let camera = &scene.camera;
     for frame in [
         SamplePlanes::new(&scene).render(),
@@ -427,7 +422,7 @@ fn a_ray_through_the_shadow_of_the_sphere_receives_less() {
     let shadowed = parse(&small_scene(SPHERE)).unwrap();
     // The shadow shaft runs from the sphere away from the lamp, down to the floor: a
     // ray from the camera through the point between the sphere and its floor shadow.
-    let light = shadowed.lights[0].position;
+    let light = shadowed.spotlights[0].position;
     let centre = Vec3::new(-0.7, 0.5, 0.0);
     let away = (centre - light).normalize();
     let in_shadow = centre + away * 0.8;
@@ -461,14 +456,14 @@ fn lights_add_up() {
         1,
     );
     let mut both = parse(&two).unwrap();
-    assert_eq!(both.lights.len(), 2);
+    assert_eq!(both.light_count(), 2);
     // The method adds up exactly; adaptive sampling interpolates each picture where its
     // own samples allow, so its sums hold only to its tolerance.
     both.planes.adaptive = false;
     let mut first = both.clone();
-    first.lights.truncate(1);
+    first.spotlights.truncate(1);
     let mut second = both.clone();
-    second.lights.remove(0);
+    second.spotlights.remove(0);
     type Render = fn(&Scene) -> Frame;
     let methods: [(&str, Render); 2] = [
         ("planes", |s| SamplePlanes::new(s).render()),
@@ -556,7 +551,7 @@ field_deg = 30.0
         .replace("width = 96\nheight = 64", "width = 240\nheight = 160");
     let mut every = parse(&text).unwrap();
     every.planes.adaptive = false;
-    assert!(every.lights[0].gobo.is_some() && every.lights[1].gobo.is_none());
+    assert!(every.spotlights[0].gobo.is_some() && every.spotlights[1].gobo.is_none());
     let mut adaptive = every.clone();
     adaptive.planes.adaptive = true;
     let exact = SamplePlanes::new(&every).render();
@@ -670,8 +665,7 @@ fn shadow_maps_enter_the_memory_budget() {
     assert_eq!(
         Scene::from_toml_str(&fewer, "test.toml", Path::new("."))
             .unwrap()
-            .lights
-            .len(),
+            .light_count(),
         12
     );
 }
@@ -769,19 +763,19 @@ set.b = { gobo_speed_dps = 90.0, cmy = [0.0, 1.0, 0.0] }
 fn moving_heads_follow_their_cues_and_only_moved_lights_rebuild_their_shadow_maps() {
     let mut scene = parse(&show_scene(CUES)).unwrap();
     // The spotlight, then the two heads.
-    assert_eq!(scene.lights.len(), 3);
+    assert_eq!(scene.light_count(), 3);
     assert_eq!(scene.show.duration(), 2.0);
-    let b = &scene.lights[2];
+    let b = &scene.show.lights()[1];
     assert!(b.gobo.is_some(), "b starts with its wheel's second gobo");
     let mut maps = atmo::shafts::planes::ShadowMaps::default();
     maps.update(&scene);
     assert_eq!(maps.rebuilt, 3);
     // Half way through the fade: a has turned, b only changed colour and gobo angle.
     scene.at_time(1.5);
-    let axis = scene.lights[1].light_from_world.row(2);
+    let axis = scene.show.lights()[0].light_from_world.row(2);
     let (want, _) = scene.show.fixtures[0].aim(45.0, 20.0);
     assert!((axis - want).length() < 1e-5, "{axis:?} {want:?}");
-    let b = &scene.lights[2];
+    let b = &scene.show.lights()[1];
     assert!(
         b.intensity.y < 0.6 * b.intensity.x,
         "magenta fading in: {:?}",
@@ -884,14 +878,19 @@ fn a_prism_makes_a_light_a_facet_and_they_move_together() {
     let text = prismed(&show_scene(CUES), "{ facets = 3, angle_deg = 8.0 }");
     let mut scene = parse(&text).unwrap();
     // The spotlight, head a's three facets, head b.
-    assert_eq!(scene.lights.len(), 5);
-    let whole: Vec3 = scene.lights[1..4].iter().map(|l| l.intensity).sum();
+    assert_eq!(scene.light_count(), 5);
+    let whole: Vec3 = scene.show.lights()[0..3].iter().map(|l| l.intensity).sum();
     let plain = parse(&show_scene(CUES)).unwrap();
-    assert!((whole - plain.lights[1].intensity).abs().max_element() < 1e-2);
+    assert!(
+        (whole - plain.show.lights()[0].intensity)
+            .abs()
+            .max_element()
+            < 1e-2
+    );
     let mut maps = atmo::shafts::planes::ShadowMaps::default();
     maps.update(&scene);
     scene.at_time(1.5);
-    assert_eq!(scene.lights.len(), 5);
+    assert_eq!(scene.light_count(), 5);
     maps.update(&scene);
     assert_eq!(
         maps.rebuilt, 3,
@@ -906,7 +905,7 @@ fn a_prism_makes_a_light_a_facet_and_they_move_together() {
     scene.at_time(1.5);
     let (beam, up) = scene.show.fixtures[0].aim(0.0, 10.0);
     let right = beam.cross(up);
-    let facet = scene.lights[1].light_from_world.row(2);
+    let facet = scene.show.lights()[0].light_from_world.row(2);
     let across = (facet - beam * facet.dot(beam)).normalize();
     let turned = across.dot(right).atan2(across.dot(up)).to_degrees();
     assert!((turned - 30.0).abs() < 1e-3, "{turned}");
@@ -922,25 +921,30 @@ fn a_prism_goes_in_and_out_by_cue() {
                 [[cue]]\ntime_s = 3.0\nset.a = { prism_in = true }\n";
     let text = prismed(&show_scene(cues), "{ facets = 3, angle_deg = 8.0 }");
     let mut scene = parse(&text).unwrap();
-    let facets: Vec3 = scene.lights[1..4].iter().map(|l| l.intensity).sum();
+    let facets: Vec3 = scene.show.lights()[0..3].iter().map(|l| l.intensity).sum();
     let mut maps = atmo::shafts::planes::ShadowMaps::default();
     maps.update(&scene);
     assert_eq!(maps.rebuilt, 5);
     // Out, half way through the pan's fade: one beam along the head's axis, all the
     // light; b's map found where it was built though b is now the third light.
     scene.at_time(1.5);
-    assert_eq!(scene.lights.len(), 3);
+    assert_eq!(scene.light_count(), 3);
     let (beam, _) = scene.show.fixtures[0].aim(20.0, 10.0);
-    assert!((scene.lights[1].light_from_world.row(2) - beam).length() < 1e-5);
-    assert!((scene.lights[1].intensity - facets).abs().max_element() < 1e-2);
+    assert!((scene.show.lights()[0].light_from_world.row(2) - beam).length() < 1e-5);
+    assert!(
+        (scene.show.lights()[0].intensity - facets)
+            .abs()
+            .max_element()
+            < 1e-2
+    );
     maps.update(&scene);
     assert_eq!(maps.rebuilt, 1, "head a's one beam; b kept");
     assert_physical(&SamplePlanes::new(&scene).render());
     // In again at 3 s: three facets around the panned beam.
     scene.at_time(3.0);
-    assert_eq!(scene.lights.len(), 5);
+    assert_eq!(scene.light_count(), 5);
     let (beam, _) = scene.show.fixtures[0].aim(40.0, 10.0);
-    for facet in &scene.lights[1..4] {
+    for facet in &scene.show.lights()[0..3] {
         let off = facet.light_from_world.row(2).dot(beam).acos().to_degrees();
         assert!((off - 8.0).abs() < 1e-3, "{off}");
     }
@@ -978,7 +982,7 @@ fn a_gdtf_fixture_sends_its_flux_and_keeps_its_modes_ranges() {
     for zoom in ["36.0", "8.0"] {
         let open = text.replace("zoom_deg = 20.0, gobo = 1", &format!("zoom_deg = {zoom}"));
         let scene = parse(&open).unwrap();
-        let lumens = flux(&scene.lights[0]);
+        let lumens = flux(&scene.show.lights()[0]);
         assert!(
             (lumens - 12_000.0).abs() < 0.02 * 12_000.0,
             "zoom {zoom}: {lumens} lm"

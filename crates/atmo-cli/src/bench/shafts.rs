@@ -97,7 +97,7 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
     let params = |scene: &Scene| {
         json!({
             "width": scene.camera.width, "height": scene.camera.height,
-            "lights": scene.lights.len(), "planes": scene.planes.planes,
+            "lights": scene.light_count(), "planes": scene.planes.planes,
             "sub_planes": scene.planes.sub_planes, "shadow_map": scene.planes.shadow_map,
             "threads": threads,
         })
@@ -217,7 +217,7 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
              against every pixel computed: rms {:.3} max {:.2} levels)",
             stage_timing.ratio,
             stage_timing.baseline_ms,
-            stage.lights.len(),
+            stage.light_count(),
             100.0 * stage_computed,
             stage_against.rms,
             stage_against.max,
@@ -264,16 +264,16 @@ pub fn cpu(quick: bool, json: bool, scenes: &Path, sweep: Option<&Path>) -> Resu
             show_timing.baseline_ms,
             show.show.fixtures.len(),
             rebuilt as f64 / frames as f64,
-            show.lights.len()
+            show.light_count()
         ),
     );
 
     // Linearity: time against lights (the stage with its first k lights), each timed in
     // turn with the ray marcher so that a drifting host does not bend the line.
-    let lines: Vec<Alternated> = (1..=stage.lights.len())
+    let lines: Vec<Alternated> = (1..=stage.light_count())
         .map(|k| {
             let mut scene = stage.clone();
-            scene.lights.truncate(k);
+            scene.spotlights.truncate(k);
             time_planes_against(&scene, runs.min(7), ray_march).0
         })
         .collect();
@@ -545,7 +545,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool, scenes: &Path) -> Result<()> {
                     name: &format!("{name}.{suffix}"),
                     params: json!({
                         "width": scene.camera.width, "height": scene.camera.height,
-                        "lights": scene.lights.len(), "planes": scene.planes.planes,
+                        "lights": scene.light_count(), "planes": scene.planes.planes,
                         "sub_planes": scene.planes.sub_planes, "shadow_map": scene.planes.shadow_map,
                     }),
                     wall_ms: wall,

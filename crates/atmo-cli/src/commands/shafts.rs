@@ -238,7 +238,7 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         args.output.display(),
         frame.width,
         frame.height,
-        scene.lights.len(),
+        scene.light_count(),
         scene.unit.radiance_unit()
     );
     Ok(())
@@ -279,7 +279,7 @@ fn animate(
         display,
         |k, frame| {
             scene.at_time(k as f32 / args.fps as f32);
-            lights += scene.lights.len();
+            lights += scene.light_count();
             let drawn = shafts.draw(&scene).map_err(gpu_error)?;
             rebuilt += drawn.maps_rebuilt;
             *frame = drawn.frame;

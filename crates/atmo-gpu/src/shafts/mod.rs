@@ -225,7 +225,7 @@ impl GpuShafts {
         let camera = &scene.camera;
         let (w, h, k) = (camera.width, camera.height, camera.supersampling);
         let (tan_half_width, tan_half_height) = camera.pinhole("the sample planes")?;
-        let lights = scene.lights.len() as u32;
+        let lights = scene.light_count() as u32;
         let size = scene.planes.shadow_map;
         gpu.check_texture_side("the image width", w, "camera.width")?;
         gpu.check_texture_side("the image height", h, "camera.height")?;
@@ -308,8 +308,7 @@ impl GpuShafts {
             gpu.float_texture("the phase table", &phase.values, PhaseTable::SIZE as u32, 1);
         // Each light's map, row after row (see GpuLight::map_row).
         let mut maps: Vec<f32> = scene
-            .lights
-            .iter()
+            .lights()
             .flat_map(|l| l.intensity_map.values.iter().copied())
             .collect();
         if maps.is_empty() {
@@ -679,8 +678,7 @@ impl Geometry {
         // Where each light's rows start in the light-map texture.
         let mut map_row_next = 0u32;
         let lights = scene
-            .lights
-            .iter()
+            .lights()
             .map(|light| {
                 let cone = scene.objects.indices_in_cone(light);
                 let cone_at = values.len() as u32;

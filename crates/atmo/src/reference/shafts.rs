@@ -73,7 +73,7 @@ impl RayMarcher {
             None => Vec3::ZERO,
         };
         let end = hit.map_or(scene.camera.far * length, |p| p.distance);
-        for light in &scene.lights {
+        for light in scene.lights() {
             radiance += self.scattered(scene, light, dir, end);
         }
         radiance

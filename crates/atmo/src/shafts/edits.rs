@@ -308,9 +308,12 @@ mod tests {
         assert_eq!(text.lines().count(), STAGE.lines().count());
         let (before, after) = (stage(&[]).unwrap(), stage(&edits).unwrap());
         // Light 2: 4000 cd of red where 2500 of blue gel were; light 1 green.
-        assert_eq!(after.lights[2].intensity, Vec3::new(4000.0, 0.0, 0.0));
-        assert_eq!(after.lights[1].intensity, Vec3::new(0.0, 2000.0, 0.0));
-        assert_eq!(after.lights[0].intensity, before.lights[0].intensity);
+        assert_eq!(after.spotlights[2].intensity, Vec3::new(4000.0, 0.0, 0.0));
+        assert_eq!(after.spotlights[1].intensity, Vec3::new(0.0, 2000.0, 0.0));
+        assert_eq!(
+            after.spotlights[0].intensity,
+            before.spotlights[0].intensity
+        );
         assert_eq!(after.haze.bounds.unwrap().min, Vec3::new(-7.0, 0.0, -4.0));
         let doc = Document::parse(&text, "stage.toml").unwrap();
         assert_eq!(doc.number("spotlight[2].intensity"), Some(4000.0));

@@ -832,7 +832,10 @@ mod tests {
         let size = 128;
         // Texels whose nearest surface is of each kind of shape.
         let mut seen = std::collections::HashMap::new();
-        for (lights, objects) in [(stage.lights.as_slice(), &stage.objects), (&[light], &fig6)] {
+        for (lights, objects) in [
+            (stage.spotlights.as_slice(), &stage.objects),
+            (&[light], &fig6),
+        ] {
             for light in lights {
                 let map = ShadowMap::new(light, objects, size);
                 for (k, &d) in map.depth.iter().enumerate() {

@@ -143,13 +143,18 @@ impl Prism {
     pub const MAX_ANGLE_DEG: f32 = 60.0;
 }
 
-/// Fixtures and their cues.
+/// Fixtures and their cues, and the spotlights they make at one time of the show: the
+/// moving heads of a [`super::Scene`], beside its fixed spotlights.
 #[derive(Debug, Clone, Default)]
 pub struct Show {
-    /// The moving heads; in a [`super::Scene`] they are the last lights, in this order.
+    /// The moving heads.
     pub fixtures: Vec<Fixture>,
     /// The cues, in time order.
     pub cues: Vec<Cue>,
+    /// The time the heads are posed at, s.
+    time_s: f32,
+    /// The heads' spotlights at `time_s`, in fixture order ([`Show::pose`]).
+    lights: Vec<Spotlight>,
 }
 
 /// One attribute's course through the cues: the fade running at the latest cue that
@@ -174,6 +179,36 @@ impl Fade {
 }
 
 impl Show {
+    /// The show of these fixtures and cues (in time order), its heads posed at its
+    /// start.
+    pub fn new(fixtures: Vec<Fixture>, cues: Vec<Cue>) -> Show {
+        let mut show = Show {
+            fixtures,
+            cues,
+            ..Show::default()
+        };
+        show.at_time(0.0);
+        show
+    }
+
+    /// Poses the heads as the cues have them at `time_s`, s; again after a caller
+    /// changes [`Show::fixtures`] or [`Show::cues`].
+    pub fn at_time(&mut self, time_s: f32) {
+        self.lights = self.pose(time_s);
+        self.time_s = time_s;
+    }
+
+    /// The time the heads are posed at, s ([`Show::at_time`]; 0 as made).
+    pub fn time_s(&self) -> f32 {
+        self.time_s
+    }
+
+    /// The heads' spotlights at [`Show::time_s`], in fixture order (a head with a prism
+    /// in gives one per facet).
+    pub fn lights(&self) -> &[Spotlight] {
+        &self.lights
+    }
+
     /// The time the last cue's fades end, s (0 without cues).
     pub fn duration(&self) -> f32 {
         self.cues
@@ -458,11 +493,8 @@ mod tests {
         });
         let facets = f.lights(&state, 0.0);
         assert_eq!(facets.len(), 3);
-        let show = Show {
-            fixtures: vec![head(), f.clone()],
-            cues: Vec::new(),
-        };
-        assert_eq!((show.light_count(0.0), show.pose(0.0).len()), (4, 4));
+        let show = Show::new(vec![head(), f.clone()], Vec::new());
+        assert_eq!((show.light_count(0.0), show.lights().len()), (4, 4));
         let total: Vec3 = facets.iter().map(|l| l.intensity).sum();
         assert!(
             (total - whole.intensity).abs().max_element() < 1e-3,
@@ -555,9 +587,9 @@ mod tests {
 
     #[test]
     fn cues_fade_from_where_the_attribute_is_and_gobos_turn_by_their_speed() {
-        let show = Show {
-            fixtures: vec![head()],
-            cues: vec![
+        let mut show = Show::new(
+            vec![head()],
+            vec![
                 Cue {
                     time_s: 1.0,
                     fade_s: 2.0,
@@ -570,7 +602,7 @@ mod tests {
                     changes: vec![(0, set(&[(PAN, -10.0)]))],
                 },
             ],
-        };
+        );
         assert_eq!(show.duration(), 3.0);
         assert_eq!(show.state(0, 0.5).channels[PAN], 0.0);
         assert!((show.state(0, 1.5).channels[PAN] - 22.5).abs() < 1e-4);
@@ -584,8 +616,10 @@ mod tests {
         assert!((show.gobo_angle_deg(0, 3.0) - 40.0).abs() < 1e-3);
         assert!((show.gobo_angle_deg(0, 5.0) - 100.0).abs() < 1e-3);
         // Posed: a dark head at the end, pointing where pan -10 puts it.
-        let lights = show.pose(3.0);
-        assert_eq!(lights[0].intensity, Vec3::ZERO);
+        assert!(show.lights()[0].intensity.max_element() > 0.0);
+        show.at_time(3.0);
+        assert_eq!(show.time_s(), 3.0);
+        assert_eq!(show.lights()[0].intensity, Vec3::ZERO);
     }
 
     #[test]

@@ -61,7 +61,7 @@ pub fn surface_radiance(
 ) -> Vec3 {
     let haze = &scene.haze;
     let mut sum = Vec3::ZERO;
-    for (k, light) in scene.lights.iter().enumerate() {
+    for (k, light) in scene.lights().enumerate() {
         let to_lamp = light.position - point.position;
         let s = to_lamp.length();
         let cos = point.normal.dot(to_lamp) / s;

@@ -31,7 +31,7 @@ impl ShadowMaps {
             .map(Some)
             .collect();
         self.rebuilt = 0;
-        for light in &scene.lights {
+        for light in scene.lights() {
             let key = (
                 light.position,
                 light.light_from_world,

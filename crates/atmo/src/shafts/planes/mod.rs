@@ -142,7 +142,7 @@ impl<'a> SamplePlanes<'a> {
     /// [`shadow_maps`]), for when only the camera moved: an interactive viewer rebuilds
     /// a light's map only when that light or an object changes.
     pub fn with_shadow_maps(scene: &'a Scene, maps: &'a [ShadowMap]) -> SamplePlanes<'a> {
-        assert_eq!(maps.len(), scene.lights.len(), "one shadow map a light");
+        assert_eq!(maps.len(), scene.light_count(), "one shadow map a light");
         SamplePlanes::prepare(scene, maps.iter().map(Cow::Borrowed).collect())
     }
 
@@ -151,8 +151,7 @@ impl<'a> SamplePlanes<'a> {
         let mut s_max = 0.0f32;
         let mut t_max = 0.0f32;
         let lights = scene
-            .lights
-            .iter()
+            .lights()
             .zip(maps)
             .map(|(light, shadow)| {
                 // Farther than this from the lamp is beyond the far plane anyway.
@@ -305,7 +304,7 @@ impl<'a> SamplePlanes<'a> {
             .for_each(|(y, (row, ends))| {
                 self.add_row(ray, y as u32 * width, row, |x, m| ends[x] = m, &patterned)
             });
-        if !self.scene.lights.iter().any(refined) {
+        if !self.scene.lights().any(refined) {
             return adaptive::Counts {
                 computed: pixels.len(),
                 interpolated: 0,
@@ -355,8 +354,7 @@ impl<'a> SamplePlanes<'a> {
         let tolerance = adaptive_tolerance(scene.display.exposure);
         let camera = &scene.camera;
         let lamps: Vec<(f32, f32, f32)> = scene
-            .lights
-            .iter()
+            .lights()
             .filter(|light| refined(light))
             .filter_map(|light| {
                 let (x, y) = camera.pixel_of(light.position)?;
@@ -439,7 +437,7 @@ impl<'a> SamplePlanes<'a> {
             *at = view_point(&self.scene.camera, *ray);
         }
         let at = &at[..rays.len()];
-        for (light, planes) in self.scene.lights.iter().zip(&self.lights) {
+        for (light, planes) in self.scene.lights().zip(&self.lights) {
             if !pick(light) || !at.iter().any(|&p| planes.view.holds(p)) {
                 continue;
             }
@@ -727,8 +725,7 @@ fn slab_centre(origin: Vec3, depth: f32, [sx, sy, sz]: [f32; 3]) -> Vec3 {
 pub fn shadow_maps(scene: &Scene) -> Vec<ShadowMap> {
     let size = scene.planes.shadow_map as usize;
     scene
-        .lights
-        .iter()
+        .lights()
         .map(|light| ShadowMap::new(light, &scene.objects, size))
         .collect()
 }

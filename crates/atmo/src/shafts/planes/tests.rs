@@ -23,7 +23,7 @@ fn the_light_where_rays_pass_the_lamp_matches_the_reference() {
     let scene = scenes().swap_remove(0);
     let method = SamplePlanes::new(&scene);
     let camera = &scene.camera;
-    let (lx, ly) = camera.pixel_of(scene.lights[0].position).unwrap();
+    let (lx, ly) = camera.pixel_of(scene.spotlights[0].position).unwrap();
     let (mut diff, mut total, mut worst, mut near) = (0.0f64, 0.0f64, 0.0f32, 0);
     for y in ly as u32 - 15..=ly as u32 + 15 {
         for x in lx as u32 - 15..=lx as u32 + 15 {
@@ -92,7 +92,7 @@ fn camera_rays_meet_objects_and_lit_volumes_only_inside_their_view_boxes() {
 fn the_extent_from_block_boxes_is_the_walk_over_every_ray_end() {
     let mut cut = 0;
     for scene in scenes() {
-        for light in &scene.lights {
+        for light in scene.lights() {
             let size = 128;
             let map = ShadowMap::new(light, &scene.objects, size);
             let blocks: Vec<usize> = map.end_boxes(light, 1e3).map(|(b, _)| b).collect();
@@ -146,7 +146,7 @@ fn lookups_left_out_are_those_that_would_give_the_values_assumed() {
                 for (end, ray) in ends.iter_mut().zip(&rays) {
                     *end = camera.far * ray.length();
                 }
-                for (light, planes) in scene.lights.iter().zip(&method.lights) {
+                for (light, planes) in scene.lights().zip(&method.lights) {
                     let lanes = Lanes::new(&method, light, planes, &rays, &offsets, &ends);
                     for (_, slice) in lanes.slices(m) {
                         let lookups =

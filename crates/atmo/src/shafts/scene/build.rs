@@ -327,7 +327,7 @@ pub(super) fn show(spec: &SceneSpec, unit: IntensityUnit, folder: &Path) -> Resu
             changes,
         });
     }
-    Ok(Show { fixtures, cues })
+    Ok(Show::new(fixtures, cues))
 }
 
 impl FixtureSpec {

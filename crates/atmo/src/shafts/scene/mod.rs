@@ -43,8 +43,9 @@ pub struct Scene {
     pub camera: Camera,
     /// The haze.
     pub haze: Haze,
-    /// The spotlights.
-    pub lights: Vec<Spotlight>,
+    /// The fixed spotlights; the moving heads are the [`Scene::show`]'s, and
+    /// [`Scene::lights`] gives both.
+    pub spotlights: Vec<Spotlight>,
     /// The opaque objects.
     pub objects: Objects,
     /// Sample planes, sub-planes and shadow maps of the plane method.
@@ -56,11 +57,9 @@ pub struct Scene {
     /// The files the scene names (gobo images, meshes, photometric files) as they
     /// were read, so that a command does not write over one of them.
     pub files: Vec<PathBuf>,
-    /// The moving heads and their cues; the heads are the last lights of
-    /// [`Scene::lights`], posed at [`Scene::time_s`].
+    /// The moving heads and their cues, posed at one time of the show
+    /// ([`Scene::at_time`]; its start as loaded).
     pub show: Show,
-    /// The show's time the heads are posed at, s ([`Scene::at_time`]; 0 as loaded).
-    pub time_s: f32,
 }
 
 /// What a light's `intensity` means; pixels are radiance in the same unit per m^2.
@@ -147,7 +146,7 @@ impl Scene {
             .spotlight
             .first()
             .map_or(IntensityUnit::Candela, |l| l.intensity_unit);
-        let lights = spec
+        let spotlights = spec
             .spotlight
             .iter()
             .enumerate()
@@ -160,8 +159,6 @@ impl Scene {
             .map(|(i, o)| o.validate(&format!("object[{i}]"), folder))
             .collect::<Result<Vec<_>>>()?;
         let show = show(&spec, unit, folder)?;
-        let mut lights = lights;
-        lights.extend(show.pose(0.0));
         let wheels = spec
             .fixture
             .iter()
@@ -180,7 +177,7 @@ impl Scene {
         let scene = Scene {
             camera,
             haze,
-            lights,
+            spotlights,
             objects: Objects { list },
             planes,
             display,
@@ -191,19 +188,30 @@ impl Scene {
                 .map(|f| folder.join(f))
                 .collect(),
             show,
-            time_s: 0.0,
         };
         scene.validate_planes()?;
         Ok(scene)
     }
 
+    /// Every light of the scene now: the fixed spotlights, then the show's heads as
+    /// posed. A light's index in this order names it to the renderers (its shadow map,
+    /// its sample planes).
+    pub fn lights(&self) -> impl ExactSizeIterator<Item = &Spotlight> + Clone {
+        Lights {
+            fixed: self.spotlights.iter(),
+            heads: self.show.lights().iter(),
+        }
+    }
+
+    /// How many lights [`Scene::lights`] gives.
+    pub fn light_count(&self) -> usize {
+        self.spotlights.len() + self.show.lights().len()
+    }
+
     /// The scene at `time_s` seconds into its show: its moving heads posed as its cues
-    /// have them then (the other lights do not change).
+    /// have them then (the fixed spotlights do not change).
     pub fn at_time(&mut self, time_s: f32) {
-        let first = self.lights.len() - self.show.light_count(self.time_s);
-        self.lights.truncate(first);
-        self.lights.extend(self.show.pose(time_s));
-        self.time_s = time_s;
+        self.show.at_time(time_s);
     }
 
     /// Checks the plane settings, and that the shadow maps they make for these lights
@@ -213,7 +221,7 @@ impl Scene {
         self.planes.validate()?;
         // Each light's shadow map, 4 bytes a texel, on the CPU or on the GPU, at the
         // time of the show with the most (every prism in).
-        let most = self.lights.len() - self.show.light_count(self.time_s) + self.show.most_lights();
+        let most = self.spotlights.len() + self.show.most_lights();
         let texels = most as u64 * (self.planes.shadow_map as u64).pow(2);
         crate::budget::check(
             &format!("{most} shadow maps of {}^2", self.planes.shadow_map),
@@ -222,3 +230,26 @@ impl Scene {
         )
     }
 }
+
+/// [`Scene::lights`]: the fixed spotlights then the heads, with a known length (a
+/// `Chain` of two slices has none).
+#[derive(Clone)]
+struct Lights<'a> {
+    fixed: std::slice::Iter<'a, Spotlight>,
+    heads: std::slice::Iter<'a, Spotlight>,
+}
+
+impl<'a> Iterator for Lights<'a> {
+    type Item = &'a Spotlight;
+
+    fn next(&mut self) -> Option<&'a Spotlight> {
+        self.fixed.next().or_else(|| self.heads.next())
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let n = self.fixed.len() + self.heads.len();
+        (n, Some(n))
+    }
+}
+
+impl ExactSizeIterator for Lights<'_> {}
