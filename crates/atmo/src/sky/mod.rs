@@ -42,6 +42,6 @@ pub mod table;
 pub use daylight::Daylight;
 pub use frame::{SkyPicture, View};
 pub use grid::DirectionGrid;
-pub use shells::{Order, ShellLight, SkyModel, SkySettings, SkylightMap};
+pub use shells::{Order, ShellLight, SkyModel, SkySettings, SkylightMap, ViewRays};
 #[cfg(feature = "table")]
 pub use table::{SkylightTable, TableSettings};

@@ -268,6 +268,26 @@ impl SkylightMap {
     }
 }
 
+/// View rays of a [`SkyModel`] at given elevations, sampled through the shells
+/// ([`SkyModel::view_rays`]): what the radiance along them needs of the viewpoint,
+/// kept for many suns and azimuths.
+pub struct ViewRays {
+    maps: ScatteringMaps,
+    elevations: Vec<f64>,
+}
+
+impl ViewRays {
+    /// How many rays.
+    pub fn len(&self) -> usize {
+        self.elevations.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.elevations.is_empty()
+    }
+}
+
 /// The light in the atmosphere that depends on neither the sun's position nor the
 /// viewpoint's direction: the sampling shells (with one through each viewpoint it
 /// serves), the light map of sunlight and the scattered light of the higher orders
@@ -529,33 +549,56 @@ impl SkyModel {
     /// interpolation between grid directions. Directions below the horizon end on the
     /// ground. Returns one spectrum per direction.
     pub fn radiance_along(&self, sun_elevation: f64, directions: &[(f64, f64)]) -> Vec<Vec<f32>> {
-        let view = self.viewpoint;
-        let rays: Vec<(usize, f64)> = directions.iter().map(|&(_, e)| (view, e.sin())).collect();
-        let light = &self.light;
-        let maps = ScatteringMaps::new(
-            &light.atmosphere,
-            &light.shells,
-            &rays,
-            light.settings.max_interval_m,
-        );
-        let sources = self.sources();
-        let sin_s = sun_elevation.sin();
+        let elevations: Vec<f64> = directions.iter().map(|&(_, e)| e).collect();
+        let rays = self.view_rays(&elevations);
+        let n = self.atmosphere().channels();
         directions
             .par_iter()
             .enumerate()
-            .map(|(k, &(azimuth, elevation))| {
-                let nu = cos_to_sun(azimuth, elevation, sun_elevation);
-                let mut out = vec![0.0f32; light.atmosphere.channels()];
-                maps.radiance(
-                    k,
-                    SunGeometry { mu_s: sin_s, nu },
-                    &sources,
-                    self.all_orders(),
-                    &mut out,
-                );
+            .map(|(k, &(azimuth, _))| {
+                let mut out = vec![0.0f32; n];
+                self.radiance_on(&rays, k, sun_elevation, azimuth, &mut out);
                 out
             })
             .collect()
+    }
+
+    /// The view rays from the viewpoint at `elevations` (rad, below the horizon too),
+    /// sampled once for any number of suns and azimuths ([`SkyModel::radiance_on`]):
+    /// the part of [`SkyModel::radiance_along`] that depends on neither.
+    pub fn view_rays(&self, elevations: &[f64]) -> ViewRays {
+        let view = self.viewpoint;
+        let rays: Vec<(usize, f64)> = elevations.iter().map(|&e| (view, e.sin())).collect();
+        let light = &self.light;
+        ViewRays {
+            maps: ScatteringMaps::new(
+                &light.atmosphere,
+                &light.shells,
+                &rays,
+                light.settings.max_interval_m,
+            ),
+            elevations: elevations.to_vec(),
+        }
+    }
+
+    /// Radiance per wavelength into `out` (one a channel) along view ray `ray` of
+    /// `rays`, at `azimuth` rad from the sun's, for a sun at `sun_elevation` rad: every
+    /// order the model carries, the sun's disc left out.
+    pub fn radiance_on(
+        &self,
+        rays: &ViewRays,
+        ray: usize,
+        sun_elevation: f64,
+        azimuth: f64,
+        out: &mut [f32],
+    ) {
+        let nu = cos_to_sun(azimuth, rays.elevations[ray], sun_elevation);
+        let geometry = SunGeometry {
+            mu_s: sun_elevation.sin(),
+            nu,
+        };
+        rays.maps
+            .radiance(ray, geometry, &self.sources(), self.all_orders(), out);
     }
 
     pub(crate) fn sources(&self) -> Sources<'_> {
