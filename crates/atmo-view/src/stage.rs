@@ -777,7 +777,7 @@ mod tests {
             "{pan} {tilt}"
         );
         // The light drawn at the show's start is that head so aimed.
-        assert!((mode.scene.spotlights[2].light_from_world * beam - Vec3::Z).length() < 1e-4);
+        assert!((mode.scene.show.lights()[2].light_from_world * beam - Vec3::Z).length() < 1e-4);
         // Beyond the head's tilt: refused, the aim kept.
         let reach = tilt.abs() + 1.0;
         let narrow = Input::Set(
