@@ -581,7 +581,7 @@ impl SkyModel {
         }
     }
 
-    /// Radiance per wavelength into `out` (one a channel) along view ray `ray` of
+    /// Radiance per wavelength written into `out` (one a channel) along view ray `ray` of
     /// `rays`, at `azimuth` rad from the sun's, for a sun at `sun_elevation` rad: every
     /// order the model carries, the sun's disc left out.
     pub fn radiance_on(
@@ -597,6 +597,7 @@ impl SkyModel {
             mu_s: sun_elevation.sin(),
             nu,
         };
+        out.fill(0.0);
         rays.maps
             .radiance(ray, geometry, &self.sources(), self.all_orders(), out);
     }
