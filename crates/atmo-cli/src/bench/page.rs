@@ -49,7 +49,7 @@ pub fn render(folder: &Path) -> Result<String> {
             out,
             "## {}\n\n`{}` ([data](bench/{}.json))\n",
             family.name,
-            command(&family.name),
+            command(family),
             family.name
         );
         let _ = writeln!(
@@ -94,19 +94,30 @@ fn families(folder: &Path) -> Result<Vec<Family>> {
         .collect()
 }
 
-/// The command that writes the family's file: `sky` is `atmo bench sky --json`,
-/// `sky-gpu` the same area with `--backend gpu`.
-fn command(family: &str) -> String {
-    match family.strip_suffix("-gpu") {
+/// The command that writes the family's file: the `command` its cases name (a bench
+/// that is not `atmo bench`'s, such as the Python package's), else `sky` is
+/// `atmo bench sky --json`, `sky-gpu` the same area with `--backend gpu`.
+fn command(family: &Family) -> String {
+    if let Some(named) = family
+        .cases
+        .first()
+        .and_then(|c| c.get("command"))
+        .and_then(Value::as_str)
+    {
+        return named.to_string();
+    }
+    let name = &family.name;
+    match name.strip_suffix("-gpu") {
         Some(area) => format!("atmo bench {area} --backend gpu --json"),
-        None => format!("atmo bench {family} --json"),
+        None => format!("atmo bench {name} --json"),
     }
 }
 
 /// The fields every case may have, each in a column of its own; any other field of a
 /// case (a sweep's rows, times by light count) goes into the figures column.
-const COLUMNS: [&str; 9] = [
+const COLUMNS: [&str; 10] = [
     "bench",
+    "command",
     "params",
     "device",
     "median_ms",
@@ -322,11 +333,26 @@ mod tests {
 
     #[test]
     fn a_gpu_family_is_the_area_with_the_gpu_backend() {
-        assert_eq!(command("sky-table"), "atmo bench sky-table --json");
+        let family = |name: &str, cases: Vec<Value>| Family {
+            name: name.into(),
+            cases,
+        };
+        let plain = serde_json::json!({"bench": "x", "median_ms": 1.0});
         assert_eq!(
-            command("clouds-gpu"),
+            command(&family("sky-table", vec![plain.clone()])),
+            "atmo bench sky-table --json"
+        );
+        assert_eq!(
+            command(&family("clouds-gpu", vec![plain])),
             "atmo bench clouds --backend gpu --json"
         );
+        // A bench of its own names its command, which is not a figure.
+        let named = serde_json::json!({"bench": "python.radiance", "command": "python bench.py", "median_ms": 2.0});
+        assert_eq!(
+            command(&family("python", vec![named.clone()])),
+            "python bench.py"
+        );
+        assert!(!figures(&named).contains("bench.py"));
     }
 
     #[test]
