@@ -4,6 +4,7 @@
 //! Every computation runs with the interpreter detached, so other Python threads go on
 //! meanwhile, and on every core (rayon).
 
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -16,6 +17,7 @@ use atmo::quadrature::gauss_legendre_unit;
 use atmo::shafts::planes::SamplePlanes;
 use atmo::shafts::Scene;
 use atmo::sky::lighting::LUMENS_PER_WATT;
+use atmo::sky::table::SkylightTable;
 use atmo::sky::{Order, SkyModel, SkyPicture, SkySettings, View, ViewRays};
 use atmo::view::place::Place;
 use atmo::view::{direction_of, Camera, Fov, Sun};
@@ -50,6 +52,34 @@ fn picture(py: Python<'_>, frame: Frame) -> PyResult<Bound<'_, PyArray3<f32>>> {
     let (w, h) = (frame.width as usize, frame.height as usize);
     let flat: Vec<f32> = frame.pixels.iter().flat_map(|p| p.to_array()).collect();
     PyArray1::from_vec(py, flat).reshape([h, w, 3])
+}
+
+/// A level pinhole camera's view of a sky picture.
+struct Look {
+    width: u32,
+    height: u32,
+    /// Vertical field of view, deg.
+    fov_deg: f64,
+    /// Where the camera looks, deg (azimuth clockwise from north).
+    azimuth_deg: f64,
+    elevation_deg: f64,
+    sun_disc: bool,
+}
+
+impl Look {
+    fn render(&self, sky: &SkyPicture) -> atmo::Result<Frame> {
+        let camera = Camera::yaw_pitch(
+            Vec3::ZERO,
+            self.azimuth_deg,
+            self.elevation_deg,
+            Fov::Vertical(self.fov_deg as f32),
+            (self.width, self.height),
+        )?;
+        Ok(sky.render(&View {
+            camera,
+            sun_disc: self.sun_disc,
+        }))
+    }
 }
 
 /// The sky of one atmosphere by the shell method, every order by default: models are
@@ -321,18 +351,19 @@ impl Sky {
         view_elevation_deg: f64,
         sun_disc: bool,
     ) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let look = Look {
+            width,
+            height,
+            fov_deg,
+            azimuth_deg: view_azimuth_deg,
+            elevation_deg: view_elevation_deg,
+            sun_disc,
+        };
         let frame = py
             .detach(|| -> atmo::Result<Frame> {
                 let sun = Sun::from_degrees(sun_elevation_deg, sun_azimuth_deg)?;
-                let camera = Camera::yaw_pitch(
-                    Vec3::ZERO,
-                    view_azimuth_deg,
-                    view_elevation_deg,
-                    Fov::Vertical(fov_deg as f32),
-                    (width, height),
-                )?;
                 let model = self.model(altitude_m)?;
-                Ok(SkyPicture::new(&model, sun).render(&View { camera, sun_disc }))
+                look.render(&SkyPicture::new(&model, sun))
             })
             .map_err(value_error)?;
         picture(py, frame)
@@ -399,6 +430,116 @@ impl Sky {
             PyArray1::from_vec(py, lux(|r| &r.0)),
             PyArray1::from_vec(py, lux(|r| &r.1)),
         ))
+    }
+}
+
+/// A skylight table (`atmo precompute sky`, sky section 4): linear sRGB radiance for
+/// any sun and altitude in its ranges, a map in well under a millisecond.
+#[pyclass(module = "atmo._atmo", frozen)]
+struct SkyTable {
+    table: SkylightTable,
+}
+
+#[pymethods]
+impl SkyTable {
+    /// The table in the file at `path` (.atmo-sky).
+    #[new]
+    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let table = py
+            .detach(|| SkylightTable::read(&path))
+            .map_err(value_error)?;
+        Ok(SkyTable { table })
+    }
+
+    /// The atmosphere's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.table.atmosphere().name.clone()
+    }
+
+    /// The sun elevations the table covers, deg (lowest, highest).
+    #[getter]
+    fn sun_elevation_range(&self) -> (f64, f64) {
+        let axis = self.table.sun_axis();
+        (axis.min().to_degrees(), axis.max().to_degrees())
+    }
+
+    /// The viewpoint altitudes the table covers, m (lowest, highest).
+    #[getter]
+    fn altitude_range(&self) -> (f64, f64) {
+        let axis = self.table.altitude_axis();
+        (axis.min(), axis.max())
+    }
+
+    /// Linear sRGB radiance, W m^-2 sr^-1, at point k of the flat arrays (as
+    /// [`Sky::radiance`]; below the horizon, where the table holds no sky, 0):
+    /// `(points, 3)`. One map a distinct (sun, altitude) pair.
+    fn radiance<'py>(
+        &self,
+        py: Python<'py>,
+        sun_elevation_deg: PyReadonlyArray1<'py, f64>,
+        altitude_m: PyReadonlyArray1<'py, f64>,
+        azimuth_from_sun_deg: PyReadonlyArray1<'py, f64>,
+        elevation_deg: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let sun = values(&sun_elevation_deg, "sun_elevation")?;
+        let altitude = values(&altitude_m, "altitude")?;
+        let azimuth = values(&azimuth_from_sun_deg, "azimuth")?;
+        let elevation = values(&elevation_deg, "elevation")?;
+        let out = py
+            .detach(|| -> atmo::Result<Vec<f32>> {
+                let mut pictures: HashMap<(u64, u64), SkyPicture> = HashMap::new();
+                let mut out = Vec::with_capacity(3 * sun.len());
+                for k in 0..sun.len() {
+                    check_range("elevation", elevation[k], -90.0, 90.0)?;
+                    let key = (sun[k].to_bits(), altitude[k].to_bits());
+                    let picture = match pictures.entry(key) {
+                        Entry::Occupied(found) => found.into_mut(),
+                        Entry::Vacant(slot) => {
+                            let at = Sun::from_degrees(sun[k], 0.0)?;
+                            slot.insert(SkyPicture::from_table(&self.table, at, altitude[k])?)
+                        }
+                    };
+                    let d = direction_of(azimuth[k].to_radians(), elevation[k].to_radians());
+                    out.extend(picture.radiance(d, false).to_array());
+                }
+                Ok(out)
+            })
+            .map_err(value_error)?;
+        matrix(py, out, 3)
+    }
+
+    /// The sky as a pinhole camera sees it, from the table (as [`Sky::render`]).
+    #[pyo3(signature = (sun_elevation_deg, sun_azimuth_deg, altitude_m, width, height, fov_deg, view_azimuth_deg, view_elevation_deg, sun_disc))]
+    #[allow(clippy::too_many_arguments)]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        sun_elevation_deg: f64,
+        sun_azimuth_deg: f64,
+        altitude_m: f64,
+        width: u32,
+        height: u32,
+        fov_deg: f64,
+        view_azimuth_deg: f64,
+        view_elevation_deg: f64,
+        sun_disc: bool,
+    ) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let look = Look {
+            width,
+            height,
+            fov_deg,
+            azimuth_deg: view_azimuth_deg,
+            elevation_deg: view_elevation_deg,
+            sun_disc,
+        };
+        let frame = py
+            .detach(|| -> atmo::Result<Frame> {
+                let sun = Sun::from_degrees(sun_elevation_deg, sun_azimuth_deg)?;
+                look.render(&SkyPicture::from_table(&self.table, sun, altitude_m)?)
+            })
+            .map_err(value_error)?;
+        picture(py, frame)
     }
 }
 
@@ -472,6 +613,7 @@ fn presets() -> Vec<&'static str> {
 #[pymodule]
 fn _atmo(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Sky>()?;
+    m.add_class::<SkyTable>()?;
     m.add_function(wrap_pyfunction!(sun_position, m)?)?;
     m.add_function(wrap_pyfunction!(render_shafts, m)?)?;
     m.add_function(wrap_pyfunction!(presets, m)?)?;

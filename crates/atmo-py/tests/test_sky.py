@@ -98,3 +98,21 @@ def test_a_picture_of_the_sky(sky):
 def test_bad_arguments_raise_value_errors_naming_them(sky, call, names):
     with pytest.raises(ValueError, match=names):
         call(sky)
+
+
+def test_a_table_draws_the_sky_of_its_model(sky, tiny_table):
+    """The table (a small one: 16 suns, 2 altitudes, 32 directions) against the model
+    it was computed from, in the same pictures of the sky above the horizon (the table
+    holds no ground)."""
+    table = atmo.Sky.from_table(tiny_table)
+    assert table.name == "earth" and table.altitude_range == (0.0, 2000.0)
+    for sun in (3.0, 25.0):
+        view = dict(sun_elevation=sun, width=96, height=54, view_elevation=40, sun_disc=False)
+        want, got = sky.render(**view), table.render(**view)
+        assert abs(got.mean() / want.mean() - 1) < 0.02
+        assert np.sqrt(np.mean((got - want) ** 2)) < 0.05 * want.mean()
+    # Radiance: RGB, broadcast as the model's; no sky below the horizon.
+    rgb = table.radiance(sun_elevation=[5.0, 40.0], azimuth=90.0, elevation=[[20.0], [-5.0]])
+    assert rgb.shape == (2, 2, 3) and np.all(rgb[0] > 0) and np.all(rgb[1] == 0)
+    with pytest.raises(ValueError, match="altitude"):
+        table.radiance(sun_elevation=5.0, azimuth=0.0, elevation=10.0, altitude=5000.0)
