@@ -11,6 +11,9 @@ use std::str::FromStr;
 use std::sync::{Arc, Mutex};
 
 use atmo::atmosphere::spectrum::{srgb_luminance, SpectrumToRgb};
+use atmo::atmosphere::PhaseFunction;
+use atmo::clouds::{Cumulus, Particle, Scattering, Splat};
+use atmo::cloudscape::{Ambient, Cloudscape, CpuClouds};
 use atmo::error::check_range;
 use atmo::image::Frame;
 use atmo::quadrature::gauss_legendre_unit;
@@ -23,7 +26,7 @@ use atmo::view::place::Place;
 use atmo::view::{direction_of, Camera, Fov, Sun};
 use atmo::Atmosphere;
 use glam::{DVec3, Vec3};
-use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
@@ -604,6 +607,135 @@ fn render_shafts(py: Python<'_>, path: PathBuf, time_s: f32) -> PyResult<Bound<'
     picture(py, frame)
 }
 
+/// The particles of a cumulus from atmo's generator, `(particles, 6)`: x, y, z (m,
+/// the base `base_m` above the ground), radius (m), peak extinction (1/m) and albedo.
+#[pyfunction]
+#[pyo3(signature = (particles, seed, width_m, base_m))]
+fn cumulus(
+    py: Python<'_>,
+    particles: usize,
+    seed: u64,
+    width_m: f32,
+    base_m: f32,
+) -> PyResult<Bound<'_, PyArray2<f32>>> {
+    let list = py
+        .detach(|| -> atmo::Result<Vec<Particle>> {
+            check_range("particles", particles as f64, 1.0, 1e7)?;
+            check_range("width", width_m as f64, 1.0, 1e5)?;
+            check_range("base", base_m as f64, 0.0, 2e4)?;
+            Ok(Cumulus {
+                particles,
+                seed,
+                width: width_m,
+                base: base_m,
+                ..Cumulus::default()
+            }
+            .generate())
+        })
+        .map_err(value_error)?;
+    let flat: Vec<f32> = list
+        .iter()
+        .flat_map(|p| {
+            let [x, y, z] = p.position.to_array();
+            [x, y, z, p.radius, p.density, p.albedo]
+        })
+        .collect();
+    matrix(py, flat, 6)
+}
+
+/// Particles (rows of x, y, z, radius, density, albedo, as [`cumulus`] gives) lit by
+/// the sun at (`sun_elevation_deg`, `sun_azimuth_deg`) and drawn from `eye` toward
+/// `target` (m; by default from south-west of the cloud, a little below it), in front
+/// of the Earth's sky with every order, lit by it and hazed, when `sky` (else the
+/// sun's light alone, on black): a
+/// `height x width x 3` array of linear radiance, W m^-2 sr^-1. `multiple` adds every
+/// order of scattering in the cloud (the fitted transfer table) to the paper's first.
+#[pyfunction]
+#[pyo3(signature = (particles, sun_elevation_deg, sun_azimuth_deg, eye, target, width, height, fov_deg, multiple, sky, resolution))]
+#[allow(clippy::too_many_arguments)]
+fn render_clouds<'py>(
+    py: Python<'py>,
+    particles: PyReadonlyArray2<'py, f32>,
+    sun_elevation_deg: f64,
+    sun_azimuth_deg: f64,
+    eye: Option<[f32; 3]>,
+    target: Option<[f32; 3]>,
+    width: u32,
+    height: u32,
+    fov_deg: f32,
+    multiple: bool,
+    sky: bool,
+    resolution: usize,
+) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let array = particles.as_array();
+    if array.ncols() != 6 {
+        return Err(PyValueError::new_err(format!(
+            "particles: rows of six values (x, y, z, radius, density, albedo), got {}",
+            array.ncols()
+        )));
+    }
+    let list: Vec<Particle> = array
+        .rows()
+        .into_iter()
+        .map(|r| Particle {
+            position: Vec3::new(r[0], r[1], r[2]),
+            radius: r[3],
+            density: r[4],
+            albedo: r[5],
+        })
+        .collect();
+    let frame = py
+        .detach(|| -> atmo::Result<Frame> {
+            if list.is_empty() {
+                return Err(atmo::Error::Invalid("particles: none given".into()));
+            }
+            for (k, p) in list.iter().enumerate() {
+                atmo::clouds::files::check(p, &format!("particles[{k}]"))?;
+            }
+            check_range("resolution", resolution as f64, 16.0, 512.0)?;
+            let scene = Cloudscape {
+                calm: list,
+                resolution,
+                forward: 0.0,
+                splat: Splat::Pieces,
+                phase: PhaseFunction::CloudMie,
+                scattering: if multiple {
+                    Scattering::MULTIPLE
+                } else {
+                    Scattering::SINGLE
+                },
+                // Without the sky, nothing but the sun lights the cloud.
+                ambient: if sky {
+                    Ambient::Sky
+                } else {
+                    Ambient::Rgb(Vec3::ZERO)
+                },
+                sky,
+                ground_albedo: None,
+            };
+            let particles = scene.blown(0.0);
+            let centre = Cloudscape::centre_of(&particles);
+            let eye = eye.map_or(centre + Vec3::new(-1500.0, -300.0, 2500.0), Vec3::from);
+            let target = target.map_or(centre, Vec3::from);
+            let camera = Camera::look_at(
+                eye,
+                target,
+                Vec3::Y,
+                Fov::Vertical(fov_deg),
+                (width, height),
+            )?;
+            let sun = Sun::from_degrees(sun_elevation_deg, sun_azimuth_deg)?;
+            let mut clouds = CpuClouds::new(scene.resolution);
+            clouds.light(&particles, sun.toward(), scene.forward, scene.splat)?;
+            let around = scene.sky_around(&particles, &camera)?;
+            let shadow = scene.shadow(&particles, sun, 256)?;
+            let (light, behind) = scene.lighting(around.as_ref(), shadow.as_ref(), sun, &camera)?;
+            clouds.draw(&particles, &camera, &light, behind.as_ref())
+        })
+        .map_err(value_error)?;
+    picture(py, frame)
+}
+
 /// The names of the embedded atmospheres, the default first.
 #[pyfunction]
 fn presets() -> Vec<&'static str> {
@@ -616,6 +748,8 @@ fn _atmo(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<SkyTable>()?;
     m.add_function(wrap_pyfunction!(sun_position, m)?)?;
     m.add_function(wrap_pyfunction!(render_shafts, m)?)?;
+    m.add_function(wrap_pyfunction!(cumulus, m)?)?;
+    m.add_function(wrap_pyfunction!(render_clouds, m)?)?;
     m.add_function(wrap_pyfunction!(presets, m)?)?;
     Ok(())
 }

@@ -24,9 +24,9 @@ from typing import Optional, Sequence, Union
 import numpy as np
 
 from . import _atmo
-from . import shafts  # noqa: F401  (atmo.shafts.render)
+from . import clouds, shafts  # noqa: F401  (atmo.clouds, atmo.shafts)
 
-__all__ = ["Sky", "SkyTable", "Irradiance", "SunPosition", "sun_position", "presets", "shafts"]
+__all__ = ["Sky", "SkyTable", "Irradiance", "SunPosition", "sun_position", "presets", "clouds", "shafts"]
 
 ArrayLike = Union[float, Sequence[float], np.ndarray]
 

@@ -1,6 +1,6 @@
 # Types of the extension module; the documented API is atmo's (__init__.py, shafts.py).
 from os import PathLike
-from typing import Optional, Tuple, Union
+from typing import List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -50,4 +50,10 @@ def sun_position(latitude_deg: float, longitude_deg: float, altitude_m: float,
                             npt.NDArray[np.float64]]: ...
 def render_shafts(path: Union[str, PathLike], time_s: float = 0.0
                   ) -> npt.NDArray[np.float32]: ...
-def presets() -> list[str]: ...
+def cumulus(particles: int, seed: int, width_m: float, base_m: float
+            ) -> npt.NDArray[np.float32]: ...
+def render_clouds(particles: npt.NDArray[np.float32], sun_elevation_deg: float,
+                  sun_azimuth_deg: float, eye: Optional[list], target: Optional[list],
+                  width: int, height: int, fov_deg: float, multiple: bool, sky: bool,
+                  resolution: int) -> npt.NDArray[np.float32]: ...
+def presets() -> List[str]: ...

@@ -26,8 +26,9 @@ pub const MAX_RADIUS_M: f32 = 1e5;
 /// Largest peak density times radius: an optical depth of 0.84 x this through the centre.
 pub const MAX_DENSITY_RADIUS: f32 = 100.0;
 
-/// Checks one particle's numbers, naming `at` (file and line, or index) on error.
-fn check(p: &Particle, at: &str) -> Result<()> {
+/// Checks one particle's numbers, naming `at` (file and line, or index) on error: what a
+/// file's reader and any other source of particles (the Python package) hold them to.
+pub fn check(p: &Particle, at: &str) -> Result<()> {
     let fields = [
         ("x", p.position.x),
         ("y", p.position.y),

@@ -1,0 +1,45 @@
+"""Clouds through the Python package."""
+
+import numpy as np
+import pytest
+
+import atmo
+
+
+@pytest.fixture(scope="module")
+def cloud():
+    return atmo.clouds.cumulus(particles=3000, seed=7)
+
+
+def test_a_cumulus_is_rows_of_particles(cloud):
+    assert cloud.shape == (3000, 6) and cloud.dtype == np.float32
+    assert np.all(cloud[:, 3] > 0) and np.all((cloud[:, 5] >= 0) & (cloud[:, 5] <= 1))
+    assert cloud[:, 1].min() > 1000, "above its base, 1.5 km up"
+    np.testing.assert_array_equal(cloud, atmo.clouds.cumulus(particles=3000, seed=7))
+
+
+def test_a_cloud_before_the_sky_and_its_higher_orders(cloud):
+    view = dict(width=96, height=54, resolution=64)
+    single = atmo.clouds.render(cloud, scattering="single", **view)
+    every = atmo.clouds.render(cloud, **view)
+    assert every.shape == (54, 96, 3) and every.dtype == np.float32
+    assert np.all(np.isfinite(every)) and np.all(every >= 0)
+    # The higher orders only add light; the sky fills the corners either way.
+    assert every.mean() > single.mean()
+    assert np.all(every >= single - 1e-3 * single.max())
+    # Without the sky: black around the cloud, and the cloud lit by the sun alone.
+    bare = atmo.clouds.render(cloud, sky=False, **view)
+    assert np.all(bare[0, 0] == 0) and every[0, 0].sum() > 0
+    assert 0 < bare.mean() < every.mean()
+
+
+@pytest.mark.parametrize("particles, scattering, names", [
+    (np.zeros((0, 6)), "single", "none"),
+    (np.ones((4, 5)), "single", "six"),
+    ([[0, 1500, 0, -1.0, 0.01, 0.9]], "single", "radius"),
+    ([[0, 1500, 0, 10.0, 0.01, 1.5]], "single", "albedo"),
+    ([[0, 1500, 0, 10.0, 0.01, 0.9]], "double", "scattering"),
+])
+def test_bad_particles_are_refused_naming_them(particles, scattering, names):
+    with pytest.raises(ValueError, match=names):
+        atmo.clouds.render(particles, scattering=scattering, width=8, height=8)
