@@ -118,6 +118,18 @@ class Sky:
         return self._sky.name
 
     @property
+    def solar_irradiance(self) -> np.ndarray:
+        """The sun's irradiance at the top of the atmosphere, W m^-2 nm^-1, at
+        ``wavelengths_nm``."""
+        return self._sky.solar_irradiance
+
+    def optical_depths(self, altitude: float = 0.0) -> dict:
+        """The vertical optical depth from ``altitude`` metres to space per wavelength:
+        ``{"rayleigh": ..., "aerosols": ... (extinction), "ozone": ... (absorption)}``."""
+        rayleigh, aerosols, ozone = self._sky.optical_depths(float(altitude))
+        return {"rayleigh": rayleigh, "aerosols": aerosols, "ozone": ozone}
+
+    @property
     def order(self) -> str:
         """The highest scattering order, ``"all"`` or a number."""
         return self._sky.order
