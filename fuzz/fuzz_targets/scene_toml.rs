@@ -16,7 +16,7 @@ fuzz_target!(|data: &[u8]| {
     let end = scene.show.duration();
     for t in [0.0, 0.37 * end, end, end + 1.0] {
         scene.at_time(t);
-        for light in &scene.lights {
+        for light in scene.lights() {
             assert!(light.position.is_finite() && light.intensity.is_finite());
             assert!(light.intensity.min_element() >= 0.0);
             assert!(light.light_from_world.is_finite() && light.field_half < 1.5708);

@@ -44,6 +44,29 @@ fn values<'a>(array: &'a PyReadonlyArray1<'_, f64>, name: &str) -> PyResult<&'a 
         .map_err(|_| PyValueError::new_err(format!("{name}: a contiguous array is expected")))
 }
 
+/// Points of the sky as four flat arrays of one length (the Python layer broadcasts
+/// them): the sun's elevation, deg; the viewpoint's altitude, m; the azimuth from the
+/// sun's and the elevation of the direction looked along, deg.
+#[derive(FromPyObject)]
+struct Points<'py>(
+    PyReadonlyArray1<'py, f64>,
+    PyReadonlyArray1<'py, f64>,
+    PyReadonlyArray1<'py, f64>,
+    PyReadonlyArray1<'py, f64>,
+);
+
+impl Points<'_> {
+    /// The four arrays' values: sun elevation, altitude, azimuth, elevation.
+    fn values(&self) -> PyResult<[&[f64]; 4]> {
+        Ok([
+            values(&self.0, "sun_elevation")?,
+            values(&self.1, "altitude")?,
+            values(&self.2, "azimuth")?,
+            values(&self.3, "elevation")?,
+        ])
+    }
+}
+
 /// `values` as a `rows x columns` numpy array.
 fn matrix(py: Python<'_>, values: Vec<f32>, columns: usize) -> PyResult<Bound<'_, PyArray2<f32>>> {
     let rows = values.len() / columns.max(1);
@@ -57,7 +80,9 @@ fn picture(py: Python<'_>, frame: Frame) -> PyResult<Bound<'_, PyArray3<f32>>> {
     PyArray1::from_vec(py, flat).reshape([h, w, 3])
 }
 
-/// A level pinhole camera's view of a sky picture.
+/// A level pinhole camera's view of a sky picture, from the Python layer's dict.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
 struct Look {
     width: u32,
     height: u32,
@@ -317,22 +342,14 @@ impl Sky {
         self.settings.order.to_string()
     }
 
-    /// Radiance per wavelength, W m^-2 sr^-1 nm^-1, at point k of the flat arrays:
-    /// a viewpoint `altitude_m[k]` high, a sun `sun_elevation_deg[k]` high, looking
-    /// `azimuth_from_sun_deg[k]` away from the sun's azimuth at `elevation_deg[k]`
-    /// (below the horizon: the lit ground). `(points, wavelengths)`.
+    /// Radiance per wavelength, W m^-2 sr^-1 nm^-1, at each of `points` (below the
+    /// horizon: the lit ground): `(points, wavelengths)`.
     fn radiance<'py>(
         &self,
         py: Python<'py>,
-        sun_elevation_deg: PyReadonlyArray1<'py, f64>,
-        altitude_m: PyReadonlyArray1<'py, f64>,
-        azimuth_from_sun_deg: PyReadonlyArray1<'py, f64>,
-        elevation_deg: PyReadonlyArray1<'py, f64>,
+        points: Points<'py>,
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        let sun = values(&sun_elevation_deg, "sun_elevation")?;
-        let altitude = values(&altitude_m, "altitude")?;
-        let azimuth = values(&azimuth_from_sun_deg, "azimuth")?;
-        let elevation = values(&elevation_deg, "elevation")?;
+        let [sun, altitude, azimuth, elevation] = points.values()?;
         let n = self.atmosphere.channels();
         let out = py
             .detach(|| -> atmo::Result<Vec<f32>> {
@@ -384,30 +401,15 @@ impl Sky {
     }
 
     /// The sky as a pinhole camera sees it: a `height x width x 3` array of linear sRGB
-    /// radiance, W m^-2 sr^-1 (the sun's disc included with `sun_disc`).
-    #[pyo3(signature = (sun_elevation_deg, sun_azimuth_deg, altitude_m, width, height, fov_deg, view_azimuth_deg, view_elevation_deg, sun_disc))]
-    #[allow(clippy::too_many_arguments)]
+    /// radiance, W m^-2 sr^-1 (the sun's disc included with `look.sun_disc`).
     fn render<'py>(
         &self,
         py: Python<'py>,
         sun_elevation_deg: f64,
         sun_azimuth_deg: f64,
         altitude_m: f64,
-        width: u32,
-        height: u32,
-        fov_deg: f64,
-        view_azimuth_deg: f64,
-        view_elevation_deg: f64,
-        sun_disc: bool,
+        look: Look,
     ) -> PyResult<Bound<'py, PyArray3<f32>>> {
-        let look = Look {
-            width,
-            height,
-            fov_deg,
-            azimuth_deg: view_azimuth_deg,
-            elevation_deg: view_elevation_deg,
-            sun_disc,
-        };
         let frame = py
             .detach(|| -> atmo::Result<Frame> {
                 let sun = Sun::from_degrees(sun_elevation_deg, sun_azimuth_deg)?;
@@ -520,21 +522,15 @@ impl SkyTable {
         (axis.min(), axis.max())
     }
 
-    /// Linear sRGB radiance, W m^-2 sr^-1, at point k of the flat arrays (as
-    /// [`Sky::radiance`]; below the horizon, where the table holds no sky, 0):
-    /// `(points, 3)`. One map a distinct (sun, altitude) pair.
+    /// Linear sRGB radiance, W m^-2 sr^-1, at each of `points` (below the horizon,
+    /// where the table holds no sky, 0): `(points, 3)`. One map a distinct (sun,
+    /// altitude) pair.
     fn radiance<'py>(
         &self,
         py: Python<'py>,
-        sun_elevation_deg: PyReadonlyArray1<'py, f64>,
-        altitude_m: PyReadonlyArray1<'py, f64>,
-        azimuth_from_sun_deg: PyReadonlyArray1<'py, f64>,
-        elevation_deg: PyReadonlyArray1<'py, f64>,
+        points: Points<'py>,
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        let sun = values(&sun_elevation_deg, "sun_elevation")?;
-        let altitude = values(&altitude_m, "altitude")?;
-        let azimuth = values(&azimuth_from_sun_deg, "azimuth")?;
-        let elevation = values(&elevation_deg, "elevation")?;
+        let [sun, altitude, azimuth, elevation] = points.values()?;
         let out = py
             .detach(|| -> atmo::Result<Vec<f32>> {
                 let mut pictures: HashMap<(u64, u64), SkyPicture> = HashMap::new();
@@ -559,29 +555,14 @@ impl SkyTable {
     }
 
     /// The sky as a pinhole camera sees it, from the table (as [`Sky::render`]).
-    #[pyo3(signature = (sun_elevation_deg, sun_azimuth_deg, altitude_m, width, height, fov_deg, view_azimuth_deg, view_elevation_deg, sun_disc))]
-    #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
         py: Python<'py>,
         sun_elevation_deg: f64,
         sun_azimuth_deg: f64,
         altitude_m: f64,
-        width: u32,
-        height: u32,
-        fov_deg: f64,
-        view_azimuth_deg: f64,
-        view_elevation_deg: f64,
-        sun_disc: bool,
+        look: Look,
     ) -> PyResult<Bound<'py, PyArray3<f32>>> {
-        let look = Look {
-            width,
-            height,
-            fov_deg,
-            azimuth_deg: view_azimuth_deg,
-            elevation_deg: view_elevation_deg,
-            sun_disc,
-        };
         let frame = py
             .detach(|| -> atmo::Result<Frame> {
                 let sun = Sun::from_degrees(sun_elevation_deg, sun_azimuth_deg)?;

@@ -192,16 +192,16 @@ def _radiance(source, sun_elevation, azimuth, elevation, altitude, sun_azimuth):
     axis (wavelengths or RGB)."""
     shape, (sun, az, el, h, sun_az) = _flat(
         sun_elevation, azimuth, elevation, altitude, sun_azimuth)
-    flat = source.radiance(sun, h, np.ascontiguousarray(az - sun_az), el)
+    flat = source.radiance((sun, h, np.ascontiguousarray(az - sun_az), el))
     return flat.reshape(shape + (flat.shape[-1],))
 
 
 def _render(source, sun_elevation, width, height, fov, sun_azimuth, altitude,
             view_azimuth, view_elevation, sun_disc):
-    look = sun_azimuth if view_azimuth is None else view_azimuth
-    return source.render(float(sun_elevation), float(sun_azimuth), float(altitude),
-                         int(width), int(height), float(fov), float(look),
-                         float(view_elevation), bool(sun_disc))
+    look = {"width": int(width), "height": int(height), "fov_deg": float(fov),
+            "azimuth_deg": float(sun_azimuth if view_azimuth is None else view_azimuth),
+            "elevation_deg": float(view_elevation), "sun_disc": bool(sun_disc)}
+    return source.render(float(sun_elevation), float(sun_azimuth), float(altitude), look)
 
 
 class SkyTable:

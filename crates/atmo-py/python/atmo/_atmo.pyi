@@ -1,9 +1,23 @@
 # Types of the extension module; the documented API is atmo's (__init__.py, shafts.py).
 from os import PathLike
-from typing import List, Optional, Tuple, Union
+from typing import List, Optional, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
+
+F64 = npt.NDArray[np.float64]
+# Sun elevation (deg), altitude (m), azimuth from the sun's and elevation (deg), flat.
+Points = Tuple[F64, F64, F64, F64]
+
+
+class Look(TypedDict):
+    width: int
+    height: int
+    fov_deg: float
+    azimuth_deg: float
+    elevation_deg: float
+    sun_disc: bool
+
 
 class Sky:
     def __init__(self, preset: Optional[str] = None,
@@ -20,13 +34,9 @@ class Sky:
     def optical_depths(self, altitude_m: float) -> Tuple[npt.NDArray[np.float64],
                                                         npt.NDArray[np.float64],
                                                         npt.NDArray[np.float64]]: ...
-    def radiance(self, sun_elevation_deg: npt.NDArray[np.float64],
-                 altitude_m: npt.NDArray[np.float64],
-                 azimuth_from_sun_deg: npt.NDArray[np.float64],
-                 elevation_deg: npt.NDArray[np.float64]) -> npt.NDArray[np.float32]: ...
+    def radiance(self, points: Points) -> npt.NDArray[np.float32]: ...
     def render(self, sun_elevation_deg: float, sun_azimuth_deg: float, altitude_m: float,
-               width: int, height: int, fov_deg: float, view_azimuth_deg: float,
-               view_elevation_deg: float, sun_disc: bool) -> npt.NDArray[np.float32]: ...
+               look: Look) -> npt.NDArray[np.float32]: ...
     def irradiance(self, sun_elevation_deg: npt.NDArray[np.float64],
                    sun_azimuth_deg: npt.NDArray[np.float64], altitude_m: float,
                    normals: npt.NDArray[np.float64]
@@ -41,13 +51,9 @@ class SkyTable:
     def sun_elevation_range(self) -> Tuple[float, float]: ...
     @property
     def altitude_range(self) -> Tuple[float, float]: ...
-    def radiance(self, sun_elevation_deg: npt.NDArray[np.float64],
-                 altitude_m: npt.NDArray[np.float64],
-                 azimuth_from_sun_deg: npt.NDArray[np.float64],
-                 elevation_deg: npt.NDArray[np.float64]) -> npt.NDArray[np.float32]: ...
+    def radiance(self, points: Points) -> npt.NDArray[np.float32]: ...
     def render(self, sun_elevation_deg: float, sun_azimuth_deg: float, altitude_m: float,
-               width: int, height: int, fov_deg: float, view_azimuth_deg: float,
-               view_elevation_deg: float, sun_disc: bool) -> npt.NDArray[np.float32]: ...
+               look: Look) -> npt.NDArray[np.float32]: ...
 
 def sun_position(latitude_deg: float, longitude_deg: float, altitude_m: float,
                  unix_ns: npt.NDArray[np.int64]
