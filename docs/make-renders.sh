@@ -3,7 +3,8 @@
 # make-sky-contact-sheet.sh, and the clouds, GPU, table and window pictures that have
 # the sky in them) with the release binary (cargo build --release -p atmo-cli), then
 # assembles the multi-panel ones with ImageMagick's montage. The window's pictures need
-# a display: run under xvfb-run. Run from the repository's root.
+# a display: run under xvfb-run -s '-screen 0 1280x800x24' (the embedding example's
+# window is 800 x 600). Run from the repository's root.
 set -euo pipefail
 atmo=${ATMO:-target/release/atmo}
 r=docs/renders
@@ -49,3 +50,12 @@ printf '1 key right\n2 key right\n' > "$tmp/sun.txt"
     --script "$tmp/sun.txt" --screenshot "$r/view-clouds.png"
 "$atmo" view sky --sun-elevation 3 --altitude 2000 --pitch 5 --exposure 0.3 --backend cpu \
     --frames 2 --screenshot "$r/view-sky.png"
+
+# The embedding example (a window of its own, no screenshot key): its window grabbed
+# from the display after it has drawn (cargo build --release -p atmo-gpu --example embed).
+target/release/examples/embed &
+embed=$!
+sleep 40
+import -window root "$tmp/root.png"
+kill "$embed"
+convert "$tmp/root.png" -crop 800x600+0+0 +repage "$r/embed-aerial.png"
