@@ -5,13 +5,17 @@ for 100 suns (1 to 89 deg), every order of the default Earth at sea level:
 
 - python.radiance: one `Sky.radiance` call in a process that has made the model
   (the model's first computation is timed apart, as python.cold);
-- its baseline: `atmo sky --probe DIRS.csv --sun-elevation S` once per sun, a process
+- python.table: the same through a skylight table (`--table`, from `atmo precompute
+  sky`), linear sRGB; the CLI cannot probe a table, so its baseline is the same;
+- their baseline: `atmo sky --probe DIRS.csv --sun-elevation S` once per sun, a process
   each, as a program had to before the package. The CLI is timed on `--cli-suns` of
   the suns (10 unless given) and scaled to 100, since each call takes seconds.
 
 Prints one JSON line per case in `atmo bench --json`'s format, for docs/bench:
 
-    python crates/atmo-py/bench/radiance.py --atmo target/release/atmo > docs/bench/python.json
+    atmo precompute sky -o earth.atmo-sky
+    python crates/atmo-py/bench/radiance.py --atmo target/release/atmo \
+        --table earth.atmo-sky > docs/bench/python.json
 """
 
 import argparse
@@ -26,13 +30,15 @@ import numpy as np
 
 import atmo
 
-COMMAND = "python crates/atmo-py/bench/radiance.py --atmo target/release/atmo"
+COMMAND = ("python crates/atmo-py/bench/radiance.py --atmo target/release/atmo "
+           "--table earth.atmo-sky")
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--atmo", required=True, help="the atmo binary")
     parser.add_argument("--cli-suns", type=int, default=10)
+    parser.add_argument("--table", help="a skylight table (atmo precompute sky)")
     args = parser.parse_args()
 
     az = np.linspace(0.0, 360.0, 100, endpoint=False)
@@ -48,6 +54,15 @@ def main():
     L = sky.radiance(sun_elevation=suns[:, None, None], azimuth=az[None, None, :],
                      elevation=el[None, :, None])
     python_ms = 1e3 * (time.perf_counter() - start)
+
+    table_ms = None
+    if args.table:
+        table = atmo.SkyTable(args.table)
+        start = time.perf_counter()
+        rgb = table.radiance(sun_elevation=suns[:, None, None], azimuth=az[None, None, :],
+                             elevation=el[None, :, None])
+        table_ms = 1e3 * (time.perf_counter() - start)
+        assert rgb.shape == L.shape[:-1] + (3,)
 
     with tempfile.TemporaryDirectory() as folder:
         dirs = os.path.join(folder, "dirs.csv")
@@ -78,7 +93,13 @@ def main():
          "error": {"max_relative_to_cli": worst}},
         {"bench": "python.cold", "command": COMMAND, "params": params,
          "median_ms": cold_ms},
-    ]:
+    ] + ([] if table_ms is None else [
+        {"bench": "python.table", "command": COMMAND,
+         "params": dict(params, wavelengths=3, order="the table's"),
+         "median_ms": table_ms,
+         "baseline": f"atmo sky --probe, a process a sun ({args.cli_suns} timed, scaled)",
+         "baseline_median_ms": cli_ms, "ratio": cli_ms / table_ms},
+    ]):
         print(json.dumps(line, sort_keys=True))
 
 
