@@ -1,12 +1,12 @@
 //! `atmo precompute sky`: the skylight table over sun elevation and altitude,
 //! compressed by SVD (sky 4.1), written to a `.atmo-sky` file.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::Result;
 use atmo::image::Display;
-use atmo::sky::table::{ErrorBound, SkylightTable, TableSettings};
+use atmo::sky::table::{parts, ErrorBound, SkylightTable, TablePart, TableSettings};
 use clap::{Args, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -26,9 +26,20 @@ enum Precompute {
 
 #[derive(Args)]
 pub struct SkyTableArgs {
-    /// Output table file (.atmo-sky by convention).
+    /// Output table file (.atmo-sky by convention); with --part, the folder the part's
+    /// file goes into.
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
+    /// Compute part K of N (K from 1 to N) of the table's maps, for a render farm: the
+    /// part's file goes into the folder -o, and is kept if it is there already (a
+    /// requeued task resumes). `--merge` makes the table from all N.
+    #[arg(long, value_name = "K/N", value_parser = parse_part, conflicts_with = "merge")]
+    part: Option<(usize, usize)>,
+    /// Make the table from the parts in this folder (each once, of one precompute), with
+    /// their atmosphere and settings (the settings given here are not used); byte for
+    /// byte the table a whole run makes.
+    #[arg(long, value_name = "FOLDER")]
+    merge: Option<PathBuf>,
     #[command(flatten)]
     medium: AtmosphereArgs,
     #[command(flatten)]
@@ -83,8 +94,24 @@ fn parse_fraction(s: &str) -> std::result::Result<f32, String> {
     }
 }
 
+/// `K/N` with 1 <= K <= N, as (K - 1, N).
+fn parse_part(s: &str) -> std::result::Result<(usize, usize), String> {
+    let (k, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("`{s}`: write the part as K/N, e.g. 3/16"))?;
+    let number = |t: &str| t.trim().parse::<usize>().map_err(|e| format!("`{t}`: {e}"));
+    let (k, n) = (number(k)?, number(n)?);
+    if !(1..=n).contains(&k) {
+        return Err(format!("part {k} of {n}: K runs from 1 to N"));
+    }
+    Ok((k - 1, n))
+}
+
 pub fn run(args: PrecomputeArgs) -> Result<()> {
     let Precompute::Sky(args) = args.what;
+    if let Some(folder) = &args.merge {
+        return merge(folder, &args.output);
+    }
     let atmosphere = args.medium.load()?;
     let settings = TableSettings {
         sky: args.method.settings(&args.medium),
@@ -104,20 +131,15 @@ pub fn run(args: PrecomputeArgs) -> Result<()> {
         },
     };
     settings.validate(&atmosphere)?;
+    if let Some((part, parts)) = args.part {
+        return compute_part(&atmosphere, &settings, part, parts, &args.output);
+    }
     atmo::files::check_folder(&args.output)?;
     if let Some(input) = &args.medium.atmosphere {
         atmo::files::check_distinct(&args.output, &[("--atmosphere", input)])?;
     }
     let start = Instant::now();
-    let bar = ProgressBar::new((settings.sun_steps * settings.altitude_steps) as u64)
-        .with_style(
-            ProgressStyle::with_template(
-                "{msg} [{bar:32}] {pos}/{len} skylight maps, {elapsed} elapsed, ETA {eta}",
-            )
-            .expect("valid template")
-            .progress_chars("=> "),
-        )
-        .with_message("shell method");
+    let bar = maps_bar(settings.sun_steps * settings.altitude_steps);
     let values = SkylightTable::skylight_matrices(&atmosphere, &settings, &|done, _| {
         bar.set_position(done as u64)
     })?;
@@ -137,6 +159,110 @@ pub fn run(args: PrecomputeArgs) -> Result<()> {
          {svd_s:.1} s; {} terms at most; largest error at the grid points {:.3} epsilon",
         args.output.display(),
         settings.sun_steps * settings.altitude_steps,
+        table.max_terms(),
+        table.grid_error(),
+    );
+    Ok(())
+}
+
+/// A bar on the terminal counting `maps` skylight maps.
+fn maps_bar(maps: usize) -> ProgressBar {
+    ProgressBar::new(maps as u64)
+        .with_style(
+            ProgressStyle::with_template(
+                "{msg} [{bar:32}] {pos}/{len} skylight maps, {elapsed} elapsed, ETA {eta}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        )
+        .with_message("shell method")
+}
+
+/// `--part K/N`: part `part` (from 0) of `parts` into the folder `folder`, unless a valid
+/// file of that part with the same atmosphere and settings is there already.
+fn compute_part(
+    atmosphere: &atmo::Atmosphere,
+    settings: &TableSettings,
+    part: usize,
+    parts: usize,
+    folder: &Path,
+) -> Result<()> {
+    if folder.exists() && !folder.is_dir() {
+        return Err(atmo::Error::Invalid(format!(
+            "{}: with --part, -o names a folder for the parts",
+            folder.display()
+        ))
+        .into());
+    }
+    let path = folder.join(TablePart::file_name(part, parts));
+    if let Ok(done) = TablePart::read(&path) {
+        let columns = TablePart::columns(settings.sun_steps * settings.altitude_steps, part, parts);
+        if done.index() == (part, parts) && done.is_of(atmosphere, settings) {
+            eprintln!(
+                "atmo: {} is there already ({} skylight maps); kept",
+                path.display(),
+                columns.len()
+            );
+            return Ok(());
+        }
+    }
+    std::fs::create_dir_all(folder).map_err(atmo::Error::io_at(folder))?;
+    let start = Instant::now();
+    let total = settings.sun_steps * settings.altitude_steps;
+    let bar = maps_bar(TablePart::columns(total, part, parts).len());
+    let computed = TablePart::compute(atmosphere, settings, part, parts, &|done, _| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
+    computed?.write(&path)?;
+    eprintln!(
+        "atmo: {} ({} skylight maps of {total}) in {:.1} s",
+        path.display(),
+        TablePart::columns(total, part, parts).len(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// `--merge FOLDER`: the table from every part file in `folder`.
+fn merge(folder: &Path, output: &Path) -> Result<()> {
+    atmo::files::check_folder(output)?;
+    let entries = std::fs::read_dir(folder).map_err(atmo::Error::io_at(folder))?;
+    let mut paths = Vec::new();
+    for entry in entries {
+        let path = entry.map_err(atmo::Error::io_at(folder))?.path();
+        if path.extension().is_some_and(|e| e == parts::EXTENSION) {
+            paths.push(path);
+        }
+    }
+    paths.sort();
+    if paths.is_empty() {
+        return Err(atmo::Error::Invalid(format!(
+            "{}: no .{} files to merge (make them with `atmo precompute sky --part K/N`)",
+            folder.display(),
+            parts::EXTENSION
+        ))
+        .into());
+    }
+    let start = Instant::now();
+    let parts = paths
+        .iter()
+        .map(|p| TablePart::read(p))
+        .collect::<atmo::Result<Vec<_>>>()?;
+    let read_s = start.elapsed().as_secs_f64();
+    let count = parts.len();
+    let spinner = ProgressBar::new_spinner().with_message("SVD and term counts per channel");
+    spinner.enable_steady_tick(Duration::from_millis(120));
+    let table = SkylightTable::merge(parts);
+    spinner.finish_and_clear();
+    let table = table?;
+    table.write(output)?;
+    eprintln!(
+        "atmo: {} ({} bytes) from {count} parts: read in {read_s:.1} s, SVD and term counts in \
+         {:.1} s; {} terms at most; largest error at the grid points {:.3} epsilon",
+        output.display(),
+        std::fs::metadata(output)?.len(),
+        start.elapsed().as_secs_f64() - read_s,
         table.max_terms(),
         table.grid_error(),
     );

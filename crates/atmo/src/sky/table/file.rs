@@ -56,39 +56,8 @@ impl SkylightTable {
         let mut w = Vec::new();
         w.extend_from_slice(MAGIC);
         put_u32(&mut w, VERSION);
-        let toml = self.atmosphere.to_toml();
-        put_u32(&mut w, toml.len() as u32);
-        w.extend_from_slice(toml.as_bytes());
-        let (s, sky) = (&self.settings, &self.settings.sky);
-        for v in [
-            sky.shells,
-            sky.directions,
-            sky.scattering_directions,
-            sky.sun_bins,
-            // 0 for every order (version 2).
-            match sky.order {
-                Order::Through(n) => n as usize,
-                Order::All => 0,
-            },
-        ] {
-            put_u32(&mut w, v as u32);
-        }
-        w.push(sky.multiple_mie as u8);
-        put_f64(&mut w, sky.max_interval_m);
-        put_u32(&mut w, s.sun_steps as u32);
-        put_f64(&mut w, s.min_sun_elevation);
-        put_f64(&mut w, s.sun_horizon_density);
-        put_u32(&mut w, s.altitude_steps as u32);
-        put_f64(&mut w, s.max_altitude_m);
-        put_f64(&mut w, s.altitude_power);
-        put_f32(&mut w, s.bound.epsilon);
-        put_f32(&mut w, s.bound.display.exposure);
-        w.push(match s.bound.display.tone {
-            ToneMap::Clamp => 0,
-            ToneMap::Exponential => 1,
-            ToneMap::Aces => 2,
-        });
-        w.push(s.bound.srgb as u8);
+        put_settings(&mut w, &self.atmosphere, &self.settings);
+        let s = &self.settings;
         put_f32(&mut w, self.grid_error);
         let f = &self.factors;
         put_u32(&mut w, f.sigma.len() as u32);
@@ -146,100 +115,19 @@ impl SkylightTable {
 
     /// Parses and validates the bytes of a table file; `origin` names it in errors.
     pub fn from_bytes(bytes: &[u8], origin: &str) -> Result<Self> {
-        let fail = |message: String| Error::Parse {
-            path: origin.to_string(),
-            message,
-        };
-        if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
-            return Err(fail(
-                "not an atmo sky table (it does not start with 'atmo-sky'); make one with \
-                 `atmo precompute sky`"
-                    .into(),
-            ));
-        }
-        let body = bytes
-            .len()
-            .checked_sub(4)
-            .filter(|&n| n >= 12)
-            .ok_or_else(|| fail("truncated: too short to hold a header and a checksum".into()))?;
-        let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-        if !(1..=VERSION).contains(&version) {
-            return Err(fail(format!(
-                "table file version {version}; this atmo reads versions 1 to {VERSION}"
-            )));
-        }
-        let stored = u32::from_le_bytes(bytes[body..].try_into().expect("4 bytes"));
-        if crc32fast::hash(&bytes[..body]) != stored {
-            return Err(fail(
-                "damaged: the checksum does not match (the file was truncated or altered)".into(),
-            ));
-        }
-        let mut r = Reader {
-            bytes: &bytes[..body],
-            at: 12,
-        };
-        Self::parse(&mut r, origin).map_err(|e| match e {
-            Error::Invalid(message) => fail(message),
-            other => other,
-        })
+        let (_, mut r) = open(
+            bytes,
+            MAGIC,
+            VERSION,
+            origin,
+            "an atmo sky table (it does not start with 'atmo-sky'); make one with `atmo \
+             precompute sky`",
+        )?;
+        Self::parse(&mut r, origin).map_err(|e| in_file(e, origin))
     }
 
     fn parse(r: &mut Reader, origin: &str) -> Result<Self> {
-        let toml_len = r.u32("atmosphere length")? as usize;
-        let toml = std::str::from_utf8(r.take(toml_len, "atmosphere")?)
-            .map_err(|_| Error::Invalid("the atmosphere is not UTF-8".into()))?;
-        let atmosphere = Atmosphere::from_toml_str(toml, &format!("{origin} (atmosphere)"))?;
-        let mut sky = SkySettings {
-            shells: r.u32("shells")? as usize,
-            directions: r.u32("directions")? as usize,
-            scattering_directions: r.u32("scattering directions")? as usize,
-            sun_bins: r.u32("sun bins")? as usize,
-            order: match r.u32("order")? {
-                0 => Order::All,
-                n => Order::Through(n),
-            },
-            ..SkySettings::default()
-        };
-        sky.multiple_mie = match r.take(1, "multiple Mie")?[0] {
-            0 => false,
-            1 => true,
-            v => return Err(Error::Invalid(format!("multiple Mie flag {v}, not 0 or 1"))),
-        };
-        sky.max_interval_m = r.f64("longest interval")?;
-        let sun_steps = r.u32("sun steps")? as usize;
-        let min_sun_elevation = r.f64("lowest sun elevation")?;
-        let sun_horizon_density = r.f64("sun density at the horizon")?;
-        let altitude_steps = r.u32("altitude steps")? as usize;
-        let max_altitude_m = r.f64("highest altitude")?;
-        let altitude_power = r.f64("altitude spacing power")?;
-        let epsilon = r.f32("epsilon")?;
-        let exposure = r.f32("exposure")?;
-        let tone = match r.take(1, "tone map")?[0] {
-            0 => ToneMap::Clamp,
-            1 => ToneMap::Exponential,
-            2 => ToneMap::Aces,
-            v => return Err(Error::Invalid(format!("tone map {v}, not 0, 1 or 2"))),
-        };
-        let srgb = match r.take(1, "sRGB flag")?[0] {
-            0 => false,
-            1 => true,
-            v => return Err(Error::Invalid(format!("sRGB flag {v}, not 0 or 1"))),
-        };
-        let settings = TableSettings {
-            sky,
-            sun_steps,
-            min_sun_elevation,
-            sun_horizon_density,
-            altitude_steps,
-            max_altitude_m,
-            altitude_power,
-            bound: ErrorBound {
-                epsilon,
-                display: Display { exposure, tone },
-                srgb,
-            },
-        };
-        settings.validate(&atmosphere)?;
+        let (atmosphere, settings) = parse_settings(r, origin)?;
         let grid_error = r.f32("grid error")?;
         if !(0.0..=1.0).contains(&grid_error) {
             return Err(Error::Invalid(format!(
@@ -264,6 +152,158 @@ impl SkylightTable {
             factors,
         })
     }
+}
+
+/// The checksummed body of a file that starts with `magic` and a version from 1 to
+/// `newest`, after the version; `what` says what the file should be, for the error when
+/// the magic differs. Errors name `origin`.
+pub(super) fn open<'a>(
+    bytes: &'a [u8],
+    magic: &[u8; 8],
+    newest: u32,
+    origin: &str,
+    what: &str,
+) -> Result<(u32, Reader<'a>)> {
+    let fail = |message: String| Error::Parse {
+        path: origin.to_string(),
+        message,
+    };
+    if bytes.len() < magic.len() || &bytes[..magic.len()] != magic {
+        return Err(fail(format!("not {what}")));
+    }
+    let body = bytes
+        .len()
+        .checked_sub(4)
+        .filter(|&n| n >= 12)
+        .ok_or_else(|| fail("truncated: too short to hold a header and a checksum".into()))?;
+    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+    if !(1..=newest).contains(&version) {
+        return Err(fail(format!(
+            "file version {version}; this atmo reads versions 1 to {newest}"
+        )));
+    }
+    let stored = u32::from_le_bytes(bytes[body..].try_into().expect("4 bytes"));
+    if crc32fast::hash(&bytes[..body]) != stored {
+        return Err(fail(
+            "damaged: the checksum does not match (the file was truncated or altered)".into(),
+        ));
+    }
+    Ok((
+        version,
+        Reader {
+            bytes: &bytes[..body],
+            at: 12,
+        },
+    ))
+}
+
+/// A content error of the file `origin` as a parse error naming it.
+pub(super) fn in_file(e: Error, origin: &str) -> Error {
+    match e {
+        Error::Invalid(message) => Error::Parse {
+            path: origin.to_string(),
+            message,
+        },
+        other => other,
+    }
+}
+
+/// Writes the atmosphere and the settings, the part every table and every part of a
+/// split precompute begins with (the layout's rows from the atmosphere to the sRGB flag).
+pub(super) fn put_settings(w: &mut Vec<u8>, atmosphere: &Atmosphere, s: &TableSettings) {
+    let toml = atmosphere.to_toml();
+    put_u32(w, toml.len() as u32);
+    w.extend_from_slice(toml.as_bytes());
+    let sky = &s.sky;
+    for v in [
+        sky.shells,
+        sky.directions,
+        sky.scattering_directions,
+        sky.sun_bins,
+        // 0 for every order (version 2).
+        match sky.order {
+            Order::Through(n) => n as usize,
+            Order::All => 0,
+        },
+    ] {
+        put_u32(w, v as u32);
+    }
+    w.push(sky.multiple_mie as u8);
+    put_f64(w, sky.max_interval_m);
+    put_u32(w, s.sun_steps as u32);
+    put_f64(w, s.min_sun_elevation);
+    put_f64(w, s.sun_horizon_density);
+    put_u32(w, s.altitude_steps as u32);
+    put_f64(w, s.max_altitude_m);
+    put_f64(w, s.altitude_power);
+    put_f32(w, s.bound.epsilon);
+    put_f32(w, s.bound.display.exposure);
+    w.push(match s.bound.display.tone {
+        ToneMap::Clamp => 0,
+        ToneMap::Exponential => 1,
+        ToneMap::Aces => 2,
+    });
+    w.push(s.bound.srgb as u8);
+}
+
+/// Reads what [`put_settings`] wrote, validated.
+pub(super) fn parse_settings(r: &mut Reader, origin: &str) -> Result<(Atmosphere, TableSettings)> {
+    let toml_len = r.u32("atmosphere length")? as usize;
+    let toml = std::str::from_utf8(r.take(toml_len, "atmosphere")?)
+        .map_err(|_| Error::Invalid("the atmosphere is not UTF-8".into()))?;
+    let atmosphere = Atmosphere::from_toml_str(toml, &format!("{origin} (atmosphere)"))?;
+    let mut sky = SkySettings {
+        shells: r.u32("shells")? as usize,
+        directions: r.u32("directions")? as usize,
+        scattering_directions: r.u32("scattering directions")? as usize,
+        sun_bins: r.u32("sun bins")? as usize,
+        order: match r.u32("order")? {
+            0 => Order::All,
+            n => Order::Through(n),
+        },
+        ..SkySettings::default()
+    };
+    sky.multiple_mie = match r.take(1, "multiple Mie")?[0] {
+        0 => false,
+        1 => true,
+        v => return Err(Error::Invalid(format!("multiple Mie flag {v}, not 0 or 1"))),
+    };
+    sky.max_interval_m = r.f64("longest interval")?;
+    let sun_steps = r.u32("sun steps")? as usize;
+    let min_sun_elevation = r.f64("lowest sun elevation")?;
+    let sun_horizon_density = r.f64("sun density at the horizon")?;
+    let altitude_steps = r.u32("altitude steps")? as usize;
+    let max_altitude_m = r.f64("highest altitude")?;
+    let altitude_power = r.f64("altitude spacing power")?;
+    let epsilon = r.f32("epsilon")?;
+    let exposure = r.f32("exposure")?;
+    let tone = match r.take(1, "tone map")?[0] {
+        0 => ToneMap::Clamp,
+        1 => ToneMap::Exponential,
+        2 => ToneMap::Aces,
+        v => return Err(Error::Invalid(format!("tone map {v}, not 0, 1 or 2"))),
+    };
+    let srgb = match r.take(1, "sRGB flag")?[0] {
+        0 => false,
+        1 => true,
+        v => return Err(Error::Invalid(format!("sRGB flag {v}, not 0 or 1"))),
+    };
+    let settings = TableSettings {
+        sky,
+        sun_steps,
+        min_sun_elevation,
+        sun_horizon_density,
+        altitude_steps,
+        max_altitude_m,
+        altitude_power,
+        bound: ErrorBound {
+            epsilon,
+            display: Display { exposure, tone },
+            srgb,
+        },
+    };
+    settings.validate(&atmosphere)?;
+    Ok((atmosphere, settings))
 }
 
 fn read_factors(r: &mut Reader, rows: usize, cols: usize, sun_steps: usize) -> Result<Factors> {
@@ -345,7 +385,7 @@ fn read_factors(r: &mut Reader, rows: usize, cols: usize, sun_steps: usize) -> R
     })
 }
 
-fn put_u32(w: &mut Vec<u8>, v: u32) {
+pub(super) fn put_u32(w: &mut Vec<u8>, v: u32) {
     w.extend_from_slice(&v.to_le_bytes());
 }
 
@@ -381,7 +421,7 @@ fn unpack(bytes: &[u8], count: usize) -> Result<Vec<i16>> {
         .collect())
 }
 
-fn put_f32(w: &mut Vec<u8>, v: f32) {
+pub(super) fn put_f32(w: &mut Vec<u8>, v: f32) {
     w.extend_from_slice(&v.to_le_bytes());
 }
 
@@ -390,13 +430,18 @@ fn put_f64(w: &mut Vec<u8>, v: f64) {
 }
 
 /// A cursor over the checksummed bytes; running past the end names what was missing.
-struct Reader<'a> {
+pub(super) struct Reader<'a> {
     bytes: &'a [u8],
-    at: usize,
+    pub(super) at: usize,
 }
 
 impl Reader<'_> {
-    fn take(&mut self, n: usize, what: &str) -> Result<&[u8]> {
+    /// How many bytes the body holds.
+    pub(super) fn bytes_len(&self) -> usize {
+        self.bytes.len()
+    }
+
+    pub(super) fn take(&mut self, n: usize, what: &str) -> Result<&[u8]> {
         let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len());
         let end = end.ok_or_else(|| {
             Error::Invalid(format!("ends inside the {what} (at byte {})", self.at))
@@ -406,18 +451,18 @@ impl Reader<'_> {
         Ok(out)
     }
 
-    fn u32(&mut self, what: &str) -> Result<u32> {
+    pub(super) fn u32(&mut self, what: &str) -> Result<u32> {
         Ok(u32::from_le_bytes(
             self.take(4, what)?.try_into().expect("4 bytes"),
         ))
     }
 
-    fn f32(&mut self, what: &str) -> Result<f32> {
+    pub(super) fn f32(&mut self, what: &str) -> Result<f32> {
         let v = f32::from_le_bytes(self.take(4, what)?.try_into().expect("4 bytes"));
         finite(v as f64, what).map(|_| v)
     }
 
-    fn f64(&mut self, what: &str) -> Result<f64> {
+    pub(super) fn f64(&mut self, what: &str) -> Result<f64> {
         let v = f64::from_le_bytes(self.take(8, what)?.try_into().expect("8 bytes"));
         finite(v, what).map(|_| v)
     }

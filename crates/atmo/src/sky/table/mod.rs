@@ -17,6 +17,7 @@
 //! 16-bit fixed point and the term counts measured on them as stored; and the table holds
 //! linear sRGB radiance rather than 8-bit values, so any exposure can be drawn from it.
 
+use std::ops::Range;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
@@ -28,11 +29,13 @@ mod draw;
 mod error_bound;
 mod factors;
 mod file;
+pub mod parts;
 pub mod svd;
 
 pub use axes::TableAxis;
 pub use error_bound::ErrorBound;
 pub use factors::TableFactors;
+pub use parts::TablePart;
 
 use super::grid::DirectionGrid;
 use super::{ShellLight, SkyModel, SkySettings};
@@ -203,11 +206,31 @@ impl SkylightTable {
         settings: &TableSettings,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<[Vec<f32>; CHANNELS]> {
+        let total = settings.sun_steps * settings.altitude_steps;
+        let maps = Self::skylight_maps(atmosphere, settings, 0..total, progress)?;
+        Ok(matrices(settings, &maps))
+    }
+
+    /// The skylight maps of the columns `columns` of sky (16) (column `altitude * M +
+    /// sun`), one after the other, each `L x L` linear sRGB values. A map depends on
+    /// its column alone, so maps computed in parts are those of one whole run, bit for
+    /// bit (each part computes the light at the shells of every altitude again).
+    pub fn skylight_maps(
+        atmosphere: &Atmosphere,
+        settings: &TableSettings,
+        columns: Range<usize>,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<Vec<[f32; 3]>> {
         settings.validate(atmosphere)?;
         let (sun, altitude) = (settings.sun_axis(), settings.altitude_axis());
+        let total = sun.count() * altitude.count();
+        if columns.start >= columns.end || columns.end > total {
+            return Err(Error::Invalid(format!(
+                "columns {columns:?} of a table with {total}"
+            )));
+        }
         let transmittance = Arc::new(TransmittanceTable::new(atmosphere));
         let colour = SpectrumToRgb::for_atmosphere(atmosphere);
-        let total = sun.count() * altitude.count();
         let done = AtomicUsize::new(0);
         // The light at the shells once, with a shell through every altitude: the
         // altitudes' models share it (the higher orders would cost seconds each).
@@ -218,30 +241,25 @@ impl SkylightTable {
             &settings.sky,
             &altitudes,
         )?);
-        // Per altitude, the maps of every sun: [sun][direction].
-        let maps: Vec<Vec<[f32; 3]>> = (0..altitude.count())
+        // The model of each altitude the columns reach, then the columns in parallel
+        // (a part may hold a single altitude).
+        let m = sun.count();
+        let first = columns.start / m;
+        let models: Vec<SkyModel> = (first..=(columns.end - 1) / m)
             .into_par_iter()
-            .map(|a| {
-                let model = shared_model(atmosphere, settings, light.clone(), altitude.value(a))?;
-                let mut out = Vec::new();
-                for s in 0..sun.count() {
-                    out.extend(model.skylight_map(sun.value(s)).to_rgb(&colour));
-                    progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-                }
-                Ok(out)
-            })
+            .map(|a| shared_model(atmosphere, settings, light.clone(), altitude.value(a)))
             .collect::<Result<_>>()?;
-        let rows = settings.sky.directions.pow(2);
-        Ok(std::array::from_fn(|c| {
-            let mut m = vec![0.0f32; rows * total];
-            m.par_chunks_mut(total).enumerate().for_each(|(d, row)| {
-                for (column, v) in row.iter_mut().enumerate() {
-                    let (a, s) = (column / sun.count(), column % sun.count());
-                    *v = maps[a][s * rows + d][c];
-                }
-            });
-            m
-        }))
+        let maps: Vec<Vec<[f32; 3]>> = columns
+            .clone()
+            .into_par_iter()
+            .map(|column| {
+                let model = &models[column / m - first];
+                let map = model.skylight_map(sun.value(column % m)).to_rgb(&colour);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, columns.len());
+                map
+            })
+            .collect();
+        Ok(maps.concat())
     }
 
     /// The table from the matrices of [`SkylightTable::skylight_matrices`].
@@ -417,6 +435,22 @@ impl SkylightTable {
             .map(Vec3::from)
             .collect()
     }
+}
+
+/// The matrices of sky (16) from every column's map, as [`SkylightTable::skylight_maps`]
+/// gives them: `[direction][column]` per channel.
+fn matrices(settings: &TableSettings, maps: &[[f32; 3]]) -> [Vec<f32>; CHANNELS] {
+    let rows = settings.sky.directions.pow(2);
+    let total = maps.len() / rows;
+    std::array::from_fn(|c| {
+        let mut m = vec![0.0f32; rows * total];
+        m.par_chunks_mut(total).enumerate().for_each(|(d, row)| {
+            for (column, v) in row.iter_mut().enumerate() {
+                *v = maps[column * rows + d][c];
+            }
+        });
+        m
+    })
 }
 
 /// The model at `altitude_m` on the table's grid, reading the shared `light`.
