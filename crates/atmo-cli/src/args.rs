@@ -293,3 +293,16 @@ impl AtmosphereArgs {
         self.atmosphere.is_none() && self.preset == "paper"
     }
 }
+
+/// `K/N` with 1 <= K <= N (part K of N, counted as people count), as (K - 1, N).
+pub fn parse_part(s: &str) -> Result<(usize, usize), String> {
+    let (k, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("`{s}`: write the part as K/N, e.g. 3/16"))?;
+    let number = |t: &str| t.trim().parse::<usize>().map_err(|e| format!("`{t}`: {e}"));
+    let (k, n) = (number(k)?, number(n)?);
+    if !(1..=n).contains(&k) {
+        return Err(format!("part {k} of {n}: K runs from 1 to N"));
+    }
+    Ok((k - 1, n))
+}

@@ -10,7 +10,7 @@ mod commands;
 mod output;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use commands::{clouds, compare, inspect, precompute, shafts, sky, sun, view};
+use commands::{assemble, clouds, compare, inspect, precompute, shafts, sky, sun, view};
 
 #[derive(Parser)]
 #[command(
@@ -48,6 +48,9 @@ enum Command {
     /// Render a particle cloud lit by the sun through a 3-D intensity buffer; still, or
     /// animated with the sun or the wind moving.
     Clouds(clouds::CloudsArgs),
+    /// The animated PNG of an animation drawn in chunks (`--frames A..B` on a render
+    /// farm), after checking every frame is there and of one animation.
+    Assemble(assemble::AssembleArgs),
     /// Precompute tables for real-time drawing: `atmo precompute sky -o earth.atmo-sky`.
     Precompute(precompute::PrecomputeArgs),
     /// What a skylight table holds (parameters, size, terms, error), and with --plots
@@ -90,6 +93,7 @@ fn main() {
         Command::Shafts(args) => shafts::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Clouds(args) => clouds::run(args).map_err(|e| with_flag(e, clouds::FLAGS)),
+        Command::Assemble(args) => assemble::run(args),
         Command::Precompute(args) => precompute::run(args),
         Command::Inspect(args) => inspect::run(args),
         Command::View(args) => {

@@ -46,7 +46,7 @@ fn clouds_render_from_the_generator_or_a_file_and_animate() {
         "cumulus",
         "--animate",
         "sun",
-        "--frames",
+        "--frame-count",
         "3",
         // The sun goes round from 300 deg: past 360 on the way.
         "--sun-azimuth",
@@ -57,7 +57,7 @@ fn clouds_render_from_the_generator_or_a_file_and_animate() {
     args.extend(SMALL_CLOUD);
     let o = atmo(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for name in ["frame-0000.png", "frame-0002.png", "animation.png"] {
+    for name in ["frame_000000.png", "frame_000002.png", "animation.png"] {
         assert!(frames.join(name).exists(), "{name}");
     }
     std::fs::remove_dir_all(&dir).unwrap();

@@ -261,9 +261,10 @@ fn a_show_plays_into_frames_and_an_animated_png() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // 7 s of cues at 2 frames/s: 0, 0.5, ..., 7.
-    assert_eq!(common::files_in(&out), 15 + 1);
-    let first = image::open(out.join("frame-0000.png")).unwrap().to_rgb8();
-    let last = image::open(out.join("frame-0014.png")).unwrap().to_rgb8();
+    // And animation.png and the manifest.
+    assert_eq!(common::files_in(&out), 15 + 2);
+    let first = image::open(out.join("frame_000000.png")).unwrap().to_rgb8();
+    let last = image::open(out.join("frame_000014.png")).unwrap().to_rgb8();
     assert_eq!(first.dimensions(), (72, 48));
     assert_ne!(first, last, "the heads moved");
     let stderr = String::from_utf8_lossy(&o.stderr);

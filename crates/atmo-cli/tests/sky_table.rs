@@ -32,19 +32,27 @@ fn a_table_is_precomputed_drawn_animated_and_inspected() {
     assert!(png.get_pixel(24, 0).0[2] > 50, "{:?}", png.get_pixel(24, 0));
     // A sunset in three frames, and its animated PNG.
     let frames = dir.join("frames");
-    let mut args = vec!["sky", "--table", t, "--animate", "sun", "--frames", "3"];
+    let mut args = vec![
+        "sky",
+        "--table",
+        t,
+        "--animate",
+        "sun",
+        "--frame-count",
+        "3",
+    ];
     args.extend(["-o", frames.to_str().unwrap()]);
     args.extend(SMALL);
     let o = atmo(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for name in ["frame-0000.png", "frame-0002.png", "animation.png"] {
+    for name in ["frame_000000.png", "frame_000002.png", "animation.png"] {
         let img = image::open(frames.join(name)).unwrap();
         assert_eq!((img.width(), img.height()), (48, 32), "{name}");
     }
-    let first = image::open(frames.join("frame-0000.png"))
+    let first = image::open(frames.join("frame_000000.png"))
         .unwrap()
         .to_rgb8();
-    let last = image::open(frames.join("frame-0002.png"))
+    let last = image::open(frames.join("frame_000002.png"))
         .unwrap()
         .to_rgb8();
     let brightness = |img: &image::RgbImage| img.pixels().map(|p| p.0[2] as u32).sum::<u32>();
@@ -202,42 +210,50 @@ fn temporaries(dir: &std::path::Path) -> Vec<String> {
         .collect()
 }
 
-/// An animation stopped by SIGTERM leaves no frames and no temporary; one stopped by
-/// SIGKILL leaves its temporary folder, which the next write into the folder removes.
+/// An animation stopped by SIGTERM leaves whole frames and no temporary, and the same
+/// command resumes it, keeping them; one stopped by SIGKILL may leave a frame's
+/// temporary, which the next write into the folder removes and no run takes for a frame.
 #[cfg(unix)]
 #[test]
-fn interrupted_animations_leave_no_partial_frames() {
+fn interrupted_animations_leave_whole_frames_and_resume() {
     let dir = scratch("interrupted-animation");
     let table = tiny_table(&dir);
     let frames = dir.join("sunset");
-    let start = || {
-        Command::new(env!("CARGO_BIN_EXE_atmo"))
-            .args([
-                "sky",
-                "--table",
-                table.to_str().unwrap(),
-                "--animate",
-                "sun",
-            ])
-            .args(["--frames", "10000", "--width", "64", "--height", "32", "-o"])
-            .arg(&frames)
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap()
+    let command = |range: &str| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_atmo"));
+        c.args([
+            "sky",
+            "--table",
+            table.to_str().unwrap(),
+            "--animate",
+            "sun",
+        ])
+        .args(["--frame-count", "10000", "--frames", range])
+        .args(["--width", "64", "--height", "32", "-o"])
+        .arg(&frames)
+        .stderr(std::process::Stdio::piped());
+        c
     };
-    // Waits until the run has written frames into its temporary folder.
+    let frame_files = || {
+        std::fs::read_dir(&frames)
+            .map(|d| {
+                d.flatten()
+                    .filter(|e| e.file_name().to_string_lossy().starts_with("frame_"))
+                    .count()
+            })
+            .unwrap_or(0)
+    };
+    // Waits until the run has written a few frames.
     let writing = || {
         for _ in 0..600 {
-            if let Some(tmp) = temporaries(&dir).first() {
-                if files_in(&dir.join(tmp)) > 2 {
-                    return;
-                }
+            if frame_files() > 2 {
+                return;
             }
             std::thread::sleep(std::time::Duration::from_millis(50));
         }
         panic!("no frames were written in 30 s");
     };
-    let child = start();
+    let child = command("0..10000").spawn().unwrap();
     writing();
     // SAFETY: kill sends a signal to our own child, which is still running.
     assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGTERM) }, 0);
@@ -248,22 +264,41 @@ fn interrupted_animations_leave_no_partial_frames() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
-    assert!(temporaries(&dir).is_empty() && !frames.exists());
-    // SIGKILL: no handler runs; the folder stays until the next write beside it.
-    let mut child = start();
-    writing();
+    assert!(temporaries(&frames).is_empty() && temporaries(&dir).is_empty());
+    let done = frame_files();
+    assert!(done > 2 && done < 10_000, "{done} frames");
+    for k in 0..done {
+        let png = image::open(frames.join(format!("frame_{k:06}.png"))).unwrap();
+        assert_eq!((png.width(), png.height()), (64, 32), "frame {k}");
+    }
+    // The same command over the first frames and one more keeps them all, draws one.
+    let o = command(&format!("0..{}", done + 1)).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(&format!("1 frame drawn, {done} kept")),
+        "{stderr}"
+    );
+    // SIGKILL: no handler runs; a temporary may stay until the next write beside it.
+    let mut child = command("0..10000").spawn().unwrap();
+    let before = frame_files();
+    for _ in 0..600 {
+        if frame_files() > before + 2 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
     child.kill().unwrap();
     child.wait().unwrap();
-    assert_eq!(temporaries(&dir).len(), 1);
-    let o = atmo(
-        &["sky", "--table", table.to_str().unwrap(), "-o"]
-            .into_iter()
-            .chain([dir.join("one.png").to_str().unwrap()])
-            .chain(SMALL)
-            .collect::<Vec<_>>(),
-    );
+    let done = frame_files();
+    let o = command(&format!("0..{}", done + 1)).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+    assert!(
+        temporaries(&frames).is_empty(),
+        "{:?}",
+        temporaries(&frames)
+    );
+    assert_eq!(frame_files(), done + 1);
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -282,7 +317,7 @@ fn a_day_is_animated_from_a_place_and_a_date() {
         "day",
     ];
     args.extend([
-        "--frames",
+        "--frame-count",
         "3",
         "--fisheye",
         "--width",
@@ -300,7 +335,7 @@ fn a_day_is_animated_from_a_place_and_a_date() {
     let o = atmo(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mean = |k: usize| {
-        let png = image::open(folder.join(format!("frame-{k:04}.png")))
+        let png = image::open(folder.join(format!("frame_{k:06}.png")))
             .unwrap()
             .to_rgb8();
         png.pixels().map(|p| p.0[2] as f64).sum::<f64>() / png.pixels().len() as f64

@@ -1,5 +1,6 @@
 //! One module a subcommand: its arguments and `run`.
 
+pub mod assemble;
 pub mod clouds;
 pub mod compare;
 pub mod inspect;

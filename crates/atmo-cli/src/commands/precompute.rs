@@ -33,7 +33,7 @@ pub struct SkyTableArgs {
     /// Compute part K of N (K from 1 to N) of the table's maps, for a render farm: the
     /// part's file goes into the folder -o, and is kept if it is there already (a
     /// requeued task resumes). `--merge` makes the table from all N.
-    #[arg(long, value_name = "K/N", value_parser = parse_part, conflicts_with = "merge")]
+    #[arg(long, value_name = "K/N", value_parser = crate::args::parse_part, conflicts_with = "merge")]
     part: Option<(usize, usize)>,
     /// Make the table from the parts in this folder (each once, of one precompute), with
     /// their atmosphere and settings (the settings given here are not used); byte for
@@ -92,19 +92,6 @@ fn parse_fraction(s: &str) -> std::result::Result<f32, String> {
         Some((a, b)) => Ok(number(a)? / number(b)?),
         None => number(s),
     }
-}
-
-/// `K/N` with 1 <= K <= N, as (K - 1, N).
-fn parse_part(s: &str) -> std::result::Result<(usize, usize), String> {
-    let (k, n) = s
-        .split_once('/')
-        .ok_or_else(|| format!("`{s}`: write the part as K/N, e.g. 3/16"))?;
-    let number = |t: &str| t.trim().parse::<usize>().map_err(|e| format!("`{t}`: {e}"));
-    let (k, n) = (number(k)?, number(n)?);
-    if !(1..=n).contains(&k) {
-        return Err(format!("part {k} of {n}: K runs from 1 to N"));
-    }
-    Ok((k - 1, n))
 }
 
 pub fn run(args: PrecomputeArgs) -> Result<()> {

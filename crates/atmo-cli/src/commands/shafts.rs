@@ -29,10 +29,12 @@ pub struct ShaftsArgs {
     /// (linear radiance, in cd/m^2 when intensities are in cd); with --animate a folder.
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
-    /// Play the scene's show (its `[[cue]]`s) into the folder -o names: frame-0000.png
+    /// Play the scene's show (its `[[cue]]`s) into the folder -o names: frame_000000.png
     /// ... and animation.png (an animated PNG), from 0 to the end of the last cue's fade.
     #[arg(long, conflicts_with = "reference")]
     animate: bool,
+    #[command(flatten)]
+    chunk: crate::output::Chunk,
     /// With --animate: frames per second of show time.
     #[arg(long, requires = "animate", default_value_t = 24)]
     fps: u16,
@@ -271,12 +273,16 @@ fn animate(
     // Shadow maps rebuilt and lights drawn over the frames (a prism in or out changes
     // the count).
     let (mut rebuilt, mut lights, start) = (0, 0, Instant::now());
-    let apng = crate::output::write_animation(
-        &args.output,
-        frames,
-        args.fps,
-        size,
-        display,
+    let written = crate::output::write_animation(
+        &crate::output::Animation {
+            command: "shafts",
+            folder: &args.output,
+            count: frames,
+            fps: args.fps,
+            size,
+            display,
+            chunk: &args.chunk,
+        },
         |k, frame| {
             scene.at_time(k as f32 / args.fps as f32);
             lights += scene.light_count();
@@ -286,19 +292,20 @@ fn animate(
             Ok(())
         },
     )?;
+    crate::output::report(&args.output, &written, start);
+    let drawn = written.drawn.max(1);
     eprintln!(
-        "{}: {frames} frames of {} x {} at {} frames/s ({duration:.2} s of show), {:.1} light(s) a frame{}: {:.0} ms a frame",
-        apng.display(),
+        "atmo: a show of {frames} frames, {} x {} at {} frames/s ({duration:.2} s of show), {:.1} light(s) a frame{}: {:.0} ms a frame drawn",
         size.0,
         size.1,
         args.fps,
-        lights as f64 / frames as f64,
+        lights as f64 / drawn as f64,
         if gpu.is_some() {
             " on the GPU".to_string()
         } else {
             format!(", {rebuilt} of {lights} shadow maps rebuilt")
         },
-        start.elapsed().as_secs_f64() * 1e3 / frames as f64
+        start.elapsed().as_secs_f64() * 1e3 / drawn as f64
     );
     Ok(())
 }

@@ -19,6 +19,7 @@ use serde_json::json;
 use super::sky_table::{self, Animate, Animation};
 use crate::args::{AtmosphereArgs, ShellArgs, SkyPictureArgs};
 use crate::backend::{gpu_error, BackendArgs};
+use crate::output::Chunk;
 
 /// The library's fields that this command's flags set, for error messages.
 pub const FLAGS: &[(&str, &str)] = &[
@@ -68,12 +69,14 @@ pub struct SkyArgs {
     table: Option<PathBuf>,
     /// With --table: write a sequence to the folder -o, the sun setting from
     /// --sun-elevation to the table's lowest, or a climb from --altitude to its highest;
-    /// frame-0000.png ... and animation.png (an animated PNG).
+    /// frame_000000.png ... and animation.png (an animated PNG, 30 frames/s).
     #[arg(long, value_enum, requires = "table")]
     animate: Option<Animate>,
     /// Frames of --animate.
     #[arg(long, default_value_t = 120, requires = "animate")]
-    frames: usize,
+    frame_count: usize,
+    #[command(flatten)]
+    chunk: Chunk,
     /// Output picture: .png (8-bit sRGB) or .exr (linear radiance); with --animate, a folder.
     #[arg(short, long, value_name = "FILE", required_unless_present_any = ["probe", "lighting"])]
     output: Option<PathBuf>,
@@ -157,12 +160,20 @@ pub fn run(args: SkyArgs) -> Result<()> {
             Some(what) => {
                 let frames = Animation {
                     what,
-                    frames: args.frames,
+                    frames: args.frame_count,
                     sun,
                     altitude_m: picture.altitude_m,
                     day: args.picture.place.place_and_time(picture.altitude_m)?,
                 };
-                sky_table::animate(&mut drawer, &table, &frames, view, display, path)
+                sky_table::animate(
+                    &mut drawer,
+                    &table,
+                    &frames,
+                    view,
+                    display,
+                    path,
+                    &args.chunk,
+                )
             }
         };
     }

@@ -15,7 +15,7 @@ use chrono::{DateTime, FixedOffset};
 use clap::ValueEnum;
 
 use crate::backend::gpu_error;
-use crate::output::write_animation;
+use crate::output::{self, write_animation, Chunk};
 
 /// What `--animate` moves.
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -105,8 +105,9 @@ impl Animation {
     }
 }
 
-/// Writes `frame-0000.png` ... and `animation.png` (animated PNG, 30 frames/s) into the
-/// folder `folder`, creating it. Everything is checked before the first file.
+/// Writes the frames `chunk` selects (all by default, and then `animation.png`, 30
+/// frames/s) into the folder `folder` (see [`crate::output`]). Everything is checked
+/// before the first frame.
 pub fn animate(
     drawer: &mut SkyRenderer,
     table: &SkylightTable,
@@ -114,32 +115,31 @@ pub fn animate(
     view: &View,
     display: Display,
     folder: &Path,
+    chunk: &Chunk,
 ) -> Result<()> {
-    check_range("frames", animation.frames as f64, 2.0, 10_000.0)?;
-    if folder.extension().is_some_and(|e| e == "png" || e == "exr") {
-        return Err(Error::Invalid(format!(
-            "{}: with --animate, -o names a folder for the frames",
-            folder.display()
-        ))
-        .into());
-    }
+    check_range("--frame-count", animation.frames as f64, 2.0, 10_000.0)?;
     // Every frame inside the table's ranges (its coefficients, not its whole map).
     let frames = animation.frames(table)?;
     for (sun, altitude) in &frames {
         table.coefficients(sun.elevation(), *altitude)?;
     }
     let start = Instant::now();
-    let size = (view.camera.width, view.camera.height);
-    let apng = write_animation(folder, animation.frames, 30, size, display, |k, frame| {
-        let (sun, altitude) = frames[k];
-        *frame = drawer.frame(sun, altitude, view).map_err(gpu_error)?;
-        Ok(())
-    })?;
-    eprintln!(
-        "atmo: {} frames and {} in {:.1} s",
-        animation.frames,
-        apng.display(),
-        start.elapsed().as_secs_f64()
-    );
+    let written = write_animation(
+        &output::Animation {
+            command: "sky",
+            folder,
+            count: animation.frames,
+            fps: 30,
+            size: (view.camera.width, view.camera.height),
+            display,
+            chunk,
+        },
+        |k, frame| {
+            let (sun, altitude) = frames[k];
+            *frame = drawer.frame(sun, altitude, view).map_err(gpu_error)?;
+            Ok(())
+        },
+    )?;
+    output::report(folder, &written, start);
     Ok(())
 }

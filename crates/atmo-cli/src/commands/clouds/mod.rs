@@ -62,7 +62,9 @@ pub struct CloudsArgs {
     animate: Option<Animate>,
     /// Frames of --animate.
     #[arg(long, default_value_t = 120, requires = "animate")]
-    frames: usize,
+    frame_count: usize,
+    #[command(flatten)]
+    chunk: crate::output::Chunk,
     /// Output picture: .png or .exr (linear radiance, sun irradiance 1 per channel);
     /// with --animate, a folder.
     #[arg(short, long, value_name = "FILE")]
@@ -273,7 +275,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
             ImageKind::of(&args.output)?;
             check_folder(&args.output)?;
         }
-        Some(_) => check_range("--frames", args.frames as f64, 2.0, 10_000.0)?,
+        Some(_) => check_range("--frame-count", args.frame_count as f64, 2.0, 10_000.0)?,
     }
     let cloud = Cloud::new(&args.still)?;
     if let Some(path) = &args.save_particles {
@@ -317,18 +319,23 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         }
         Some(animate) => {
             let start = Instant::now();
-            let apng = write_animation(
-                &args.output,
-                args.frames,
-                30,
-                (camera.width, camera.height),
-                display,
+            let count = args.frame_count;
+            let written = write_animation(
+                &crate::output::Animation {
+                    command: "clouds",
+                    folder: &args.output,
+                    count,
+                    fps: 30,
+                    size: (camera.width, camera.height),
+                    display,
+                    chunk: &args.chunk,
+                },
                 |k, frame| {
                     let (sun, wind_s) = match animate {
                         // Once round, the azimuth kept in [0, 360).
                         Animate::Sun => (
                             cloud.sun_at(
-                                (cloud.sun_azimuth + 360.0 * k as f32 / args.frames as f32)
+                                (cloud.sun_azimuth + 360.0 * k as f32 / count as f32)
                                     .rem_euclid(360.0),
                             )?,
                             cloud.wind_s,
@@ -342,12 +349,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                     Ok(())
                 },
             )?;
-            eprintln!(
-                "atmo: {} frames and {} in {:.1} s",
-                args.frames,
-                apng.display(),
-                start.elapsed().as_secs_f64()
-            );
+            crate::output::report(&args.output, &written, start);
         }
     }
     Ok(())
