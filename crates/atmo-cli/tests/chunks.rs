@@ -4,21 +4,9 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use common::{atmo, scene, scratch, tiny_table, SMALL_CLOUD};
-
-/// The example show at 72 x 48 in `dir`, its gobos where they are.
-fn small_show(dir: &Path) -> PathBuf {
-    let show = std::fs::read_to_string(scene("show.toml"))
-        .unwrap()
-        .replace("width = 720", "width = 72")
-        .replace("height = 480", "height = 48")
-        .replace("\"gobos/", &format!("\"{}/", scene("gobos")));
-    let file = dir.join("show.toml");
-    std::fs::write(&file, show).unwrap();
-    file
-}
+use common::{atmo, scratch, small_show, tiny_table, SMALL_CLOUD, TINY_TABLE};
 
 fn ok(args: &[&str]) -> String {
     let o = atmo(args);
@@ -186,21 +174,9 @@ fn a_table_in_parts_merges_to_the_whole_run_byte_for_byte() {
     let parts = dir.join("parts");
     let p = parts.to_str().unwrap();
     // tiny_table's settings, in 4 parts of its 18 maps.
-    let settings = [
-        "--directions",
-        "8",
-        "--sun-steps",
-        "6",
-        "--altitude-steps",
-        "3",
-        "--shells",
-        "12",
-        "--scattering-directions",
-        "16",
-    ];
     let part = |k: &str| {
         let mut args = vec!["precompute", "sky", "--part", k, "-o", p];
-        args.extend(settings);
+        args.extend(TINY_TABLE);
         ok(&args)
     };
     for k in ["3/4", "1/4", "4/4"] {

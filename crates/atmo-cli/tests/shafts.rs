@@ -241,14 +241,7 @@ fn compare_refuses_pictures_with_nan_or_infinity() {
 #[test]
 fn a_show_plays_into_frames_and_an_animated_png() {
     let dir = scratch("shafts-show");
-    // The example show at 72 x 48, its gobos where they are.
-    let show = std::fs::read_to_string(scene("show.toml"))
-        .unwrap()
-        .replace("width = 720", "width = 72")
-        .replace("height = 480", "height = 48")
-        .replace("\"gobos/", &format!("\"{}/", scene("gobos")));
-    let file = dir.join("show.toml");
-    std::fs::write(&file, &show).unwrap();
+    let file = common::small_show(&dir);
     let out = dir.join("frames");
     let o = atmo(&[
         "shafts",

@@ -50,27 +50,40 @@ pub fn probe_file(dir: &Path, n: usize) -> PathBuf {
 /// A small picture.
 pub const SMALL: [&str; 4] = ["--width", "48", "--height", "32"];
 
-/// A tiny table (8 x 8 directions, 6 suns, 3 altitudes) in `dir`, made with the CLI.
+/// The settings of [`tiny_table`]: 8 x 8 directions, 6 suns, 3 altitudes.
+pub const TINY_TABLE: [&str; 10] = [
+    "--directions",
+    "8",
+    "--sun-steps",
+    "6",
+    "--altitude-steps",
+    "3",
+    "--shells",
+    "12",
+    "--scattering-directions",
+    "16",
+];
+
+/// A tiny table ([`TINY_TABLE`]) in `dir`, made with the CLI.
 pub fn tiny_table(dir: &Path) -> PathBuf {
     let table = dir.join("tiny.atmo-sky");
-    let o = atmo(&[
-        "precompute",
-        "sky",
-        "-o",
-        table.to_str().unwrap(),
-        "--directions",
-        "8",
-        "--sun-steps",
-        "6",
-        "--altitude-steps",
-        "3",
-        "--shells",
-        "12",
-        "--scattering-directions",
-        "16",
-    ]);
+    let mut args = vec!["precompute", "sky", "-o", table.to_str().unwrap()];
+    args.extend(TINY_TABLE);
+    let o = atmo(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     table
+}
+
+/// The example show (scenes/show.toml) at 72 x 48 in `dir`, its gobos where they are.
+pub fn small_show(dir: &Path) -> PathBuf {
+    let show = std::fs::read_to_string(scene("show.toml"))
+        .unwrap()
+        .replace("width = 720", "width = 72")
+        .replace("height = 480", "height = 48")
+        .replace("\"gobos/", &format!("\"{}/", scene("gobos")));
+    let file = dir.join("show.toml");
+    std::fs::write(&file, show).unwrap();
+    file
 }
 
 /// The path of an example scene.

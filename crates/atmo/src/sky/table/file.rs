@@ -101,10 +101,7 @@ impl SkylightTable {
 
     /// Writes the table to `path` atomically (a temporary file renamed when complete).
     pub fn write(&self, path: &Path) -> Result<()> {
-        let bytes = self.to_bytes();
-        write_atomically(path, |w| {
-            std::io::Write::write_all(w, &bytes).map_err(Error::io_at(path))
-        })
+        write_bytes(path, &self.to_bytes())
     }
 
     /// Reads and validates a table file.
@@ -152,6 +149,13 @@ impl SkylightTable {
             factors,
         })
     }
+}
+
+/// Writes `bytes` to `path` atomically (a temporary file renamed when complete).
+pub(super) fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomically(path, |w| {
+        std::io::Write::write_all(w, bytes).map_err(Error::io_at(path))
+    })
 }
 
 /// The checksummed body of a file that starts with `magic` and a version from 1 to

@@ -18,11 +18,10 @@
 use std::ops::Range;
 use std::path::Path;
 
-use super::file::{in_file, open, parse_settings, put_f32, put_settings, put_u32};
+use super::file::{in_file, open, parse_settings, put_f32, put_settings, put_u32, write_bytes};
 use super::{matrices, SkylightTable, TableSettings};
 use crate::atmosphere::Atmosphere;
 use crate::error::{Error, Result};
-use crate::files::write_atomically;
 
 /// The first bytes of every part file.
 pub const MAGIC: &[u8; 8] = b"atmo-skp";
@@ -117,10 +116,7 @@ impl TablePart {
 
     /// Writes the part to `path` atomically.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let bytes = self.to_bytes();
-        write_atomically(path, |w| {
-            std::io::Write::write_all(w, &bytes).map_err(Error::io_at(path))
-        })
+        write_bytes(path, &self.to_bytes())
     }
 
     /// Reads and validates a part file.
