@@ -182,30 +182,28 @@ fn compute_part(
         .into());
     }
     let path = folder.join(TablePart::file_name(part, parts));
+    let total = settings.sun_steps * settings.altitude_steps;
+    let maps = TablePart::columns(total, part, parts).len();
     if let Ok(done) = TablePart::read(&path) {
-        let columns = TablePart::columns(settings.sun_steps * settings.altitude_steps, part, parts);
         if done.index() == (part, parts) && done.is_of(atmosphere, settings) {
             eprintln!(
-                "atmo: {} is there already ({} skylight maps); kept",
-                path.display(),
-                columns.len()
+                "atmo: {} is there already ({maps} skylight maps); kept",
+                path.display()
             );
             return Ok(());
         }
     }
     std::fs::create_dir_all(folder).map_err(atmo::Error::io_at(folder))?;
     let start = Instant::now();
-    let total = settings.sun_steps * settings.altitude_steps;
-    let bar = maps_bar(TablePart::columns(total, part, parts).len());
+    let bar = maps_bar(maps);
     let computed = TablePart::compute(atmosphere, settings, part, parts, &|done, _| {
         bar.set_position(done as u64)
     });
     bar.finish_and_clear();
     computed?.write(&path)?;
     eprintln!(
-        "atmo: {} ({} skylight maps of {total}) in {:.1} s",
+        "atmo: {} ({maps} skylight maps of {total}) in {:.1} s",
         path.display(),
-        TablePart::columns(total, part, parts).len(),
         start.elapsed().as_secs_f64()
     );
     Ok(())

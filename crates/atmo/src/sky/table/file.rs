@@ -94,9 +94,7 @@ impl SkylightTable {
         let packed = pack(&q);
         put_u32(&mut w, packed.len() as u32);
         w.extend_from_slice(&packed);
-        let crc = crc32fast::hash(&w);
-        put_u32(&mut w, crc);
-        w
+        seal(w)
     }
 
     /// Writes the table to `path` atomically (a temporary file renamed when complete).
@@ -156,6 +154,13 @@ pub(super) fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomically(path, |w| {
         std::io::Write::write_all(w, bytes).map_err(Error::io_at(path))
     })
+}
+
+/// `w` with its CRC-32 appended: what [`open`] checks.
+pub(super) fn seal(mut w: Vec<u8>) -> Vec<u8> {
+    let crc = crc32fast::hash(&w);
+    put_u32(&mut w, crc);
+    w
 }
 
 /// The checksummed body of a file that starts with `magic` and a version from 1 to

@@ -18,7 +18,9 @@
 use std::ops::Range;
 use std::path::Path;
 
-use super::file::{in_file, open, parse_settings, put_f32, put_settings, put_u32, write_bytes};
+use super::file::{
+    in_file, open, parse_settings, put_f32, put_settings, put_u32, seal, write_bytes,
+};
 use super::{matrices, SkylightTable, TableSettings};
 use crate::atmosphere::Atmosphere;
 use crate::error::{Error, Result};
@@ -109,9 +111,7 @@ impl TablePart {
             put_u32(&mut w, v as u32);
         }
         self.maps.iter().flatten().for_each(|&x| put_f32(&mut w, x));
-        let crc = crc32fast::hash(&w);
-        put_u32(&mut w, crc);
-        w
+        seal(w)
     }
 
     /// Writes the part to `path` atomically.
