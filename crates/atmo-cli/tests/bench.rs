@@ -72,3 +72,33 @@ fn the_benchmarks_page_is_made_from_the_checked_in_data() {
         }
     }
 }
+
+/// `atmo bench farm --quick`: each split against one process, its outputs the same
+/// bytes, and the per-frame cost; every time measured from the pieces' processes.
+#[test]
+fn the_farm_bench_compares_pieces_with_one_process() {
+    let scenes = common::scene(".");
+    let o = atmo(&["bench", "farm", "--quick", "--json", "--scenes", &scenes]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let names: Vec<&str> = lines.iter().map(|l| l["bench"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        ["farm.show", "farm.show", "farm.frame", "farm.table"]
+    );
+    for line in &lines {
+        // A child's CPU time is measured (wait4), not the bench's own (near zero).
+        assert!(line["cpu_ms"].as_f64().unwrap() > 10.0, "{line}");
+        assert!(line["median_ms"].as_f64().unwrap() > 0.0, "{line}");
+        if line["bench"] != "farm.frame" {
+            assert_eq!(line["identical"], true, "{line}");
+            let ratio = line["ratio"].as_f64().unwrap();
+            assert!(ratio > 0.0 && ratio < 10.0, "{line}");
+        }
+    }
+    assert_eq!(lines[0]["params"]["chunks"], 4);
+    assert_eq!(lines[3]["params"]["parts"], 8);
+}

@@ -4,6 +4,7 @@
 //! docs/benchmarks.md from them ([`page`]).
 
 mod clouds;
+mod farm;
 pub mod page;
 mod shafts;
 mod sky;
@@ -31,7 +32,8 @@ pub struct BenchArgs {
     /// One JSON object per case on its own line, instead of a table.
     #[arg(long)]
     json: bool,
-    /// shafts and view: the folder holding spotlight-sphere.toml and stage.toml.
+    /// shafts, view and farm: the folder holding spotlight-sphere.toml, stage.toml and
+    /// show.toml.
     #[arg(long, default_value = "scenes")]
     scenes: std::path::PathBuf,
     /// shafts: a folder to write the plane sweep into as shafts-sweep.csv and .svg
@@ -71,6 +73,10 @@ enum Area {
     /// the stage orbited; one of its lights re-aimed; the sun round a cloud) beside the
     /// still's draw of the same frame; needs a display (xvfb-run).
     View,
+    /// Render farms: a show in chunks and a sky table in parts, each piece a process,
+    /// against one process of the whole (wall and CPU time, bytes compared), and the
+    /// per-frame and per-map costs a farm is projected from (docs/farm.md).
+    Farm,
     /// Times nothing: makes docs/benchmarks.md from the JSON files under --from.
     Page,
 }
@@ -97,6 +103,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
         };
         return view::run(args.quick, args.json, backends, &args.scenes);
     }
+    if let Area::Farm = args.area {
+        if args.backend != Backend::Cpu {
+            anyhow::bail!("--backend: `atmo bench farm` times pieces on the CPU; allowed: cpu");
+        }
+        return farm::cpu(args.quick, args.json, &args.scenes);
+    }
     if args.backend != Backend::Cpu {
         let device = BackendArgs {
             backend: Backend::Gpu,
@@ -110,14 +122,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
             Area::SkyTable => sky_table::gpu(&gpu, args.quick, args.json),
             Area::Shafts => shafts::gpu(&gpu, args.quick, args.json, &args.scenes),
             Area::Clouds => clouds::gpu(&gpu, args.quick, args.json),
-            Area::View | Area::Page => unreachable!("handled above"),
+            Area::View | Area::Farm | Area::Page => unreachable!("handled above"),
         };
     }
     match args.area {
         Area::Sky => sky::cpu(args.quick, args.json),
         Area::SkyTable => sky_table::cpu(args.quick, args.json),
         Area::Clouds => clouds::cpu(args.quick, args.json),
-        Area::View | Area::Page => unreachable!("handled above"),
+        Area::View | Area::Farm | Area::Page => unreachable!("handled above"),
         Area::Shafts => {
             if let Some(dir) = &args.sweep_dir {
                 atmo::files::check_folder(&dir.join("shafts-sweep.csv"))?;
@@ -252,15 +264,16 @@ pub(crate) fn report(json: bool, gpu: &Gpu, case: Case) {
     );
 }
 
-/// Prints `line` as JSON with --json, else `text`. The JSON line gets `peak_rss_mb`:
-/// the process's peak resident memory since the previous line (the peak starts again
-/// after each), MiB, or null where the system does not say.
+/// Prints `line` as JSON with --json, else `text`. The JSON line gets `peak_rss_mb`
+/// unless it has its own (a case measured in other processes): the process's peak
+/// resident memory since the previous line (the peak starts again after each), MiB, or
+/// null where the system does not say.
 pub fn emit(json: bool, mut line: Value, text: String) {
     if json {
         let peak = atmo::budget::peak_rss_bytes()
             .map(|b| (b as f64 / (1u64 << 20) as f64 * 10.0).round() / 10.0);
         if let Value::Object(fields) = &mut line {
-            fields.insert("peak_rss_mb".into(), json!(peak));
+            fields.entry("peak_rss_mb").or_insert(json!(peak));
         }
         println!("{line}");
     } else {
