@@ -65,6 +65,9 @@ $sudo chmod 600 "$work/munge.key"
 $sudo munged --force --key-file="$work/munge.key" --socket="$work/munge.socket" \
   --pid-file="$work/munged.pid" --log-file="$work/munged.log" --seed-file="$work/munge.seed"
 user=$(id -un)
+# Two CPUs, or one on a machine with one: a node declared with more CPUs than it has
+# is drained by slurmd.
+cpus=$(($(nproc) < 2 ? $(nproc) : 2))
 cat >"$SLURM_CONF" <<EOF
 ClusterName=atmo-farm-test
 SlurmctldHost=localhost(127.0.0.1)
@@ -91,7 +94,7 @@ AccountingStorageType=accounting_storage/none
 MpiDefault=none
 MailProg=/bin/true
 KillWait=5
-NodeName=localhost NodeAddr=127.0.0.1 CPUs=2 State=UNKNOWN
+NodeName=localhost NodeAddr=127.0.0.1 CPUs=$cpus State=UNKNOWN
 PartitionName=main Nodes=localhost Default=YES MaxTime=INFINITE State=UP
 EOF
 mkdir -p "$work/state" "$work/spool" "$work/jobs"
