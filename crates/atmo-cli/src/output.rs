@@ -148,8 +148,13 @@ pub struct Manifest {
     pub tone: String,
 }
 
+/// The most frames an animation may have: frames are named `frame_000000` to
+/// `frame_999999`, six digits that sort in order (a million frames is 11.6 hours at 24
+/// a second).
+pub const MAX_FRAMES: usize = 1_000_000;
+
 impl Manifest {
-    /// The file name of frame `k`.
+    /// The file name of frame `k` (below [`MAX_FRAMES`]).
     pub fn frame_name(&self, k: usize) -> String {
         format!("frame_{k:06}.{}", self.format.extension())
     }

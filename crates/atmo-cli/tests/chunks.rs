@@ -100,6 +100,25 @@ fn a_show_in_chunks_is_the_whole_run_byte_for_byte() {
         e.contains("--frames 10..16") && e.contains("0 to 14"),
         "{e}"
     );
+    // Cue times the scene allows, at a rate --fps allows, past a million frames (the
+    // names' six digits): refused before anything is drawn, naming the remedies.
+    let late = dir.join("late");
+    let e = refused(&[
+        "shafts",
+        show,
+        "--animate",
+        "--fps",
+        "240",
+        "--set",
+        "cue[2].time_s=1000000",
+        "-o",
+        late.to_str().unwrap(),
+    ]);
+    assert!(
+        e.contains("--fps 240") && e.contains("at most 1000000") && e.contains("time_s"),
+        "{e}"
+    );
+    assert!(!late.exists());
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -413,3 +413,37 @@ fn the_default_sky_is_every_order_with_ozone() {
     assert_eq!(o.status.code(), Some(2));
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// An output that is there and not a regular file (a device, a FIFO, a folder) exits 2
+/// naming what it is, and is left as it was: never opened, never replaced.
+#[test]
+#[cfg(unix)]
+fn outputs_that_are_not_regular_files_exit_2_and_stay() {
+    use std::os::unix::fs::FileTypeExt as _;
+    let dir = scratch("not-files");
+    let fifo = dir.join("fifo.png");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.unwrap().success(), "mkfifo");
+    let folder = dir.join("folder.png");
+    std::fs::create_dir(&folder).unwrap();
+    // A device through a link (as /proc/self/fd/N are), named as a picture.
+    let device = dir.join("null.png");
+    std::os::unix::fs::symlink("/dev/null", &device).unwrap();
+    for (out, kind) in [
+        (device.as_path(), "a device"),
+        (fifo.as_path(), "a FIFO"),
+        (folder.as_path(), "a folder"),
+    ] {
+        let mut args = vec!["sky", "-o", out.to_str().unwrap()];
+        args.extend(SMALL);
+        let o = atmo(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{}: {stderr}", out.display());
+        assert!(stderr.contains(&format!("is {kind}")), "{stderr}");
+    }
+    let t = |p: &std::path::Path| std::fs::metadata(p).unwrap().file_type();
+    assert!(t(&device).is_char_device() && t("/dev/null".as_ref()).is_char_device());
+    assert!(t(&fifo).is_fifo() && t(&folder).is_dir());
+    assert_eq!(files_in(&folder), 0);
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -64,8 +64,14 @@ pub fn read_text(path: &Path, what: &str, limit: u64) -> Result<String> {
 }
 
 /// Checks, before any work, that the folder `path` would be written into exists, so a
-/// long computation does not end in a failed write.
+/// long computation does not end in a failed write, and that `path` is not a device, a
+/// FIFO or a socket ([`write_atomically`] refuses those too, and folders).
 pub fn check_folder(path: &Path) -> Result<()> {
+    if let Ok(m) = std::fs::metadata(resolve(path)) {
+        if !m.is_file() && !m.is_dir() {
+            return Err(not_a_file(path, &m));
+        }
+    }
     let folder = folder_of(path);
     if folder.is_dir() {
         Ok(())
@@ -241,13 +247,53 @@ fn through_temporary<T>(
     result
 }
 
+/// The error for an output `path` that is there and not a regular file (`m`): the
+/// rename would replace it, a device or a FIFO too (as root, `-o /dev/full` once
+/// replaced the device with a file).
+fn not_a_file(path: &Path, m: &std::fs::Metadata) -> Error {
+    let kind = special_kind(m.file_type());
+    Error::Invalid(format!(
+        "{}: the output is {kind}, which atmo does not replace; name a regular file, new or old",
+        path.display()
+    ))
+}
+
+/// What a file that is not a regular file is, for messages.
+#[cfg(unix)]
+fn special_kind(t: std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt as _;
+    match () {
+        _ if t.is_dir() => "a folder",
+        _ if t.is_char_device() || t.is_block_device() => "a device",
+        _ if t.is_fifo() => "a FIFO",
+        _ if t.is_socket() => "a socket",
+        _ => "not a regular file",
+    }
+}
+
+#[cfg(not(unix))]
+fn special_kind(t: std::fs::FileType) -> &'static str {
+    if t.is_dir() {
+        "a folder"
+    } else {
+        "not a regular file"
+    }
+}
+
 /// Writes `path` through `fill` into a temporary file beside it, then renames it into
 /// place; on any error the temporary file is removed and `path` is left untouched. A
-/// symbolic link is written through, and an existing file keeps its permissions.
+/// symbolic link is written through, and an existing file keeps its permissions. A
+/// `path` that is there and not a regular file (a device, a FIFO, a folder) is refused
+/// before anything is written.
 pub fn write_atomically(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
 ) -> Result<()> {
+    if let Ok(m) = std::fs::metadata(resolve(path)) {
+        if !m.is_file() {
+            return Err(not_a_file(path, &m));
+        }
+    }
     through_temporary(path, "file", |tmp, target| {
         let file = File::create(tmp).map_err(Error::io_at(tmp))?;
         let mut w = BufWriter::new(file);
@@ -310,6 +356,40 @@ mod tests {
 
     fn put(w: &mut BufWriter<File>, bytes: &[u8]) -> Result<()> {
         w.write_all(bytes).map_err(Error::io_at(Path::new("test")))
+    }
+
+    #[test]
+    fn outputs_that_are_not_regular_files_are_refused_and_left_alone() {
+        let dir = scratch("not-files");
+        let folder = dir.join("a-folder");
+        std::fs::create_dir(&folder).unwrap();
+        let e = write_atomically(&folder, |w| put(w, b"x")).unwrap_err();
+        assert!(e.to_string().contains("is a folder"), "{e}");
+        assert!(folder.is_dir());
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt as _;
+            // A device (and a link to one, as /proc/self/fd links are): refused early
+            // and at the write, never replaced.
+            let link = dir.join("null-link");
+            std::os::unix::fs::symlink("/dev/null", &link).unwrap();
+            for path in [Path::new("/dev/null"), link.as_path()] {
+                let early = check_folder(path).unwrap_err();
+                assert!(early.to_string().contains("is a device"), "{early}");
+                let e = write_atomically(path, |w| put(w, b"x")).unwrap_err();
+                assert!(e.to_string().contains("is a device"), "{e}");
+            }
+            assert!(std::fs::metadata("/dev/null")
+                .unwrap()
+                .file_type()
+                .is_char_device());
+        }
+        // A regular file, and a folder for a folder's output, pass the early check.
+        check_folder(&folder).unwrap();
+        check_folder(&dir.join("new.png")).unwrap();
+        let expected = if cfg!(unix) { 2 } else { 1 }; // the folder, and the link
+        assert_eq!(names(&dir).len(), expected, "a temporary was left");
+        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]

@@ -266,6 +266,16 @@ fn animate(
         .into());
     }
     let frames = (duration * args.fps as f32).ceil() as usize + 1;
+    if frames > crate::output::MAX_FRAMES {
+        return Err(atmo::Error::Invalid(format!(
+            "--fps {}: the show's {duration} s at {} frames/s are {frames} frames; allowed at \
+             most {} (lower --fps, or the last cue's time_s + fade_s)",
+            args.fps,
+            args.fps,
+            crate::output::MAX_FRAMES
+        ))
+        .into());
+    }
     let camera = &scene.camera;
     let size = (camera.width, camera.height);
     let mut shafts =
