@@ -32,7 +32,7 @@ impl BackendArgs {
             .open(self.adapter.as_deref())
             .map_err(gpu_error)?;
         if self.backend != Backend::Cpu {
-            eprintln!("{}", opened.notice);
+            note!("{}", opened.notice);
         }
         Ok(opened.gpu)
     }

@@ -3,6 +3,9 @@
 //! Exit codes: 0 on success, 2 for bad input (a message names the field and the
 //! allowed range; no output file is left behind), 1 for anything else.
 
+// First: its macros (`outln!`, `note!`) are for every module after it.
+#[macro_use]
+mod streams;
 mod args;
 mod backend;
 mod bench;
@@ -76,7 +79,7 @@ fn main() {
     // killed outright leaves them for the next write into the folder to remove.
     let _ = ctrlc::set_handler(|| {
         atmo::files::interrupt();
-        eprintln!("atmo: interrupted; nothing was left half-written");
+        note!("atmo: interrupted; nothing was left half-written");
         std::process::exit(130);
     });
     // `atmo ... | head`: a closed pipe ends the run quietly, as it does other Unix
@@ -110,7 +113,7 @@ fn main() {
                 std::thread::park();
             }
         }
-        eprintln!("atmo: {error:#}");
+        note!("atmo: {error:#}");
         // Errors of the library are about what the user asked for; others are ours.
         let code = if error.downcast_ref::<atmo::Error>().is_some() {
             2
@@ -154,7 +157,7 @@ fn with_scene(
             argv
         }
         Err(e) => {
-            eprintln!("atmo: {e}");
+            note!("atmo: {e}");
             std::process::exit(2);
         }
     }
@@ -183,7 +186,7 @@ fn parse_args() -> Cli {
         ) {
             if value.parse::<f64>().is_ok_and(|v| v < 0.0) {
                 let flag = arg.split_whitespace().next().unwrap_or(arg);
-                eprintln!("atmo: {flag} = {value} is out of range: allowed whole numbers >= 0");
+                note!("atmo: {flag} = {value} is out of range: allowed whole numbers >= 0");
                 std::process::exit(2);
             }
         }

@@ -400,12 +400,12 @@ pub fn report(folder: &Path, written: &Written, start: std::time::Instant) {
         n => format!(", {n} kept from an earlier run"),
     };
     match &written.animation {
-        Some(apng) => eprintln!(
+        Some(apng) => note!(
             "atmo: {}{kept} and {} in {seconds:.2} s",
             frames_drawn(written.drawn),
             apng.display()
         ),
-        None => eprintln!(
+        None => note!(
             "atmo: {}{kept} into {} in {seconds:.2} s; `atmo assemble` makes the \
              animation once every chunk is done",
             frames_drawn(written.drawn),

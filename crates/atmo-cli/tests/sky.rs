@@ -447,3 +447,56 @@ fn outputs_that_are_not_regular_files_exit_2_and_stay() {
     assert_eq!(files_in(&folder), 0);
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A full standard output (`> /dev/full`) ends the run with exit 1 and a message, not
+/// a panic (exit 101); a full standard error loses the messages and the run still
+/// writes its picture.
+#[test]
+#[cfg(target_os = "linux")]
+fn full_standard_streams_never_panic() {
+    use std::process::{Command, Stdio};
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    let dir = scratch("full-streams");
+    let table = common::tiny_table(&dir);
+    for args in [
+        vec![
+            "sun",
+            "--latitude",
+            "48.2",
+            "--longitude",
+            "16.4",
+            "--time",
+            "2026-06-21T12:00:00Z",
+        ],
+        vec!["inspect", table.to_str().unwrap()],
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_atmo"))
+            .args(&args)
+            .stdout(full())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("standard output") && !stderr.contains("panicked"),
+            "{args:?}: {stderr}"
+        );
+    }
+    let out = dir.join("sky.png");
+    let mut args = vec!["sky", "-o", out.to_str().unwrap()];
+    args.extend(SMALL);
+    let o = Command::new(env!("CARGO_BIN_EXE_atmo"))
+        .args(&args)
+        .stdout(Stdio::null())
+        .stderr(full())
+        .status()
+        .unwrap();
+    assert_eq!(o.code(), Some(0));
+    assert!(out.is_file());
+    std::fs::remove_dir_all(dir).unwrap();
+}

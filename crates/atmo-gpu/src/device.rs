@@ -2,6 +2,7 @@
 //! needs checked up front, and submissions that turn GPU errors (out of memory, a lost
 //! device) into [`GpuError`]s instead of panics.
 
+use std::io::Write as _;
 use std::sync::{Arc, Mutex};
 
 use wgpu::util::DeviceExt;
@@ -66,8 +67,10 @@ impl Gpu {
             *on_lost.lock().unwrap() = Some(format!("{reason:?}: {message}"));
         });
         // Errors outside a `run` scope (none are expected) are reported, not panicked on.
-        gpu.device
-            .on_uncaptured_error(Arc::new(|e| eprintln!("atmo-gpu: {e}")));
+        gpu.device.on_uncaptured_error(Arc::new(|e| {
+            // Never a panic where standard error fails: the message is lost.
+            let _ = writeln!(std::io::stderr(), "atmo-gpu: {e}");
+        }));
         Ok(gpu)
     }
 

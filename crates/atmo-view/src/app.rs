@@ -1,6 +1,7 @@
 //! The window: winit's event loop, the surface, the egui panel, the frame loop, and
 //! screenshots.
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -22,6 +23,14 @@ use crate::input::{Input, Key};
 use crate::layer::PanelLayer;
 use crate::pixels::WindowPixels;
 use crate::{Mode, Options, Picture};
+
+/// `eprintln!` that never panics: where standard error fails (a full disk behind
+/// `2> file`) the message is lost and the window goes on.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
 
 /// Opens the window and runs until it is closed or [`Options::frames`] are drawn. Bad
 /// input found before the window is up (a script naming a parameter the mode lacks,
@@ -305,7 +314,7 @@ fn open(
         choose_adapter(&instance, options.adapter.as_deref(), Some(&surface)).map_err(opening)?;
     let gpu = Gpu::open(&adapter).map_err(opening)?;
     let on_gpu = options.backend.runs_on(&gpu);
-    eprintln!(
+    note!(
         "atmo: the window on {}; the picture drawn on the {}",
         gpu.describe(),
         if on_gpu { "GPU" } else { "CPU" }
@@ -327,7 +336,7 @@ fn open(
     let pixels = (!on_gpu)
         .then(|| WindowPixels::new(window.clone(), (config.width, config.height)))
         .and_then(|made| {
-            made.map_err(|e| eprintln!("atmo view: {e}; shown through the adapter instead"))
+            made.map_err(|e| note!("atmo view: {e}; shown through the adapter instead"))
                 .ok()
         });
     let screen = match pixels {
@@ -499,7 +508,7 @@ impl Running {
 
     /// Shows a refusal in the panel and on stderr; the state stays as it was.
     fn refuse(&mut self, e: anyhow::Error) {
-        eprintln!("atmo view: {e:#}");
+        note!("atmo view: {e:#}");
         self.message = Some(format!("{e:#}"));
         self.layer.invalidate();
     }
@@ -511,7 +520,10 @@ impl Running {
         let display = self.mode.display();
         frame.write(path, display.exposure, display.tone)?;
         let still = self.mode.still_command(path, self.picture.size);
-        println!("{still}");
+        let mut stdout = std::io::stdout().lock();
+        writeln!(stdout, "{still}")
+            .and_then(|()| stdout.flush())
+            .context("standard output: the still's command")?;
         self.still = Some(still);
         self.layer.invalidate();
         Ok(())
@@ -564,7 +576,7 @@ impl Running {
             }
             other => {
                 // Occluded or timed out: the picture is drawn, nothing shown this time.
-                eprintln!("atmo view: the window's surface: {other:?}");
+                note!("atmo view: the window's surface: {other:?}");
                 self.gpu.queue.submit([encoder.finish()]);
                 return Ok(());
             }

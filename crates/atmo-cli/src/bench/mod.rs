@@ -90,7 +90,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     .map_err(atmo::Error::io_at(path))
             })?),
             None => {
-                print!("{page}");
+                crate::streams::out(format_args!("{page}"));
                 Ok(())
             }
         };
@@ -275,9 +275,9 @@ pub fn emit(json: bool, mut line: Value, text: String) {
         if let Value::Object(fields) = &mut line {
             fields.entry("peak_rss_mb").or_insert(json!(peak));
         }
-        println!("{line}");
+        outln!("{line}");
     } else {
-        println!("{text}");
+        outln!("{text}");
     }
     atmo::budget::reset_peak_rss();
 }

@@ -147,7 +147,7 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
         );
     }
     if !json {
-        println!(
+        outln!(
             "reference: {} directions timed ({per_direction_ms:.0} ms each), scaled to {}; doubling its counts changes it by {}",
             directions.len(),
             grid.azimuths * grid.elevations,

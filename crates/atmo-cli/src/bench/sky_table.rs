@@ -293,7 +293,7 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
 
 pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
     let settings = table_settings(quick);
-    eprintln!("atmo: precomputing the table on the CPU (a minute at the defaults)");
+    note!("atmo: precomputing the table on the CPU (a minute at the defaults)");
     let table = SkylightTable::precompute(&Atmosphere::earth(), &settings, &|_, _| {})?;
     let sky = GpuSkyTable::new(gpu, &table).map_err(gpu_error)?;
     let mut pass = SkyPass::new(gpu, SkyTarget::HEADLESS).map_err(gpu_error)?;

@@ -152,7 +152,7 @@ pub fn run(quick: bool, json: bool, backends: &[&str], scenes: &Path) -> Result<
     let dir = std::env::temp_dir().join(format!("atmo-bench-view-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let atmosphere = Atmosphere::earth();
-    eprintln!("atmo: precomputing the table (a minute at the defaults, --quick: seconds)");
+    note!("atmo: precomputing the table (a minute at the defaults, --quick: seconds)");
     let table = SkylightTable::precompute(&atmosphere, &table_settings(quick), &|_, _| {})?;
     let table_path = dir.join("bench.atmo-sky");
     table.write(&table_path)?;

@@ -21,7 +21,7 @@ pub struct AssembleArgs {
 pub fn run(args: AssembleArgs) -> Result<()> {
     let start = Instant::now();
     let frames = crate::output::assemble(&args.folders, &args.output)?;
-    eprintln!(
+    note!(
         "atmo: {} ({frames} frames) in {:.1} s",
         args.output.display(),
         start.elapsed().as_secs_f64()

@@ -63,7 +63,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
         difference.write(output, 1.0, atmo::image::ToneMap::Clamp)?;
     }
     let n = 3.0 * a.pixels.len() as f64;
-    println!(
+    outln!(
         "levels (8-bit, after exposure {} and the {:?} tone map): rms {:.3} ({:.3} % of 255), max {:.2}",
         args.exposure,
         display.tone,
@@ -71,14 +71,14 @@ pub fn run(args: CompareArgs) -> Result<()> {
         100.0 * levels.rms / 255.0,
         levels.max
     );
-    println!(
+    outln!(
         "linear: rms {:.4e} ({:.3} % of B's rms), max {:.4e}",
         (sum / n).sqrt(),
         100.0 * (sum / sum_b.max(1e-300)).sqrt(),
         max
     );
     if let Some(output) = &args.output {
-        println!("difference image: {}", output.display());
+        outln!("difference image: {}", output.display());
     }
     Ok(())
 }

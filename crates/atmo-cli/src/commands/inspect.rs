@@ -53,18 +53,18 @@ fn print_summary(table: &SkylightTable, path: &Path, bytes: u64) {
     let grid = table.grid(altitude.max());
     let raw = grid.azimuths * grid.elevations * sun.count() * altitude.count() * CHANNELS;
     let a = table.atmosphere();
-    println!(
+    outln!(
         "{}: {bytes} bytes, {:.2} % of the {raw} bytes of the table in 8-bit RGB",
         path.display(),
         100.0 * bytes as f64 / raw as f64
     );
-    println!(
+    outln!(
         "atmosphere: {} ({}), {} wavelengths",
         a.name,
         a.description,
         a.channels()
     );
-    println!(
+    outln!(
         "shell method: {} shells, order {}, {} scattering directions{}",
         s.sky.shells,
         s.sky.order,
@@ -75,7 +75,7 @@ fn print_summary(table: &SkylightTable, path: &Path, bytes: u64) {
             ""
         }
     );
-    println!(
+    outln!(
         "grid: {} x {} directions (azimuth from the sun 0 to 180 deg, elevation from the \
          horizon, down to {:.2} deg at the highest altitude, to 90 deg), {} sun elevations \
          ({} to {} deg, {}x denser at the horizon), {} altitudes (0 to {} m, spacing power \
@@ -92,7 +92,7 @@ fn print_summary(table: &SkylightTable, path: &Path, bytes: u64) {
         s.altitude_power
     );
     let b = s.bound;
-    println!(
+    outln!(
         "bound: epsilon {:.6} (= 1/{:.1}) on {} values at exposure {} through the {:?} tone map",
         b.epsilon,
         1.0 / b.epsilon,
@@ -101,7 +101,7 @@ fn print_summary(table: &SkylightTable, path: &Path, bytes: u64) {
         b.display.tone
     );
     let sigma = table.singular_values();
-    println!(
+    outln!(
         "SVD: {} terms computed, {} stored (the most any direction uses); sigma_k / sigma_1 \
          at k = 2, 5, 10, 20, 50: {}",
         sigma.len(),
@@ -117,9 +117,9 @@ fn print_summary(table: &SkylightTable, path: &Path, bytes: u64) {
         let t = table.terms(c);
         let mean = t.iter().map(|&x| x as f64).sum::<f64>() / t.len() as f64;
         let (min, max) = (t.iter().min().unwrap_or(&0), t.iter().max().unwrap_or(&0));
-        println!("terms T(theta, phi), {name}: {min} to {max}, mean {mean:.1}");
+        outln!("terms T(theta, phi), {name}: {min} to {max}, mean {mean:.1}");
     }
-    println!(
+    outln!(
         "largest error at the grid points: {:.3} epsilon",
         table.grid_error()
     );
@@ -226,7 +226,7 @@ fn write_plots(table: &SkylightTable, folder: &Path, sun: f64, altitude_m: f64) 
         }
     }
     write_display(&mut plot, &folder.join("singular-values.png"))?;
-    println!(
+    outln!(
         "wrote {}: singular-values.png (log10 sigma_k/sigma_1 from 0 at the top to {floor} at \
          the bottom, one grey line a decade, k = 1 to {} left to right, red: terms stored), \
          terms.png (T_R, T_G, T_B / {most}: azimuth from the sun 0 to 180 deg left to right, \

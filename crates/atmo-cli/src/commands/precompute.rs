@@ -141,7 +141,7 @@ pub fn run(args: PrecomputeArgs) -> Result<()> {
     let svd_s = svd_start.elapsed().as_secs_f64();
     table.write(&args.output)?;
     let bytes = std::fs::metadata(&args.output)?.len();
-    eprintln!(
+    note!(
         "atmo: {} ({bytes} bytes): {} skylight maps in {maps_s:.1} s, SVD and term counts in \
          {svd_s:.1} s; {} terms at most; largest error at the grid points {:.3} epsilon",
         args.output.display(),
@@ -186,7 +186,7 @@ fn compute_part(
     let maps = TablePart::columns(total, part, parts).len();
     if let Ok(done) = TablePart::read(&path) {
         if done.index() == (part, parts) && done.is_of(atmosphere, settings) {
-            eprintln!(
+            note!(
                 "atmo: {} is there already ({maps} skylight maps); kept",
                 path.display()
             );
@@ -201,7 +201,7 @@ fn compute_part(
     });
     bar.finish_and_clear();
     computed?.write(&path)?;
-    eprintln!(
+    note!(
         "atmo: {} ({maps} skylight maps of {total}) in {:.1} s",
         path.display(),
         start.elapsed().as_secs_f64()
@@ -242,7 +242,7 @@ fn merge(folder: &Path, output: &Path) -> Result<()> {
     spinner.finish_and_clear();
     let table = table?;
     table.write(output)?;
-    eprintln!(
+    note!(
         "atmo: {} ({} bytes) from {count} parts: read in {read_s:.1} s, SVD and term counts in \
          {:.1} s; {} terms at most; largest error at the grid points {:.3} epsilon",
         output.display(),

@@ -176,7 +176,7 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         args.device.open()?
     };
     if gpu.is_some() && args.adaptive {
-        eprintln!("atmo: the GPU draws the scattered light at every pixel; render.adaptive applies to the CPU method");
+        note!("atmo: the GPU draws the scattered light at every pixel; render.adaptive applies to the CPU method");
     }
     if args.animate {
         return animate(&args, scene, display, gpu.as_ref());
@@ -235,7 +235,7 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
     };
     let ms = start.elapsed().as_secs_f64() * 1e3;
     frame.write(&args.output, display.exposure, display.tone)?;
-    eprintln!(
+    note!(
         "{}: {} x {}, {} light(s), {method}: {ms:.1} ms; pixels in {}",
         args.output.display(),
         frame.width,
@@ -304,7 +304,7 @@ fn animate(
     )?;
     crate::output::report(&args.output, &written, start);
     let drawn = written.drawn.max(1);
-    eprintln!(
+    note!(
         "atmo: a show of {frames} frames, {} x {} at {} frames/s ({duration:.2} s of show), {:.1} light(s) a frame{}: {:.0} ms a frame drawn",
         size.0,
         size.1,

@@ -117,9 +117,11 @@ pub fn run(args: SkyArgs) -> Result<()> {
     // Everything is validated before any work or any file is written.
     let position = args.picture.sun_position()?;
     if let Some(p) = &position {
-        eprintln!(
+        note!(
             "atmo: the sun at {:.3} deg elevation ({:.3} deg refracted), {:.3} deg azimuth (SPA)",
-            p.elevation_deg, p.refracted_elevation_deg, p.azimuth_deg
+            p.elevation_deg,
+            p.refracted_elevation_deg,
+            p.azimuth_deg
         );
     }
     let picture = args.picture.params_at(position.as_ref());
@@ -200,7 +202,7 @@ pub fn run(args: SkyArgs) -> Result<()> {
         .frame(sun, picture.altitude_m, &view)
         .map_err(gpu_error)?;
     frame.write(path, picture.exposure, picture.tone)?;
-    eprintln!(
+    note!(
         "atmo: {} ({}x{}, {}, order {}) in {:.0} ms",
         path.display(),
         view.camera.width,
@@ -311,7 +313,7 @@ fn environment(args: &SkyArgs, picture: &atmo_view::sky::SkyParams, sun: Sun) ->
                 .map_err(atmo::Error::io_at(path))
         })?;
     }
-    eprintln!(
+    note!(
         "atmo: {} in {:.0} ms",
         outputs
             .iter()

@@ -42,7 +42,7 @@ pub fn draw(
     let frame = drawer.frame(sun, altitude_m, view).map_err(gpu_error)?;
     let total_ms = start.elapsed().as_secs_f64() * 1e3;
     frame.write(path, display.exposure, display.tone)?;
-    eprintln!(
+    note!(
         "atmo: {} ({}x{}) from the table in {total_ms:.1} ms",
         path.display(),
         view.camera.width,

@@ -50,6 +50,6 @@ pub fn run(args: SunArgs) -> Result<()> {
             "linear_srgb_colour": light.colour,
         },
     });
-    println!("{}", serde_json::to_string_pretty(&out)?);
+    outln!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
 }

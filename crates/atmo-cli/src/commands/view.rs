@@ -195,7 +195,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             "frame": stats(&timings.frame_ms),
             "method": stats(&timings.method_ms),
         });
-        println!("{line}");
+        outln!("{line}");
     }
     Ok(())
 }

@@ -102,9 +102,10 @@ impl Cloud {
         let mut sun = (still.sun_elevation, still.sun_azimuth);
         // The sun from a place and a time, where they are given (at the cloud's base).
         if let Some(p) = still.place.sun_position(Cumulus::default().base as f64)? {
-            eprintln!(
+            note!(
                 "atmo: the sun at {:.3} deg elevation, {:.3} deg azimuth (SPA)",
-                p.elevation_deg, p.azimuth_deg
+                p.elevation_deg,
+                p.azimuth_deg
             );
             sun = (p.elevation_deg as f32, p.azimuth_deg as f32);
         }
@@ -308,7 +309,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
                 .map_err(gpu_error)?;
             let draw_ms = start.elapsed().as_secs_f64() * 1e3;
             frame.write(&args.output, display.exposure, display.tone)?;
-            eprintln!(
+            note!(
                 "{}: {} x {}, {} particles, {}^3 buffer: light pass {light_ms:.1} ms, drawing {draw_ms:.1} ms",
                 args.output.display(),
                 frame.width,
