@@ -210,8 +210,10 @@ fn parse_args() -> Cli {
 /// command's flag sets that field, the message names the flag first, so that the user
 /// sees what to change: `--sun-elevation: sun.elevation_deg = 95 is out of range ...`.
 fn with_flag(error: anyhow::Error, flags: &[(&str, &str)]) -> anyhow::Error {
+    // A field out of range, or the setting a memory budget's message says to lower.
     let field = match error.downcast_ref::<atmo::Error>() {
         Some(atmo::Error::OutOfRange { field, .. }) => field.clone(),
+        Some(atmo::Error::OverBudget { setting, .. }) => setting.clone(),
         _ => return error,
     };
     match flags.iter().find(|(f, _)| *f == field) {

@@ -114,6 +114,37 @@ fn bad_input_exits_2_with_a_message_and_no_file() {
         "--sun-elevation: sun.elevation_deg",
     );
     refused("below", &["--altitude", "-5"], "altitude");
+    refused(
+        "altitude-nan",
+        &["--altitude", "NaN"],
+        "--altitude: altitude_m = NaN",
+    );
+    // A cubemap's six faces over the budget name --envmap-size, not the height of one
+    // tall frame; an equirectangular map's name it too.
+    refused(
+        "cubemap-budget",
+        &[
+            "--envmap",
+            "cubemap",
+            "--envmap-size",
+            "8192",
+            "--memory-limit",
+            "64M",
+        ],
+        "--envmap-size: six 8192 x 8192 cube faces",
+    );
+    refused(
+        "equirect-budget",
+        &[
+            "--envmap",
+            "equirect",
+            "--envmap-size",
+            "8192",
+            "--memory-limit",
+            "64M",
+        ],
+        "--envmap-size: a 16384 x 8192 map",
+    );
     refused("above", &["--altitude", "70000"], "altitude");
     refused("width", &["--width", "0"], "width");
     refused(
@@ -498,5 +529,39 @@ fn full_standard_streams_never_panic() {
         .unwrap();
     assert_eq!(o.code(), Some(0));
     assert!(out.is_file());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `--lighting` with `-o` and no `--envmap` writes both: the JSON and the picture, the
+/// same picture as without `--lighting`.
+#[test]
+fn lighting_with_a_picture_writes_both() {
+    let dir = scratch("lighting-picture");
+    let (with, without, light) = (
+        dir.join("with.png"),
+        dir.join("without.png"),
+        dir.join("light.json"),
+    );
+    let mut base = vec!["sky", "--backend", "cpu"];
+    base.extend(SMALL);
+    base.extend(COARSE_SHELLS);
+    let run = |extra: &[&str]| {
+        let o = atmo(&[base.as_slice(), extra].concat());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    run(&[
+        "-o",
+        with.to_str().unwrap(),
+        "--lighting",
+        light.to_str().unwrap(),
+    ]);
+    run(&["-o", without.to_str().unwrap()]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&light).unwrap()).unwrap();
+    assert!(json["sun"]["illuminance_lux"]["normal"].as_f64().unwrap() > 0.0);
+    assert_eq!(
+        std::fs::read(&with).unwrap(),
+        std::fs::read(&without).unwrap()
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }

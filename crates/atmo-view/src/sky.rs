@@ -60,9 +60,18 @@ impl SkyParams {
         Sun::from_degrees(self.sun_elevation_deg, self.sun_azimuth_deg)
     }
 
-    /// Refuses a sun out of range or an exposure that is not positive, naming the field.
+    /// Refuses a sun out of range, an altitude below the ground or not a number, or an
+    /// exposure that is not positive, naming the field (the model refuses an altitude
+    /// above its atmosphere's top).
     pub fn validate(&self) -> atmo::Result<()> {
         self.sun()?;
+        if !(self.altitude_m.is_finite() && self.altitude_m >= 0.0) {
+            return Err(Error::out_of_range(
+                "altitude_m",
+                self.altitude_m,
+                "[0, the atmosphere's top) m",
+            ));
+        }
         if !(self.exposure.is_finite() && self.exposure > 0.0) {
             return Err(Error::out_of_range(
                 "exposure",

@@ -244,6 +244,18 @@ fn environment(args: &SkyArgs, picture: &atmo_view::sky::SkyParams, sun: Sun) ->
     if kind.is_some() && args.output.is_none() {
         return Err(atmo::Error::Invalid("--envmap writes to -o: name an .exr file".into()).into());
     }
+    // --lighting with -o and no --envmap: the picture too, of the same sky.
+    let picture_view = match (kind, &args.output) {
+        (None, Some(path)) => {
+            ImageKind::of(path)?;
+            outputs.push(path.clone());
+            Some((
+                picture.view((args.picture.width, args.picture.height))?,
+                path,
+            ))
+        }
+        _ => None,
+    };
     outputs.extend(args.lighting.clone());
     let inputs = args.inputs();
     for path in &outputs {
@@ -282,6 +294,10 @@ fn environment(args: &SkyArgs, picture: &atmo_view::sky::SkyParams, sun: Sun) ->
     };
     for (frame, path) in faces.iter().zip(&outputs) {
         frame.write(path, picture.exposure, picture.tone)?;
+    }
+    if let Some((view, path)) = &picture_view {
+        sky.render(view)
+            .write(path, picture.exposure, picture.tone)?;
     }
     if let Some(path) = &args.lighting {
         let lighting = Lighting::new(&sky, &atmosphere, picture.altitude_m, sun);
