@@ -300,3 +300,34 @@ fn a_show_plays_into_frames_and_an_animated_png() {
     assert!(!dir.join("none").exists() && !dir.join("a.png").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A scene whose shadow maps are over the memory budget is refused naming
+/// `--shadow-map`, and that flag then makes it fit: the flag is applied before the
+/// scene is built and charged.
+#[test]
+fn the_shadow_map_flag_answers_the_budget_message() {
+    let dir = scratch("shafts-shadow-budget");
+    let out = dir.join("out.png");
+    let stage = scene("spotlight-sphere.toml");
+    let base = [
+        stage.as_str(),
+        "--set",
+        "render.shadow_map=8192",
+        "--memory-limit",
+        "64M",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let o = atmo(&[&["shafts"], &base[..]].concat());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--shadow-map") && !out.exists(), "{stderr}");
+    let o = atmo(&[&["shafts"], &base[..], &["--shadow-map", "256"]].concat());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("256^2 shadow maps") && out.is_file(),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

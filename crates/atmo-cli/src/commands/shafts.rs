@@ -104,7 +104,10 @@ impl From<GpuMethod> for ShaftsMethod {
     }
 }
 
-/// The scene of `path` with the command line's edits and overrides, validated.
+/// The scene of `path` with the command line's edits and overrides, validated. The
+/// overrides are edits of the file's `[render]` after the `--set`s, so the scene is
+/// built (its shadow maps charged to the memory budget) with them, and a message that
+/// names `--shadow-map` is one the flag answers.
 pub fn load_scene(
     path: &std::path::Path,
     edits: &[String],
@@ -112,14 +115,22 @@ pub fn load_scene(
     sub_planes: Option<u32>,
     shadow_map: Option<u32>,
 ) -> Result<Scene> {
+    let overrides = [
+        ("planes", planes),
+        ("sub_planes", sub_planes),
+        ("shadow_map", shadow_map),
+    ];
     let edits = edits
         .iter()
-        .map(|e| Edit::parse(e))
+        .cloned()
+        .chain(
+            overrides
+                .iter()
+                .filter_map(|(key, value)| value.map(|v| format!("render.{key}={v}"))),
+        )
+        .map(|e| Edit::parse(&e))
         .collect::<atmo::Result<Vec<_>>>()?;
-    let mut scene = atmo::shafts::edits::load(path, &edits)?;
-    scene.planes.planes = planes.unwrap_or(scene.planes.planes);
-    scene.planes.sub_planes = sub_planes.unwrap_or(scene.planes.sub_planes);
-    scene.planes.shadow_map = shadow_map.unwrap_or(scene.planes.shadow_map);
+    let scene = atmo::shafts::edits::load(path, &edits)?;
     scene.validate_planes()?;
     Ok(scene)
 }
