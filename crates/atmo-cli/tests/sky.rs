@@ -565,3 +565,27 @@ fn lighting_with_a_picture_writes_both() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A cubemap's faces and the lighting are written together: when the last of them
+/// cannot be written (here a folder where the JSON goes), no face appears either.
+#[test]
+fn cube_faces_and_lighting_appear_together_or_not_at_all() {
+    let dir = scratch("together");
+    let (env, light) = (dir.join("env.exr"), dir.join("light.json"));
+    std::fs::create_dir(&light).unwrap();
+    let mut args = vec!["sky", "--backend", "cpu", "--envmap", "cubemap"];
+    args.extend(["--envmap-size", "8", "-o", env.to_str().unwrap()]);
+    args.extend(["--lighting", light.to_str().unwrap()]);
+    args.extend(COARSE_SHELLS);
+    let o = atmo(&args);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("is a folder"), "{stderr}");
+    // Only the folder that was there: no face, no temporary.
+    assert_eq!(files_in(&dir), 1, "{stderr}");
+    std::fs::remove_dir(&light).unwrap();
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(files_in(&dir), 7);
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -243,8 +243,88 @@ fn through_temporary<T>(
     if result.is_err() {
         remove_temporary(&tmp);
     }
-    release(&tmp);
+    // A file of a set written together stays registered until the set is renamed.
+    if result.is_err() || !is_deferred(&tmp) {
+        release(&tmp);
+    }
     result
+}
+
+/// A file of a set ([`write_together`]) written to its temporary, to be renamed to
+/// `target` (for `path`) with the others.
+struct Deferred {
+    tmp: PathBuf,
+    target: PathBuf,
+    path: PathBuf,
+}
+
+thread_local! {
+    /// The files of the set this thread is writing, if it is writing one.
+    static SET: std::cell::RefCell<Option<Vec<Deferred>>> = const { std::cell::RefCell::new(None) };
+}
+
+fn is_deferred(tmp: &Path) -> bool {
+    SET.with(|s| {
+        s.borrow()
+            .as_ref()
+            .is_some_and(|set| set.iter().any(|d| d.tmp == tmp))
+    })
+}
+
+/// Renames the complete temporary `tmp` to `target`, or, inside [`write_together`],
+/// leaves it for the set's renaming.
+fn put_in_place(tmp: &Path, target: &Path, path: &Path) -> Result<()> {
+    let deferred = SET.with(|s| match s.borrow_mut().as_mut() {
+        Some(set) => {
+            set.push(Deferred {
+                tmp: tmp.to_path_buf(),
+                target: target.to_path_buf(),
+                path: path.to_path_buf(),
+            });
+            true
+        }
+        None => false,
+    });
+    if deferred {
+        Ok(())
+    } else {
+        std::fs::rename(tmp, target).map_err(Error::io_at(path))
+    }
+}
+
+/// Runs `write` with every file it writes ([`write_atomically`], and so
+/// [`crate::image::Frame::write`]) held back as one set: each is written whole to its
+/// temporary, and only once `write` succeeds are they all renamed into place, with an
+/// interrupt ([`interrupt`]) held off until the last, so after an error or a signal
+/// the old files stand, all of them, or the new ones do (cube faces, plots). A rename
+/// that fails part way (a file system error, not a signal) is said, naming its file.
+pub fn write_together<T>(write: impl FnOnce() -> Result<T>) -> Result<T> {
+    SET.with(|s| {
+        let mut set = s.borrow_mut();
+        assert!(set.is_none(), "write_together is not nested");
+        *set = Some(Vec::new());
+    });
+    let result = write();
+    let set = SET.with(|s| s.borrow_mut().take()).unwrap_or_default();
+    let renamed = result.and_then(|value| {
+        let mut live = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+        if live.interrupted {
+            return Err(Error::Invalid(
+                "not written, the run was interrupted".to_string(),
+            ));
+        }
+        let renamed = set
+            .iter()
+            .try_for_each(|d| std::fs::rename(&d.tmp, &d.target).map_err(Error::io_at(&d.path)));
+        live.paths.retain(|p| !set.iter().any(|d| &d.tmp == p));
+        renamed.map(|()| value)
+    });
+    for d in &set {
+        // Those of a failed set (a renamed one is not there any more).
+        remove_temporary(&d.tmp);
+        release(&d.tmp);
+    }
+    renamed
 }
 
 /// The error for an output `path` that is there and not a regular file (`m`): the
@@ -305,7 +385,7 @@ pub fn write_atomically(
                 .map_err(Error::io_at(tmp))?;
         }
         w.get_ref().sync_all().map_err(Error::io_at(tmp))?;
-        std::fs::rename(tmp, target).map_err(Error::io_at(path))
+        put_in_place(tmp, target, path)
     })
 }
 
@@ -389,6 +469,44 @@ mod tests {
         check_folder(&dir.join("new.png")).unwrap();
         let expected = if cfg!(unix) { 2 } else { 1 }; // the folder, and the link
         assert_eq!(names(&dir).len(), expected, "a temporary was left");
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn files_written_together_all_appear_or_none() {
+        let dir = scratch("together");
+        let (a, b) = (dir.join("a.txt"), dir.join("b.txt"));
+        std::fs::write(&a, "old a").unwrap();
+        std::fs::write(&b, "old b").unwrap();
+        // The second file fails after the first is complete: neither is replaced.
+        let failed = write_together(|| {
+            write_atomically(&a, |w| put(w, b"new a"))?;
+            assert_eq!(
+                std::fs::read_to_string(&a).unwrap(),
+                "old a",
+                "renamed early"
+            );
+            write_atomically(&b, |_| Err(Error::Invalid("disk full".into())))
+        });
+        assert!(failed.is_err());
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "old a");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "old b");
+        assert_eq!(names(&dir), ["a.txt", "b.txt"], "a temporary was left");
+        // Both complete: both replaced, and a value comes back.
+        let n = write_together(|| {
+            write_atomically(&a, |w| put(w, b"new a"))?;
+            write_atomically(&b, |w| put(w, b"new b"))?;
+            Ok(2)
+        });
+        assert_eq!(n.unwrap(), 2);
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "new a");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "new b");
+        assert_eq!(names(&dir), ["a.txt", "b.txt"]);
+        let live = LIVE.lock().unwrap().paths.clone();
+        assert!(
+            !live.iter().any(|p| p.starts_with(&dir)),
+            "still registered"
+        );
         std::fs::remove_dir_all(dir).unwrap();
     }
 

@@ -42,7 +42,10 @@ pub fn run(args: InspectArgs) -> Result<()> {
     print_summary(&table, &args.table, bytes);
     if let Some(folder) = &args.plots {
         std::fs::create_dir_all(folder).map_err(Error::io_at(folder))?;
-        write_plots(&table, folder, sun, args.altitude)?;
+        // The five plots, all of them or (after an error or a signal) none.
+        let written =
+            atmo::files::write_together(|| write_plots(&table, folder, sun, args.altitude))?;
+        outln!("{written}");
     }
     Ok(())
 }
@@ -138,15 +141,20 @@ fn grid_picture(values: &[Vec3], width: usize, height: usize) -> Frame {
 }
 
 /// Writes a picture whose pixel values are the displayed values wanted, in [0, 1].
-fn write_display(frame: &mut Frame, path: &Path) -> Result<()> {
+fn write_display(frame: &mut Frame, path: &Path) -> atmo::Result<()> {
     for p in &mut frame.pixels {
         *p = Vec3::new(srgb_decode(p.x), srgb_decode(p.y), srgb_decode(p.z));
     }
-    frame.write(path, 1.0, ToneMap::Clamp)?;
-    Ok(())
+    frame.write(path, 1.0, ToneMap::Clamp)
 }
 
-fn write_plots(table: &SkylightTable, folder: &Path, sun: f64, altitude_m: f64) -> Result<()> {
+/// Writes the plots into `folder`, and says what they are.
+fn write_plots(
+    table: &SkylightTable,
+    folder: &Path,
+    sun: f64,
+    altitude_m: f64,
+) -> atmo::Result<String> {
     let grid = table.grid(altitude_m);
     let (w, h) = (grid.azimuths, grid.elevations);
     let bound = table.settings().bound;
@@ -226,7 +234,7 @@ fn write_plots(table: &SkylightTable, folder: &Path, sun: f64, altitude_m: f64) 
         }
     }
     write_display(&mut plot, &folder.join("singular-values.png"))?;
-    outln!(
+    Ok(format!(
         "wrote {}: singular-values.png (log10 sigma_k/sigma_1 from 0 at the top to {floor} at \
          the bottom, one grey line a decade, k = 1 to {} left to right, red: terms stored), \
          terms.png (T_R, T_G, T_B / {most}: azimuth from the sun 0 to 180 deg left to right, \
@@ -235,6 +243,5 @@ fn write_plots(table: &SkylightTable, folder: &Path, sun: f64, altitude_m: f64) 
         folder.display(),
         sigma.len(),
         sun.to_degrees()
-    );
-    Ok(())
+    ))
 }

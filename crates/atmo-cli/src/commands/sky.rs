@@ -292,43 +292,20 @@ fn environment(args: &SkyArgs, picture: &atmo_view::sky::SkyParams, sun: Sun) ->
         Some(EnvmapKind::Cubemap) => sky.cubemap(args.envmap_size, sun_disc),
         None => Vec::new(),
     };
-    for (frame, path) in faces.iter().zip(&outputs) {
-        frame.write(path, picture.exposure, picture.tone)?;
-    }
-    if let Some((view, path)) = &picture_view {
-        sky.render(view)
-            .write(path, picture.exposure, picture.tone)?;
-    }
-    if let Some(path) = &args.lighting {
-        let lighting = Lighting::new(&sky, &atmosphere, picture.altitude_m, sun);
-        let up = lighting.sky_irradiance_up;
-        let out = json!({
-            "atmosphere": atmosphere.name,
-            "altitude_m": picture.altitude_m,
-            "frame": "world: x east, y up, z south",
-            "sun": {
-                "direction": lighting.sun.direction,
-                "elevation_deg": sun.elevation().to_degrees(),
-                "azimuth_deg": sun.azimuth().to_degrees(),
-                "wavelengths_nm": atmosphere.wavelengths_nm,
-                "direct_normal_irradiance_w_m2_nm": lighting.sun.spectrum,
-                "illuminance_lux": {"normal": lighting.sun.normal_lux, "horizontal": lighting.sun.horizontal_lux},
-                "linear_srgb_colour": lighting.sun.colour,
-            },
-            "sky": {
-                "sh9_radiance_linear_srgb": lighting.sky_sh9,
-                "sh_basis": "real, (l,m) = (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0) (2,1) (2,2); Y_1-1 ~ y, Y_10 ~ z, Y_11 ~ x",
-                "irradiance_up_linear_srgb_w_m2": up,
-                "illuminance_up_lux": atmo::sky::lighting::LUMENS_PER_WATT * atmo::atmosphere::spectrum::srgb_luminance(up),
-            },
-        });
-        let text = serde_json::to_string_pretty(&out)? + "\n";
-        atmo::files::write_atomically(path, |w| {
-            use std::io::Write;
-            w.write_all(text.as_bytes())
-                .map_err(atmo::Error::io_at(path))
-        })?;
-    }
+    // The faces, the picture and the lighting: all of them, or none after an error.
+    atmo::files::write_together(|| {
+        for (frame, path) in faces.iter().zip(&outputs) {
+            frame.write(path, picture.exposure, picture.tone)?;
+        }
+        if let Some((view, path)) = &picture_view {
+            sky.render(view)
+                .write(path, picture.exposure, picture.tone)?;
+        }
+        match &args.lighting {
+            Some(path) => write_lighting(path, &sky, &atmosphere, picture, sun),
+            None => Ok(()),
+        }
+    })?;
     note!(
         "atmo: {} in {:.0} ms",
         outputs
@@ -339,6 +316,46 @@ fn environment(args: &SkyArgs, picture: &atmo_view::sky::SkyParams, sun: Sun) ->
         start.elapsed().as_secs_f64() * 1e3
     );
     Ok(())
+}
+
+/// The sky's light on things at the viewpoint, as an engine takes it, into `path`
+/// (JSON).
+fn write_lighting(
+    path: &Path,
+    sky: &SkyPicture,
+    atmosphere: &Atmosphere,
+    picture: &atmo_view::sky::SkyParams,
+    sun: Sun,
+) -> atmo::Result<()> {
+    let lighting = Lighting::new(sky, atmosphere, picture.altitude_m, sun);
+    let up = lighting.sky_irradiance_up;
+    let out = json!({
+        "atmosphere": atmosphere.name,
+        "altitude_m": picture.altitude_m,
+        "frame": "world: x east, y up, z south",
+        "sun": {
+            "direction": lighting.sun.direction,
+            "elevation_deg": sun.elevation().to_degrees(),
+            "azimuth_deg": sun.azimuth().to_degrees(),
+            "wavelengths_nm": atmosphere.wavelengths_nm,
+            "direct_normal_irradiance_w_m2_nm": lighting.sun.spectrum,
+            "illuminance_lux": {"normal": lighting.sun.normal_lux, "horizontal": lighting.sun.horizontal_lux},
+            "linear_srgb_colour": lighting.sun.colour,
+        },
+        "sky": {
+            "sh9_radiance_linear_srgb": lighting.sky_sh9,
+            "sh_basis": "real, (l,m) = (0,0) (1,-1) (1,0) (1,1) (2,-2) (2,-1) (2,0) (2,1) (2,2); Y_1-1 ~ y, Y_10 ~ z, Y_11 ~ x",
+            "irradiance_up_linear_srgb_w_m2": up,
+            "illuminance_up_lux": atmo::sky::lighting::LUMENS_PER_WATT * atmo::atmosphere::spectrum::srgb_luminance(up),
+        },
+    });
+    // A tree of numbers and strings, always serialisable.
+    let text = serde_json::to_string_pretty(&out).expect("JSON of plain values") + "\n";
+    atmo::files::write_atomically(path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes())
+            .map_err(atmo::Error::io_at(path))
+    })
 }
 
 /// Directions per block of `--probe`: each holds a few kB of scattering maps while its
