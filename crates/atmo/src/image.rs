@@ -459,8 +459,35 @@ impl Frame {
             ));
         }
         let bytes = crate::files::read_bounded(path, "picture", crate::files::DATA_LIMIT_BYTES)?;
-        let rgb = image::load_from_memory_with_format(&bytes, image::ImageFormat::OpenExr)
-            .map_err(|e| Error::Invalid(format!("{}: cannot read the image: {e}", path.display())))?
+        Frame::exr_from_bytes(&bytes, &path.display().to_string())
+    }
+
+    #[cfg(not(feature = "exr"))]
+    pub fn exr_from_bytes(_bytes: &[u8], origin: &str) -> Result<Frame> {
+        Err(Error::Invalid(format!(
+            "{origin}: this build of atmo reads no EXR (the `exr` feature is off)"
+        )))
+    }
+
+    /// The picture in the EXR file `bytes` (named `origin` in messages), RGB as linear
+    /// radiance. Its size is checked against the pictures' limits and the memory
+    /// budget ([`Frame::check_size`], and the decoder's own copy) before it is decoded.
+    #[cfg(feature = "exr")]
+    pub fn exr_from_bytes(bytes: &[u8], origin: &str) -> Result<Frame> {
+        use image::ImageDecoder as _;
+        let bad =
+            |e: image::ImageError| Error::Invalid(format!("{origin}: cannot read the image: {e}"));
+        let decoder = image::codecs::openexr::OpenExrDecoder::new(std::io::Cursor::new(bytes))
+            .map_err(bad)?;
+        let (width, height) = decoder.dimensions();
+        Frame::check_size(width, height)?;
+        crate::budget::check(
+            &format!("{origin} ({width} x {height})"),
+            decoder.total_bytes() + width as u64 * height as u64 * 24,
+            "the picture's size",
+        )?;
+        let rgb = image::DynamicImage::from_decoder(decoder)
+            .map_err(bad)?
             .to_rgb32f();
         Ok(Frame {
             width: rgb.width(),

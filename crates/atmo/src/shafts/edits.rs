@@ -183,8 +183,26 @@ pub fn load(path: &Path, edits: &[Edit]) -> Result<Scene> {
     Scene::from_text_at(&text, path)
 }
 
+/// The most parts a key may have (`cue[0].set.left.pan_deg` has 4), and its longest,
+/// bytes: beyond what a person writes, a key only makes nested tables that the TOML
+/// reader then recurses into (a 10,000-part key took 7.9 GB before it aborted).
+pub const MAX_KEY_PARTS: usize = 16;
+pub const MAX_KEY_BYTES: usize = 256;
+
+/// The longest value an edit sets, bytes: a long list of numbers, not a file.
+pub const MAX_VALUE_BYTES: usize = 64 << 10;
+
 /// A key's parts: each table's name, and the index where it is an array of tables.
 fn path(key: &str) -> Result<Vec<(&str, Option<usize>)>> {
+    let parts = key.split('.').count();
+    if key.len() > MAX_KEY_BYTES || parts > MAX_KEY_PARTS {
+        let shown: String = key.chars().take(48).collect();
+        return Err(Error::Invalid(format!(
+            "--set {shown}...: a key is at most {MAX_KEY_PARTS} parts and {MAX_KEY_BYTES} \
+             bytes (this one: {parts} parts, {} bytes); a scene's deepest is 5",
+            key.len()
+        )));
+    }
     let bad = || {
         Error::Invalid(format!(
             "--set {key}: a key is NAME or NAME[INDEX] parts joined by '.', e.g. \
@@ -215,6 +233,14 @@ fn path(key: &str) -> Result<Vec<(&str, Option<usize>)>> {
 
 fn apply_one(root: &mut dyn TableLike, edit: &Edit) -> Result<()> {
     let parts = path(&edit.key)?;
+    if let Some(value) = edit.value.as_ref().filter(|v| v.len() > MAX_VALUE_BYTES) {
+        return Err(Error::Invalid(format!(
+            "--set {}: the value is {} bytes; at most {} KiB",
+            edit.key,
+            value.len(),
+            MAX_VALUE_BYTES >> 10
+        )));
+    }
     let (last, tables) = parts.split_last().expect("split gives one part at least");
     let mut table = root;
     let mut at = String::new();
@@ -285,6 +311,26 @@ mod tests {
     fn stage(edits: &[Edit]) -> Result<Scene> {
         let text = apply(STAGE, "stage.toml", edits)?;
         Scene::from_toml_str(&text, "stage.toml", Path::new("../../scenes"))
+    }
+
+    #[test]
+    fn keys_and_values_past_what_a_person_writes_are_refused() {
+        let deep = vec!["a"; 10_000].join(".");
+        let e = stage(&[Edit::set(&deep, "1")]).unwrap_err().to_string();
+        assert!(e.contains("at most 16 parts") && e.len() < 300, "{e}");
+        let long = format!("camera.{}", "x".repeat(300));
+        let e = stage(&[Edit::set(&long, "1")]).unwrap_err().to_string();
+        assert!(e.contains("256"), "{e}");
+        let big = format!("[{}0]", "0, ".repeat(30_000));
+        let e = stage(&[Edit::set("camera.position", big)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("at most 64 KiB"), "{e}");
+        // The deepest a scene goes is well inside.
+        let cue = Edit::set("cue[0].set.left.pan_deg", "10");
+        assert!(
+            apply(STAGE, "stage.toml", &[cue]).is_err_and(|e| e.to_string().contains("[[cue]]"))
+        );
     }
 
     #[test]
