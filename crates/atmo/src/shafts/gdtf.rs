@@ -22,6 +22,10 @@ use super::spotlight::Sampling;
 #[cfg(feature = "gdtf")]
 use crate::error::{Error, Result};
 
+/// The most luminous flux a fixture's beam may give, lm: a hundred times the
+/// brightest stage fixtures.
+pub const MAX_FLUX_LM: f32 = 1e7;
+
 /// What a fixture's GDTF file gives for one mode.
 #[derive(Debug, Clone)]
 pub struct GdtfFixture {
@@ -193,6 +197,22 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
     );
     let luminous_flux_lm = number(beam, "LuminousFlux", 10_000.0)?;
     let kelvin = number(beam, "ColorTemperature", 6000.0)?;
+    // What a luminaire can be: past these the light's arithmetic gives NaN (a flux of
+    // 3e38 lm) or no beam at all (an angle of 0 or over 180 degrees).
+    let within = |name: &str, x: f32, (lo, hi): (f32, f32), open: bool| -> Result<()> {
+        if (if open { x > lo } else { x >= lo }) && x <= hi {
+            return Ok(());
+        }
+        let bracket = if open { "(" } else { "[" };
+        Err(fail(format!(
+            "Beam {:?}: {name} = {x}: allowed {bracket}{lo}, {hi}]",
+            beam.attribute("Name").unwrap_or("")
+        )))
+    };
+    within("BeamAngle", beam_deg, (0.0, 180.0), true)?;
+    within("FieldAngle", field_deg, (0.0, 180.0), true)?;
+    within("LuminousFlux", luminous_flux_lm, (0.0, MAX_FLUX_LM), true)?;
+    within("ColorTemperature", kelvin, (1000.0, 40000.0), false)?;
     let modes: Vec<roxmltree::Node> = fixture
         .descendants()
         .filter(|n| n.has_tag_name("DMXMode"))
@@ -230,6 +250,14 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
     };
     let (pan_range_deg, tilt_range_deg, zoom_range_deg) =
         (range("Pan")?, range("Tilt")?, range("Zoom")?);
+    if let Some([narrow, wide]) = zoom_range_deg {
+        if !(narrow > 0.0 && wide <= 180.0) {
+            return Err(fail(format!(
+                "the Zoom channel's PhysicalFrom..PhysicalTo is {narrow}..{wide} degrees: \
+                 allowed within (0, 180]"
+            )));
+        }
+    }
     let mut wheel = Vec::new();
     let gobo = wheel_turned_by(fixture, &functions, "gobo", |a| a.starts_with("Gobo"));
     if let Some(node) = gobo.map_err(&fail)? {
@@ -704,6 +732,33 @@ mod reading {
                 with_gobos("Rotation=\"{1.000000,", "Rotation=\"{one,"),
                 "Standard",
                 "prism wheel \"Prism1\" slot \"3-Facet\": a facet's Rotation \"{one,",
+            ),
+            // Numbers that read but that no luminaire has (each gave a NaN picture or
+            // no beam).
+            (
+                with_gobos("LuminousFlux=\"12000\"", "LuminousFlux=\"3e38\""),
+                "Standard",
+                "Beam \"Beam\": LuminousFlux = 300000000000000000000000000000000000000: allowed (0, 10000000]",
+            ),
+            (
+                with_gobos("BeamAngle=\"18\"", "BeamAngle=\"0\""),
+                "Standard",
+                "BeamAngle = 0: allowed (0, 180]",
+            ),
+            (
+                with_gobos("FieldAngle=\"24\"", "FieldAngle=\"400\""),
+                "Standard",
+                "FieldAngle = 400: allowed (0, 180]",
+            ),
+            (
+                with_gobos("ColorTemperature=\"6500\"", "ColorTemperature=\"-5\""),
+                "Standard",
+                "ColorTemperature = -5: allowed [1000, 40000]",
+            ),
+            (
+                with_gobos("PhysicalFrom=\"8\" PhysicalTo=\"36\"", "PhysicalFrom=\"8\" PhysicalTo=\"1e30\""),
+                "Standard",
+                "the Zoom channel's PhysicalFrom..PhysicalTo is 8..1000000000000000000000000000000 degrees",
             ),
         ];
         for (bytes, mode, want) in cases {

@@ -39,6 +39,10 @@ pub enum Symmetry {
     Full,
 }
 
+/// The brightest a photometric file may make a light, cd: ten times the brightest
+/// searchlights (about 1e9 cd); past it the light's arithmetic leaves f32.
+pub const MAX_CANDELA: f64 = 1e10;
+
 /// A measured intensity distribution, type C, in candela.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Photometry {
@@ -207,6 +211,19 @@ impl Photometry {
             return Err(fail(
                 c_line,
                 "every candela value is 0: the file gives no light".into(),
+            ));
+        }
+        // The file's values times its multipliers: past what any luminaire gives, the
+        // light's arithmetic overflows (a multiplier of 1e35 gave a picture of NaN).
+        let peak = self.peak() as f64 * scale as f64;
+        if peak > MAX_CANDELA {
+            return Err(fail(
+                c_line,
+                format!(
+                    "the candela values times the file's multipliers reach {peak:.3e} cd: \
+                     allowed at most {MAX_CANDELA:.0e} cd (ten times the brightest \
+                     searchlights)"
+                ),
             ));
         }
         for c in &mut self.candela {
@@ -406,6 +423,12 @@ mod tests {
                 good.replace("1 -1 2.0", "1 -1 0"),
                 "line 5: the candela multiplier is 0",
             ),
+            // A multiplier that reads, times values that read: past any luminaire (it
+            // gave a picture of NaN).
+            (
+                good.replace("1 -1 2.0", "1 -1 1e35"),
+                "line 9: the candela values times the file's multipliers reach 1.000e38 cd: allowed at most 1e10 cd",
+            ),
             (
                 good.replace("1 1 100", "0 1 100"),
                 "line 6: the ballast factor",
@@ -533,6 +556,11 @@ mod tests {
             (with(4, "x"), "line 4: the number of C planes Mc is `x`"),
             (with(24, "0"), "line 24: the conversion factor is 0"),
             (with(29, "-5"), "line 29: the lamps' total flux is -5"),
+            // A flux that reads, past any lamp (the light would overflow to NaN).
+            (
+                with(29, "1e38"),
+                "line 48: the candela values times the file's multipliers reach",
+            ),
             (
                 with(46, "5"),
                 "line 44: vertical angles must increase: 5 (number 3) follows 10",
