@@ -331,3 +331,34 @@ fn the_shadow_map_flag_answers_the_budget_message() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A scene file is charged to the memory budget before it is parsed (its TOML tree
+/// takes about 47 bytes a byte): one too large for the budget is refused naming it,
+/// and the same file parses under the default budget.
+#[test]
+fn a_scene_too_large_for_the_budget_is_refused_before_it_is_parsed() {
+    let dir = scratch("shafts-big-scene");
+    let show = common::small_show(&dir);
+    let mut text = std::fs::read_to_string(&show).unwrap();
+    for i in 0..25_000 {
+        text += &format!(
+            "\n[[cue]]\ntime_s = {}\nfade_s = 0.5\nset.left = {{ pan_deg = {}.0 }}\n",
+            7.0 + i as f64 * 0.01,
+            i % 90
+        );
+    }
+    assert!(text.len() > 1 << 20);
+    std::fs::write(&show, text).unwrap();
+    let out = dir.join("out.png");
+    let args = [show.to_str().unwrap(), "-o", out.to_str().unwrap()];
+    let o = atmo(&[&["shafts", "--memory-limit", "64M"], &args[..]].concat());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("parsed would need") && stderr.contains("lower the file's size"),
+        "{stderr}"
+    );
+    let o = atmo(&[&["shafts"], &args[..]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -92,10 +92,17 @@ pub struct Script {
     events: Vec<(u64, Input)>,
 }
 
+/// Largest script file, bytes: 100,000 lines of a key or an edit (a 10 MB `set` line
+/// took 2.3 GB in the panel's text layout).
+pub const SCRIPT_LIMIT_BYTES: u64 = 4 << 20;
+
+/// Longest line of a script, bytes: a key, a drag or an edit's value as a person types it.
+pub const SCRIPT_LINE_BYTES: usize = 4096;
+
 impl Script {
     /// Reads and parses a script file; errors name the file and line.
     pub fn read(path: &Path) -> atmo::Result<Script> {
-        let text = atmo::files::read_text(path, "script", atmo::files::TEXT_LIMIT_BYTES)?;
+        let text = atmo::files::read_text(path, "script", SCRIPT_LIMIT_BYTES)?;
         Script::parse(&text, &path.display().to_string())
     }
 
@@ -103,14 +110,20 @@ impl Script {
     pub fn parse(text: &str, origin: &str) -> atmo::Result<Script> {
         let mut events = Vec::new();
         for (i, line) in text.lines().enumerate() {
-            let line = line.split('#').next().unwrap_or("").trim();
-            if line.is_empty() {
-                continue;
-            }
             let bad = |message: String| Error::Parse {
                 path: format!("{origin}:{}", i + 1),
                 message,
             };
+            if line.len() > SCRIPT_LINE_BYTES {
+                return Err(bad(format!(
+                    "the line is {} bytes; a script's line is at most {SCRIPT_LINE_BYTES}",
+                    line.len()
+                )));
+            }
+            let line = line.split('#').next().unwrap_or("").trim();
+            if line.is_empty() {
+                continue;
+            }
             let words: Vec<&str> = line.split_whitespace().collect();
             let frame: u64 = words[0]
                 .parse()
@@ -226,6 +239,10 @@ mod tests {
             ("1 jump", "is not 'FRAME key NAME'"),
             ("1 set time", "is not 'FRAME key NAME'"),
             ("1 aim x 1 2", "not a light's index"),
+            (
+                &format!("1 set camera.position [{}]", "1, ".repeat(5000)),
+                "a script's line is at most 4096",
+            ),
         ] {
             let e = Script::parse(&format!("# ok\n{text}"), "run.txt")
                 .unwrap_err()

@@ -313,8 +313,7 @@ impl Atmosphere {
 
     /// Reads, parses and validates a TOML file.
     pub fn from_toml_file(path: &std::path::Path) -> Result<Self> {
-        let text =
-            crate::files::read_text(path, "atmosphere file", crate::files::TEXT_LIMIT_BYTES)?;
+        let text = crate::files::read_toml(path, "atmosphere file")?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 

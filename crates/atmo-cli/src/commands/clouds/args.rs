@@ -144,7 +144,7 @@ pub struct CloudStill {
 pub fn scene_arguments(path: &std::path::Path, long_flags: &[&str]) -> atmo::Result<Vec<String>> {
     let name = path.display();
     // Through the bounded reader, as every file a user names.
-    let text = atmo::files::read_text(path, "cloud scene file", atmo::files::TEXT_LIMIT_BYTES)
+    let text = atmo::files::read_toml(path, "cloud scene file")
         .map_err(|e| atmo::Error::Invalid(format!("--scene {e}")))?;
     let table: toml::Table = text
         .parse()

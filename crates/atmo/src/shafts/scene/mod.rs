@@ -92,7 +92,7 @@ impl Scene {
 
     /// The text of the scene file at `path` (through the bounded reader).
     pub fn read_text(path: &Path) -> Result<String> {
-        crate::files::read_text(path, "scene file", crate::files::TEXT_LIMIT_BYTES)
+        crate::files::read_toml(path, "scene file")
     }
 
     /// The scene of `text` as if it were the file at `path` (named so in messages, its
