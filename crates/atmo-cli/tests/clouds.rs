@@ -418,3 +418,47 @@ fn a_scene_file_stands_for_its_flags_and_the_command_line_overrides_it() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Particles are charged to the memory budget (about 400 bytes each once drawn) before
+/// they are read or generated: a file or a count past it is refused, naming it.
+#[test]
+fn particles_past_the_budget_are_refused_before_they_are_read() {
+    let dir = scratch("clouds-particle-budget");
+    let count: u32 = 200_000;
+    let file = dir.join("many.atmo-particles");
+    let mut bytes = b"ATMOPART".to_vec();
+    for word in [1, count, 0] {
+        bytes.extend(word.to_le_bytes());
+    }
+    bytes.resize(bytes.len() + count as usize * 20, 0);
+    std::fs::write(&file, bytes).unwrap();
+    let out = dir.join("out.png");
+    let base = [
+        "clouds",
+        "--memory-limit",
+        "64M",
+        "--resolution",
+        "64",
+        "-o",
+    ];
+    for (source, named) in [
+        (
+            vec!["--particles-file", file.to_str().unwrap()],
+            "200000 particles (".to_string(),
+        ),
+        (
+            vec!["--generate", "cumulus", "--particles", "200000"],
+            "200000 particles (--particles)".to_string(),
+        ),
+    ] {
+        let o = atmo(&[&base[..], &[out.to_str().unwrap()], &source[..]].concat());
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{stderr}");
+        assert!(
+            stderr.contains(&named) && stderr.contains("lower the particle count"),
+            "{stderr}"
+        );
+        assert!(!out.exists());
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -85,6 +85,8 @@ pub fn check(p: &Particle, at: &str) -> Result<()> {
 
 /// The particles of a CSV text; `origin` names it in messages.
 pub fn parse_csv(text: &str, origin: &str, default_albedo: f32) -> Result<Vec<Particle>> {
+    // At most a particle a line, less the header: charged before any is parsed.
+    super::particles::check_count(text.lines().count().saturating_sub(1), origin)?;
     let mut lines = text
         .lines()
         .enumerate()
@@ -163,6 +165,7 @@ pub fn parse_binary(bytes: &[u8], origin: &str) -> Result<Vec<Particle>> {
     if count == 0 {
         return Err(fail("no particles".into()));
     }
+    super::particles::check_count(count, origin)?;
     if body.len() != count * floats * 4 {
         return Err(fail(format!(
             "{} bytes of particles for {count} particles of {} bytes each",

@@ -129,6 +129,7 @@ impl Cloud {
             Some(path) => files::read(path, 0.99)?,
             None => {
                 check_range("--particles", still.particles as f64, 1.0, 5e6)?;
+                atmo::clouds::particles::check_count(still.particles, "--particles")?;
                 Cumulus {
                     particles: still.particles,
                     seed: still.seed,
