@@ -146,12 +146,11 @@ impl Scene {
             .spotlight
             .first()
             .map_or(IntensityUnit::Candela, |l| l.intensity_unit);
-        let spotlights = spec
-            .spotlight
-            .iter()
-            .enumerate()
-            .map(|(i, l)| l.validate(&format!("spotlight[{i}]"), unit, folder))
-            .collect::<Result<Vec<_>>>()?;
+        let mut spotlights: Vec<Spotlight> = Vec::with_capacity(spec.spotlight.len());
+        for (i, l) in spec.spotlight.iter().enumerate() {
+            let light = l.validate(&format!("spotlight[{i}]"), unit, folder)?;
+            spotlights.push(share_profile(&spotlights, light));
+        }
         let list = spec
             .object
             .iter()
@@ -229,6 +228,26 @@ impl Scene {
             "render.shadow_map (--shadow-map) or the number of spotlights",
         )
     }
+}
+
+/// `light` holding the profile of the first of `before` measured from the same file,
+/// and its intensity map where the two are equal: each light read its file again and
+/// tabulated it again (200 lights sharing an IES file held 200 copies of each, 120 MB
+/// of maps). Done as each light is built, so only one copy is ever extra.
+fn share_profile(before: &[Spotlight], mut light: Spotlight) -> Spotlight {
+    let Profile::Measured(photometry) = &light.profile else {
+        return light;
+    };
+    let same = before
+        .iter()
+        .find(|b| matches!(&b.profile, Profile::Measured(p) if p == photometry));
+    if let Some(first) = same {
+        light.profile = first.profile.clone();
+        if first.intensity_map == light.intensity_map {
+            light.intensity_map = first.intensity_map.clone();
+        }
+    }
+    light
 }
 
 /// [`Scene::lights`]: the fixed spotlights then the heads, with a known length (a
