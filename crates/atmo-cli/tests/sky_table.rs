@@ -344,3 +344,59 @@ fn a_day_is_animated_from_a_place_and_a_date() {
     assert!(folder.join("animation.png").exists());
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Drawing from a table is charged what drawing holds, not the table's precompute:
+/// a table whose precompute needs more than 64 MiB is drawn under a 64 MiB budget
+/// (it was refused for the precompute's memory, which drawing does not use).
+#[test]
+fn a_table_is_drawn_under_a_budget_its_precompute_would_not_fit() {
+    let dir = scratch("table-budget");
+    let table = dir.join("wide.atmo-sky");
+    let settings = [
+        "--order",
+        "1",
+        "--directions",
+        "128",
+        "--sun-steps",
+        "32",
+        "--altitude-steps",
+        "4",
+        "--shells",
+        "12",
+        "--scattering-directions",
+        "16",
+    ];
+    let precompute = |extra: &[&str]| {
+        atmo(
+            &[
+                &["precompute", "sky"],
+                &settings[..],
+                extra,
+                &["-o", table.to_str().unwrap()],
+            ]
+            .concat(),
+        )
+    };
+    let o = precompute(&["--memory-limit", "64M"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "the precompute fits 64 MiB: the test needs one that does not"
+    );
+    let o = precompute(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.join("sky.png");
+    let mut args = vec![
+        "sky",
+        "--table",
+        table.to_str().unwrap(),
+        "--memory-limit",
+        "64M",
+    ];
+    args.extend(["-o", out.to_str().unwrap()]);
+    args.extend(SMALL);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.is_file());
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -311,7 +311,8 @@ pub(super) fn parse_settings(r: &mut Reader, origin: &str) -> Result<(Atmosphere
             srgb,
         },
     };
-    settings.validate(&atmosphere)?;
+    // The fields only: a part's merge and a precompute check their memory themselves.
+    settings.check_fields(&atmosphere)?;
     Ok((atmosphere, settings))
 }
 

@@ -103,6 +103,18 @@ impl Default for TableSettings {
 impl TableSettings {
     /// Checks every field and that the precompute fits the run's memory budget ([`crate::budget`]).
     pub fn validate(&self, atmosphere: &Atmosphere) -> Result<()> {
+        self.check_fields(atmosphere)?;
+        crate::budget::check(
+            "the skylight table's precompute",
+            self.memory_bytes(atmosphere),
+            "directions, sun_steps or altitude_steps",
+        )
+    }
+
+    /// Checks every field, not the precompute's memory: what a table read from a file
+    /// needs (drawing from it holds the table, not its precompute, which once refused
+    /// a table below 1,168 MiB that drawing needed a few MiB of).
+    pub fn check_fields(&self, atmosphere: &Atmosphere) -> Result<()> {
         self.sky.validate(atmosphere)?;
         check_range("sun_steps", self.sun_steps as f64, 2.0, 4096.0)?;
         check_range("altitude_steps", self.altitude_steps as f64, 2.0, 1024.0)?;
@@ -129,12 +141,7 @@ impl TableSettings {
                 "(0, 1), in displayed values",
             ));
         }
-        check_positive("exposure", self.bound.display.exposure as f64, 1e9)?;
-        crate::budget::check(
-            "the skylight table's precompute",
-            self.memory_bytes(atmosphere),
-            "directions, sun_steps or altitude_steps",
-        )
+        check_positive("exposure", self.bound.display.exposure as f64, 1e9)
     }
 
     /// An upper bound of the bytes the precompute holds at once: the table as maps and
