@@ -1,7 +1,7 @@
 //! GDTF fixture files (a zip of description.xml and wheel images): no panic, no
 //! allocation past the budget (entries are checked against it before they are read);
-//! an accepted fixture has finite angles, flux and colour temperature, ordered
-//! ranges, and a prism of unit beams that is atmo's circular prism or refused.
+//! an accepted fixture has beam and field angles in (0, 180], a flux in
+//! (0, MAX_FLUX_LM], a colour temperature in [1000, 40000] K, ordered ranges, and a prism of unit beams that is atmo's circular prism or refused.
 #![no_main]
 use atmo::shafts::show::Prism;
 use atmo::shafts::spotlight::Sampling;
@@ -15,8 +15,14 @@ fuzz_target!(|data: &[u8]| {
         let Ok(f) = atmo::shafts::gdtf::read(data, "fuzz", mode, Sampling::Nearest) else {
             continue;
         };
-        assert!(f.beam_deg.is_finite() && f.field_deg.is_finite());
-        assert!(f.luminous_flux_lm.is_finite() && f.kelvin.is_finite());
+        // The ranges a luminaire's beam has (each refused past them, naming it).
+        assert!(f.beam_deg > 0.0 && f.beam_deg <= 180.0);
+        assert!(f.field_deg > 0.0 && f.field_deg <= 180.0);
+        assert!(f.luminous_flux_lm > 0.0 && f.luminous_flux_lm <= atmo::shafts::gdtf::MAX_FLUX_LM);
+        assert!((1000.0..=40000.0).contains(&f.kelvin));
+        if let Some([narrow, wide]) = f.zoom_range_deg {
+            assert!(narrow > 0.0 && wide <= 180.0);
+        }
         for [lo, hi] in [f.pan_range_deg, f.tilt_range_deg, f.zoom_range_deg].into_iter().flatten() {
             assert!(lo <= hi);
         }

@@ -1,6 +1,6 @@
 //! Photometric files (IES LM-63 and EULUMDAT): no panic, no allocation past the counts'
-//! limits; an accepted file gives finite candela >= 0 everywhere, a peak > 0 and a
-//! reach within its vertical angles.
+//! limits; an accepted file gives finite candela >= 0 everywhere, a peak in
+//! (0, MAX_CANDELA] and a reach within its vertical angles.
 #![no_main]
 use atmo::shafts::photometry::Photometry;
 use libfuzzer_sys::fuzz_target;
@@ -19,7 +19,7 @@ fuzz_target!(|data: &[u8]| {
     .into_iter()
     .flatten()
     {
-        assert!(p.peak() > 0.0 && p.peak().is_finite());
+        assert!(p.peak() > 0.0 && p.peak() as f64 <= atmo::shafts::photometry::MAX_CANDELA);
         let reach = p.reach();
         assert!((0.0..=180.0).contains(&reach));
         for gamma in [0.0, 7.3, reach * 0.5, reach, 179.0] {
