@@ -448,6 +448,34 @@ pub struct LevelErrors {
     pub max: f64,
 }
 
+/// The largest block (a tile, or a run of scan lines) the EXR file `bytes` declares,
+/// bytes: the decoder reserves a block's declared size before it reads it, so a small
+/// file declaring huge tiles took 796 MB (found by the `exr` fuzz target). 0 where the
+/// header does not read (the decoder then refuses the file).
+#[cfg(feature = "exr")]
+fn exr_block_bytes(bytes: &[u8]) -> u64 {
+    use exr::meta::BlockDescription;
+    let Ok(meta) = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+    else {
+        return 0;
+    };
+    meta.headers
+        .iter()
+        .map(|h| {
+            let pixels = match h.blocks {
+                BlockDescription::Tiles(t) => {
+                    (t.tile_size.0 as u64).saturating_mul(t.tile_size.1 as u64)
+                }
+                BlockDescription::ScanLines => {
+                    h.compression.scan_lines_per_block() as u64 * h.layer_size.0 as u64
+                }
+            };
+            pixels.saturating_mul(h.channels.bytes_per_pixel as u64)
+        })
+        .max()
+        .unwrap_or(0)
+}
+
 impl Frame {
     /// Reads linear radiance from an OpenEXR file (as [`Frame::write`] writes it).
     pub fn read_exr(path: &Path) -> Result<Frame> {
@@ -483,7 +511,7 @@ impl Frame {
         Frame::check_size(width, height)?;
         crate::budget::check(
             &format!("{origin} ({width} x {height})"),
-            decoder.total_bytes() + width as u64 * height as u64 * 24,
+            decoder.total_bytes() + width as u64 * height as u64 * 24 + exr_block_bytes(bytes),
             "the picture's size",
         )?;
         let rgb = image::DynamicImage::from_decoder(decoder)
@@ -548,6 +576,24 @@ impl Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Found by the `exr` fuzz target: 460 bytes whose header declares tiles the
+    /// decoder reserved 796 MB for, past the budget; they are charged now.
+    #[test]
+    #[cfg(feature = "exr")]
+    fn an_exr_is_charged_for_the_blocks_its_header_declares() {
+        let huge = include_bytes!("../../../fuzz/corpus/exr/huge-tiles.exr");
+        assert!(
+            exr_block_bytes(huge) >= 796_262_784,
+            "{}",
+            exr_block_bytes(huge)
+        );
+        let sky = include_bytes!("../../../fuzz/corpus/exr/sky-8x4.exr");
+        let frame = Frame::exr_from_bytes(sky, "sky").unwrap();
+        assert_eq!((frame.width, frame.height), (8, 4));
+        // Its blocks: a few scan lines of RGB floats.
+        assert!(exr_block_bytes(sky) < 1 << 20, "{}", exr_block_bytes(sky));
+    }
 
     #[test]
     fn tone_maps_are_monotone_and_bounded() {
