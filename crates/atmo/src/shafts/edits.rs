@@ -192,6 +192,32 @@ pub const MAX_KEY_BYTES: usize = 256;
 /// The longest value an edit sets, bytes: a long list of numbers, not a file.
 pub const MAX_VALUE_BYTES: usize = 64 << 10;
 
+/// The most quote characters of one kind in a row a value's strings may hold: the
+/// TOML writer counts such runs in a byte and overflowed past 255 (found by the
+/// `set_edits` fuzz target); no scene's string has more than two.
+pub const MAX_QUOTE_RUN: usize = 64;
+
+/// The longest run of `"` or of `'` in the strings (and inline tables' keys) of `value`.
+fn quote_run(value: &Value) -> usize {
+    let in_text = |text: &str| {
+        ['"', '\'']
+            .iter()
+            .map(|&q| text.split(|c| c != q).map(str::len).max().unwrap_or(0))
+            .max()
+            .unwrap_or(0)
+    };
+    match value {
+        Value::String(s) => in_text(s.value()),
+        Value::Array(a) => a.iter().map(quote_run).max().unwrap_or(0),
+        Value::InlineTable(t) => t
+            .iter()
+            .map(|(k, v)| in_text(k).max(quote_run(v)))
+            .max()
+            .unwrap_or(0),
+        _ => 0,
+    }
+}
+
 /// A key's parts: each table's name, and the index where it is an array of tables.
 fn path(key: &str) -> Result<Vec<(&str, Option<usize>)>> {
     let parts = key.split('.').count();
@@ -291,6 +317,13 @@ fn apply_one(root: &mut dyn TableLike, edit: &Edit) -> Result<()> {
             let mut value = text
                 .parse::<Value>()
                 .unwrap_or_else(|_| Value::from(text.as_str()));
+            let run = quote_run(&value);
+            if run > MAX_QUOTE_RUN {
+                return Err(Error::Invalid(format!(
+                    "--set {}: the value holds {run} quotes in a row; at most {MAX_QUOTE_RUN}",
+                    edit.key
+                )));
+            }
             // The old value's comment and spacing stay (`color = [...]  # a blue gel`).
             if let Some(old) = table.get(name).and_then(Item::as_value) {
                 *value.decor_mut() = old.decor().clone();
@@ -326,6 +359,17 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("at most 64 KiB"), "{e}");
+        // A run of quotes past what the TOML writer counts (it overflowed at 256).
+        let quotes = format!("x{}", "\"".repeat(300));
+        let e = stage(&[Edit::set("spotlight[0].name", quotes)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("300 quotes in a row"), "{e}");
+        let nested = format!("[{{ a = \"{}\" }}]", "\\\"".repeat(100));
+        let e = stage(&[Edit::set("spotlight[0].name", nested)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("100 quotes in a row"), "{e}");
         // The deepest a scene goes is well inside.
         let cue = Edit::set("cue[0].set.left.pan_deg", "10");
         assert!(
