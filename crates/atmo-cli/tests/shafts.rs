@@ -362,3 +362,31 @@ fn a_scene_too_large_for_the_budget_is_refused_before_it_is_parsed() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The plane method's buffers are charged at what they hold a pixel (a frame's 12
+/// bytes were a third of it): a picture whose buffers are past the budget is refused
+/// naming the camera's size; the scene's own size fits.
+#[test]
+fn the_pictures_buffers_are_charged_to_the_budget() {
+    let dir = scratch("shafts-picture-budget");
+    let out = dir.join("out.png");
+    let sphere = scene("spotlight-sphere.toml");
+    let run = |size: &[&str]| {
+        let mut args = vec!["shafts", sphere.as_str(), "--memory-limit", "64M"];
+        args.extend(size);
+        args.extend(["--backend", "cpu", "-o", out.to_str().unwrap()]);
+        atmo(&args)
+    };
+    // 2560 x 1440: 44 MB as frames were charged, 141 MB as the method holds them.
+    let o = run(&["--set", "camera.width=2560", "--set", "camera.height=1440"]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("lower camera.width and camera.height"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+    let o = run(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(dir).unwrap();
+}

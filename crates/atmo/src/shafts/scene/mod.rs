@@ -226,9 +226,23 @@ impl Scene {
             &format!("{most} shadow maps of {}^2", self.planes.shadow_map),
             4 * texels,
             "render.shadow_map (--shadow-map) or the number of spotlights",
+        )?;
+        // And the picture's buffers beside them (a frame was charged 12 bytes a pixel,
+        // a third of what the plane method holds).
+        let (width, height) = (self.camera.width, self.camera.height);
+        crate::budget::check(
+            &format!("{most} shadow maps and a {width} x {height} picture's buffers"),
+            4 * texels + width as u64 * height as u64 * PLANES_BYTES_PER_PIXEL,
+            "camera.width and camera.height",
         )
     }
 }
+
+/// What the plane method holds a pixel of its picture, bytes: the frame, the
+/// scattered light and the grid it is interpolated over, the surfaces seen. Measured
+/// from outside at 34 (peak resident size over 2.8 M more pixels of
+/// spotlight-sphere.toml, adaptive); charged at 40.
+pub const PLANES_BYTES_PER_PIXEL: u64 = 40;
 
 /// `light` holding the profile of the first of `before` measured from the same file,
 /// and its intensity map where the two are equal: each light read its file again and
