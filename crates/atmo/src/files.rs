@@ -394,17 +394,18 @@ pub fn write_atomically(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
 ) -> Result<()> {
-    if let Ok(m) = std::fs::metadata(resolve(path)) {
-        if !m.is_file() {
-            return Err(not_a_file(path, &m));
-        }
-    }
     through_temporary(path, "file", |tmp, target| {
+        // What is there now: a regular file keeps its permissions, anything else is
+        // refused before the temporary is made.
+        let old = std::fs::metadata(target).ok();
+        if let Some(m) = old.as_ref().filter(|m| !m.is_file()) {
+            return Err(not_a_file(path, m));
+        }
         let file = File::create(tmp).map_err(Error::io_at(tmp))?;
         let mut w = BufWriter::new(file);
         fill(&mut w)?;
         w.flush().map_err(Error::io_at(tmp))?;
-        if let Ok(old) = std::fs::metadata(target) {
+        if let Some(old) = old {
             w.get_ref()
                 .set_permissions(old.permissions())
                 .map_err(Error::io_at(tmp))?;

@@ -313,13 +313,16 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// What a frame holds a pixel, bytes: linear RGB, an f32 each.
+    pub const BYTES_PER_PIXEL: u64 = 12;
+
     /// Checks that a `width` x `height` frame is allowed, before anything is allocated.
     pub fn check_size(width: u32, height: u32) -> Result<()> {
         check_range("width", width as f64, 1.0, 16384.0)?;
         check_range("height", height as f64, 1.0, 16384.0)?;
         crate::budget::check(
             &format!("a {width} x {height} frame"),
-            width as u64 * height as u64 * 12,
+            width as u64 * height as u64 * Self::BYTES_PER_PIXEL,
             "width or height",
         )
     }

@@ -120,16 +120,13 @@ pub fn load_scene(
         ("sub_planes", sub_planes),
         ("shadow_map", shadow_map),
     ];
-    let edits = edits
+    let mut edits = edits
         .iter()
-        .cloned()
-        .chain(
-            overrides
-                .iter()
-                .filter_map(|(key, value)| value.map(|v| format!("render.{key}={v}"))),
-        )
-        .map(|e| Edit::parse(&e))
+        .map(|e| Edit::parse(e))
         .collect::<atmo::Result<Vec<_>>>()?;
+    edits.extend(overrides.iter().filter_map(|(key, value)| {
+        value.map(|v| Edit::set(&format!("render.{key}"), v.to_string()))
+    }));
     let scene = atmo::shafts::edits::load(path, &edits)?;
     scene.validate_planes()?;
     Ok(scene)

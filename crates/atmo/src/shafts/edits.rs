@@ -348,27 +348,19 @@ mod tests {
 
     #[test]
     fn keys_and_values_past_what_a_person_writes_are_refused() {
-        let deep = vec!["a"; 10_000].join(".");
-        let e = stage(&[Edit::set(&deep, "1")]).unwrap_err().to_string();
+        let refused =
+            |key: &str, value: String| stage(&[Edit::set(key, value)]).unwrap_err().to_string();
+        let e = refused(&vec!["a"; 10_000].join("."), "1".into());
         assert!(e.contains("at most 16 parts") && e.len() < 300, "{e}");
-        let long = format!("camera.{}", "x".repeat(300));
-        let e = stage(&[Edit::set(&long, "1")]).unwrap_err().to_string();
+        let e = refused(&format!("camera.{}", "x".repeat(300)), "1".into());
         assert!(e.contains("256"), "{e}");
-        let big = format!("[{}0]", "0, ".repeat(30_000));
-        let e = stage(&[Edit::set("camera.position", big)])
-            .unwrap_err()
-            .to_string();
+        let e = refused("camera.position", format!("[{}0]", "0, ".repeat(30_000)));
         assert!(e.contains("at most 64 KiB"), "{e}");
         // A run of quotes past what the TOML writer counts (it overflowed at 256).
-        let quotes = format!("x{}", "\"".repeat(300));
-        let e = stage(&[Edit::set("spotlight[0].name", quotes)])
-            .unwrap_err()
-            .to_string();
+        let e = refused("spotlight[0].name", format!("x{}", "\"".repeat(300)));
         assert!(e.contains("300 quotes in a row"), "{e}");
         let nested = format!("[{{ a = \"{}\" }}]", "\\\"".repeat(100));
-        let e = stage(&[Edit::set("spotlight[0].name", nested)])
-            .unwrap_err()
-            .to_string();
+        let e = refused("spotlight[0].name", nested);
         assert!(e.contains("100 quotes in a row"), "{e}");
         // The deepest a scene goes is well inside.
         let cue = Edit::set("cue[0].set.left.pan_deg", "10");

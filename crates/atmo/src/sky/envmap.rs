@@ -59,8 +59,8 @@ pub fn cube_direction(face: usize, x: u32, y: u32, size: u32) -> Vec3 {
 }
 
 /// Checks an environment map's size `n` (rows of an equirectangular map, or a cube
-/// face's side): in range, and the map's frames (12 bytes a pixel, as every [`Frame`])
-/// within the run's memory budget; errors name the field `envmap size`.
+/// face's side): in range, and the map's frames ([`Frame::BYTES_PER_PIXEL`]) within
+/// the run's memory budget; errors name the field `envmap size`.
 pub fn check_size(kind: EnvmapKind, n: u32) -> Result<()> {
     check_range("envmap size", n as f64, 4.0, 8192.0)?;
     let side = n as u64;
@@ -68,7 +68,7 @@ pub fn check_size(kind: EnvmapKind, n: u32) -> Result<()> {
         EnvmapKind::Equirect => (format!("a {} x {n} map", 2 * n), 2 * side * side),
         EnvmapKind::Cubemap => (format!("six {n} x {n} cube faces"), 6 * side * side),
     };
-    crate::budget::check(&what, pixels * 12, "envmap size")
+    crate::budget::check(&what, pixels * Frame::BYTES_PER_PIXEL, "envmap size")
 }
 
 impl SkyPicture {
