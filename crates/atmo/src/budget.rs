@@ -4,8 +4,12 @@
 //! setting to lower, never an allocation failure that aborts the process.
 //!
 //! The budget is one number for the process (the CLI's `--memory-limit`), read where a
-//! size is checked; library users set it once with [`set_limit`].
+//! size is checked; library users set it once with [`set_limit`]. What a build already
+//! keeps (a scene's gobos, profiles and meshes, read one after another) is counted in
+//! the checks made while it reads the next ([`beside`]), so that many files each
+//! within the budget cannot add up past it.
 
+use std::cell::Cell;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
@@ -42,16 +46,48 @@ pub fn limit() -> u64 {
     LIMIT.load(Ordering::Relaxed)
 }
 
-/// Checks that `needed_bytes` fits the run's budget, else an [`Error::OverBudget`]
-/// naming what needs it and the `setting` to lower.
+thread_local! {
+    /// Bytes the thread's current build already holds, and what holds them (the
+    /// innermost named): see [`beside`].
+    static HELD: Cell<(u64, &'static str)> = const { Cell::new((0, "")) };
+}
+
+/// Runs `work` with `held_bytes` (what the caller keeps while it runs, named `held` in
+/// messages) counted in every [`check`] it makes on this thread; nested calls add up.
+pub fn beside<T>(held_bytes: u64, held: &'static str, work: impl FnOnce() -> T) -> T {
+    /// Puts the outer count back however `work` ends, a panic included.
+    struct Restore((u64, &'static str));
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            HELD.set(self.0);
+        }
+    }
+    let outer = HELD.get();
+    let _restore = Restore(outer);
+    HELD.set((outer.0.saturating_add(held_bytes), held));
+    work()
+}
+
+/// Checks that `needed_bytes`, beside what the build holds ([`beside`]), fits the run's
+/// budget, else an [`Error::OverBudget`] naming what needs it and the `setting` to
+/// lower.
 pub fn check(what: &str, needed_bytes: u64, setting: &str) -> Result<()> {
     let budget_bytes = limit();
-    if needed_bytes <= budget_bytes {
+    let (held, holder) = HELD.get();
+    let total = needed_bytes.saturating_add(held);
+    if total <= budget_bytes {
         Ok(())
+    } else if held > 0 {
+        Err(Error::OverBudget {
+            what: format!("{what} beside {holder} ({} MiB)", held.div_ceil(1 << 20)),
+            needed_bytes: total,
+            budget_bytes,
+            setting: format!("{setting}, or {holder}"),
+        })
     } else {
         Err(Error::OverBudget {
             what: what.to_string(),
-            needed_bytes,
+            needed_bytes: total,
             budget_bytes,
             setting: setting.to_string(),
         })
@@ -122,6 +158,23 @@ mod tests {
         assert!(parse_size("-1G").is_err());
         assert!(parse_size("2X").is_err());
         assert!(parse_size("").is_err());
+    }
+
+    #[test]
+    fn what_a_build_holds_counts_in_the_checks_it_makes() {
+        let limit = limit();
+        assert!(check("a", limit / 2, "x").is_ok());
+        let refused = beside(limit / 2 + 1, "the maps", || check("a", limit / 2, "x"));
+        let message = refused.unwrap_err().to_string();
+        assert!(message.contains("a beside the maps"), "{message}");
+        assert!(message.contains("lower x, or the maps"), "{message}");
+        // Nested calls add up, and each puts the outer count back.
+        beside(limit / 4, "m", || {
+            assert!(check("b", limit / 2, "x").is_ok());
+            assert!(beside(limit / 4 + 1, "m", || check("b", limit / 2, "x")).is_err());
+            assert!(check("b", limit / 2, "x").is_ok());
+        });
+        assert!(check("a", limit, "x").is_ok());
     }
 
     #[cfg(target_os = "linux")]

@@ -255,6 +255,11 @@ impl Mesh {
         self.triangles.len()
     }
 
+    /// What the triangles and their hierarchy hold, bytes.
+    pub fn bytes(&self) -> u64 {
+        (std::mem::size_of_val(&self.triangles[..]) + std::mem::size_of_val(&self.nodes[..])) as u64
+    }
+
     /// The triangles as the BVH orders them, each as `[a, b - a, c - a]`.
     pub fn triangles(&self) -> &[[Vec3; 3]] {
         &self.triangles

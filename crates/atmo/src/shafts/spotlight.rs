@@ -58,8 +58,9 @@ pub struct Gobo {
     /// Row-major texels, top row first, as the image's 8-bit sRGB values: 3 bytes a
     /// texel (a 4096^2 gobo holds 50 MB, where linear f32 took 200 MB); [`Gobo::texel`]
     /// is the linear transmittance. Private, with the size, so that [`Gobo::dark`]
-    /// always describes them.
-    srgb: Vec<[u8; 3]>,
+    /// always describes them. Shared: the lights and wheel slots that project one file,
+    /// and every pose of a head, hold one copy.
+    srgb: Arc<[[u8; 3]]>,
     /// Lookup.
     pub sampling: Sampling,
     /// How far the gobo is turned in its holder, radians, counterclockwise seen from
@@ -99,7 +100,7 @@ impl Gobo {
         Gobo {
             width,
             height,
-            srgb,
+            srgb: srgb.into(),
             sampling,
             rotation: 0.0,
             dark,
@@ -114,6 +115,19 @@ impl Gobo {
     /// The texels, row-major from the top, as the image's 8-bit sRGB values.
     pub fn srgb(&self) -> &[[u8; 3]] {
         &self.srgb
+    }
+
+    /// The same texels looked up with `sampling` (shared, not copied).
+    pub fn with_sampling(&self, sampling: Sampling) -> Gobo {
+        Gobo {
+            sampling,
+            ..self.clone()
+        }
+    }
+
+    /// What the texels hold, bytes (3 a texel, and the dark-block flags).
+    pub fn bytes(&self) -> u64 {
+        (std::mem::size_of_val(&*self.srgb) + self.dark.len()) as u64
     }
 
     /// The linear transmittance of texel `k` (row-major).

@@ -68,6 +68,11 @@ pub const MAX_ANGLES: usize = 20_000;
 pub const MAX_VALUES: usize = 2_000_000;
 
 impl Photometry {
+    /// What the angles and candela hold, bytes.
+    pub fn bytes(&self) -> u64 {
+        4 * (self.vertical.len() + self.horizontal.len() + self.candela.len()) as u64
+    }
+
     /// The intensity toward vertical angle `gamma` in half-plane `c`, both degrees,
     /// candela: bilinear between the measured angles, zero past the last vertical angle.
     pub fn candela_at(&self, gamma: f32, c: f32) -> f32 {

@@ -1,7 +1,130 @@
 //! The files a scene names, read through the bounded reader: photometric profiles
-//! (IES, EULUMDAT), gobo images and OBJ meshes.
+//! (IES, EULUMDAT), gobo images, GDTF fixtures and OBJ meshes.
+
+use std::cell::{Cell, RefCell};
+use std::collections::HashMap;
+use std::sync::Arc;
 
 use super::*;
+
+/// What messages call the files a scene holds.
+pub(super) const FILES: &str = "the scene's gobos, photometric files, GDTF files and meshes";
+
+/// The files of one scene as they are read: each gobo, profile and GDTF file once,
+/// however many lights, wheel slots and fixtures name it (a wheel listing one image
+/// 200 times held 200 copies), and what they hold together counted in every budget
+/// check made while the next is read ([`crate::budget::beside`]).
+pub(super) struct Assets<'a> {
+    /// Where relative paths start.
+    folder: &'a Path,
+    /// What the files read so far hold, bytes.
+    held: Cell<u64>,
+    gobos: RefCell<HashMap<PathBuf, Gobo>>,
+    profiles: RefCell<HashMap<PathBuf, Arc<Photometry>>>,
+    fixtures: RefCell<HashMap<(PathBuf, String), gdtf::GdtfFixture>>,
+}
+
+impl<'a> Assets<'a> {
+    pub(super) fn new(folder: &'a Path) -> Assets<'a> {
+        Assets {
+            folder,
+            held: Cell::new(0),
+            gobos: RefCell::default(),
+            profiles: RefCell::default(),
+            fixtures: RefCell::default(),
+        }
+    }
+
+    /// What the files read hold, bytes.
+    pub(super) fn held(&self) -> u64 {
+        self.held.get()
+    }
+
+    /// `file` from the scene's folder.
+    pub(super) fn path(&self, file: &Path) -> PathBuf {
+        self.folder.join(file)
+    }
+
+    /// `load`, with what is held counted in its checks, then what it keeps counted too:
+    /// refused if the files together pass the budget.
+    fn read<T>(
+        &self,
+        what: &str,
+        load: impl FnOnce() -> Result<T>,
+        kept: impl Fn(&T) -> u64,
+    ) -> Result<T> {
+        let value = crate::budget::beside(self.held(), FILES, load)?;
+        let held = self.held().saturating_add(kept(&value));
+        crate::budget::check(&format!("{FILES} with {what}"), held, FILES)?;
+        self.held.set(held);
+        Ok(value)
+    }
+
+    /// The gobo image `file`, looked up with `sampling`.
+    pub(super) fn gobo(&self, file: &Path, sampling: Sampling) -> Result<Gobo> {
+        let path = self.path(file);
+        if let Some(gobo) = self.gobos.borrow().get(&path) {
+            return Ok(gobo.with_sampling(sampling));
+        }
+        let what = format!("gobo {}", path.display());
+        let gobo = self.read(&what, || load_gobo(&path, sampling), Gobo::bytes)?;
+        self.gobos.borrow_mut().insert(path, gobo.clone());
+        Ok(gobo)
+    }
+
+    /// The photometric file `file`: IES LM-63, or EULUMDAT when `eulumdat`.
+    pub(super) fn profile(&self, file: &Path, eulumdat: bool) -> Result<Arc<Photometry>> {
+        let path = self.path(file);
+        if let Some(profile) = self.profiles.borrow().get(&path) {
+            return Ok(profile.clone());
+        }
+        let what = format!("photometric file {}", path.display());
+        let profile = self.read(
+            &what,
+            || load_photometry(&path, eulumdat).map(Arc::new),
+            |p| p.bytes(),
+        )?;
+        self.profiles.borrow_mut().insert(path, profile.clone());
+        Ok(profile)
+    }
+
+    /// The fixture of GDTF file `file` in DMX `mode`, its gobos looked up with
+    /// `sampling`.
+    pub(super) fn fixture(
+        &self,
+        file: &Path,
+        mode: &str,
+        sampling: Sampling,
+    ) -> Result<gdtf::GdtfFixture> {
+        let key = (self.path(file), mode.to_string());
+        let cached = self.fixtures.borrow().get(&key).cloned();
+        let mut fixture = match cached {
+            Some(fixture) => fixture,
+            None => {
+                let what = format!("GDTF file {}", key.0.display());
+                let fixture = self.read(
+                    &what,
+                    || read_gdtf(&key.0, mode, sampling),
+                    |f| f.wheel.iter().map(Gobo::bytes).sum(),
+                )?;
+                self.fixtures.borrow_mut().insert(key, fixture.clone());
+                fixture
+            }
+        };
+        for gobo in &mut fixture.wheel {
+            *gobo = gobo.with_sampling(sampling);
+        }
+        Ok(fixture)
+    }
+
+    /// The mesh of OBJ file `file`, each vertex mapped by `place` (a mesh is placed as
+    /// it is read, so each object reads its own).
+    pub(super) fn mesh(&self, file: &Path, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
+        let path = self.path(file);
+        let what = format!("OBJ file {}", path.display());
+        self.read(&what, || load_obj(&path, place), Mesh::bytes)
+    }
+}
 
 /// The farthest off the axis a measured profile is drawn, degrees: the field of a
 /// spotlight's square light map and shadow map must stay below 90 (`field_deg` below
@@ -71,7 +194,7 @@ pub fn gobo_from_image(bytes: &[u8], origin: &str, sampling: Sampling) -> Result
 }
 
 impl ObjectSpec {
-    pub(super) fn validate(&self, at: &str, folder: &Path) -> Result<Object> {
+    pub(super) fn validate(&self, at: &str, assets: &Assets) -> Result<Object> {
         let field = |name: &str| format!("{at}.{name}");
         let (shape, a) = match self {
             ObjectSpec::Plane {
@@ -145,7 +268,7 @@ impl ObjectSpec {
                 check_range(&field("rotate_y_deg"), *rotate_y_deg as f64, -360.0, 360.0)?;
                 let translate = vec3(&field("translate"), *translate)?;
                 let rotation = glam::Mat3::from_rotation_y(rotate_y_deg.to_radians());
-                let mesh = load_obj(&folder.join(file), |p| rotation * (p * *scale) + translate)?;
+                let mesh = assets.mesh(file, |p| rotation * (p * *scale) + translate)?;
                 (Shape::Mesh(mesh), albedo)
             }
         };
@@ -170,14 +293,16 @@ pub fn load_obj(path: &Path, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
 #[cfg(feature = "obj")]
 pub fn mesh_from_obj(bytes: &[u8], origin: &str, place: impl Fn(Vec3) -> Vec3) -> Result<Mesh> {
     let fail = |why: String| Error::Invalid(format!("OBJ file {origin}: {why}"));
-    // The parsed lists, the triangles and their hierarchy hold a few times the text.
+    let text = std::str::from_utf8(bytes).map_err(|e| fail(format!("not UTF-8 text ({e})")))?;
+    let counts = check_obj_indices(text).map_err(fail)?;
     crate::budget::check(
-        &format!("the mesh of OBJ file {origin}"),
-        4 * bytes.len() as u64,
+        &format!(
+            "the mesh of OBJ file {origin} ({} triangles, {} vertices)",
+            counts.triangles, counts.vertices
+        ),
+        bytes.len() as u64 + counts.bytes(),
         "the mesh's size",
     )?;
-    let text = std::str::from_utf8(bytes).map_err(|e| fail(format!("not UTF-8 text ({e})")))?;
-    check_obj_indices(text).map_err(fail)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         ..Default::default()
@@ -217,13 +342,36 @@ pub fn mesh_from_obj(bytes: &[u8], origin: &str, place: impl Fn(Vec3) -> Vec3) -
     Ok(Mesh::new(triangles))
 }
 
+/// How many vertices and triangles an OBJ file's text gives (its faces fanned).
+#[cfg(feature = "obj")]
+#[derive(Debug, Default, PartialEq)]
+pub(super) struct ObjCounts {
+    pub vertices: u64,
+    pub triangles: u64,
+}
+
+#[cfg(feature = "obj")]
+impl ObjCounts {
+    /// What reading the mesh holds beside the text, bytes: tobj's lists, the
+    /// triangles, their hierarchy and its build, measured from outside (peak resident
+    /// size over 3 M triangles of a 41 MB file, and 1.3 M triangles and 640 k vertices
+    /// of a 48 MB one: 135 and about 110 bytes a triangle) and charged at 128 a
+    /// triangle and 24 a vertex. Charging the text four times over, as before, left a
+    /// file of short face lines undercounted 2.7 times.
+    pub fn bytes(&self) -> u64 {
+        128 * self.triangles + 24 * self.vertices
+    }
+}
+
 /// Checks every index of the face and line elements (`f`, `l`) against the vertices,
 /// texture coordinates and normals given before it, as OBJ counts them (from 1, or
 /// back from the last with a minus sign): tobj turns an index out of range into an
 /// arithmetic overflow (found by fuzzing: a panic in debug builds, a wrapped index in
-/// release ones), so none reaches it. The message names the line.
+/// release ones), so none reaches it. The message names the line. Gives the counts
+/// the mesh is charged by.
 #[cfg(feature = "obj")]
-pub(super) fn check_obj_indices(text: &str) -> std::result::Result<(), String> {
+pub(super) fn check_obj_indices(text: &str) -> std::result::Result<ObjCounts, String> {
+    let mut triangles = 0u64;
     let mut counts = [0i64; 3]; // positions, texture coordinates, normals
     for (k, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
@@ -231,8 +379,10 @@ pub(super) fn check_obj_indices(text: &str) -> std::result::Result<(), String> {
             Some("v") => counts[0] += 1,
             Some("vt") => counts[1] += 1,
             Some("vn") => counts[2] += 1,
-            Some("f") | Some("l") => {
+            Some(element @ ("f" | "l")) => {
+                let mut corners = 0u64;
                 for word in words {
+                    corners += 1;
                     for (kind, index) in word.split('/').enumerate().take(3) {
                         if index.is_empty() {
                             continue;
@@ -250,11 +400,17 @@ pub(super) fn check_obj_indices(text: &str) -> std::result::Result<(), String> {
                         }
                     }
                 }
+                if element == "f" {
+                    triangles += corners.saturating_sub(2);
+                }
             }
             _ => {}
         }
     }
-    Ok(())
+    Ok(ObjCounts {
+        vertices: counts[0] as u64,
+        triangles,
+    })
 }
 
 /// Without atmo's `obj` feature, OBJ meshes are refused with a message saying so.

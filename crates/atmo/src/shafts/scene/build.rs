@@ -143,7 +143,7 @@ impl SpotlightSpec {
         &self,
         at: &str,
         unit: IntensityUnit,
-        folder: &Path,
+        assets: &Assets,
     ) -> Result<Spotlight> {
         let position = vec3(&format!("{at}.position"), self.position)?;
         let axis = match (self.aim, self.direction) {
@@ -179,11 +179,11 @@ impl SpotlightSpec {
         }
         let (intensity, field_half, profile) = match &self.profile {
             None => self.beam(at)?,
-            Some(spec) => self.measured(at, spec, folder)?,
+            Some(spec) => self.measured(at, spec, assets)?,
         };
         let gobo = match &self.gobo {
             None => None,
-            Some(file) => Some(load_gobo(&folder.join(file), self.gobo_sampling.into())?),
+            Some(file) => Some(assets.gobo(file, self.gobo_sampling.into())?),
         };
         Ok(Spotlight::new(
             position,
@@ -235,7 +235,7 @@ impl SpotlightSpec {
         &self,
         at: &str,
         spec: &ProfileSpec,
-        folder: &Path,
+        assets: &Assets,
     ) -> Result<(f32, f32, Profile)> {
         refuse_given(
             at,
@@ -254,23 +254,23 @@ impl SpotlightSpec {
             )));
         }
         let (file, eulumdat) = spec.file(at)?;
-        let photometry = load_photometry(&folder.join(file), eulumdat)?;
+        let photometry = assets.profile(file, eulumdat)?;
         let reach = photometry.reach().min(MEASURED_REACH_DEG);
         Ok((
             photometry.peak(),
             reach.to_radians(),
-            Profile::Measured(std::sync::Arc::new(photometry)),
+            Profile::Measured(photometry),
         ))
     }
 }
 
 /// The scene's moving heads and cues, validated: ranges, names, gobo slots, cue order.
-pub(super) fn show(spec: &SceneSpec, unit: IntensityUnit, folder: &Path) -> Result<Show> {
+pub(super) fn show(spec: &SceneSpec, unit: IntensityUnit, assets: &Assets) -> Result<Show> {
     let (fixtures, limits): (Vec<Fixture>, Vec<Limits>) = spec
         .fixture
         .iter()
         .enumerate()
-        .map(|(i, f)| f.validate(&format!("fixture[{i}] ({})", f.name), unit, folder))
+        .map(|(i, f)| f.validate(&format!("fixture[{i}] ({})", f.name), unit, assets))
         .collect::<Result<Vec<_>>>()?
         .into_iter()
         .unzip();
@@ -335,7 +335,7 @@ impl FixtureSpec {
         &self,
         at: &str,
         unit: IntensityUnit,
-        folder: &Path,
+        assets: &Assets,
     ) -> Result<(Fixture, Limits)> {
         let field = |name: &str| format!("{at}.{name}");
         let position = vec3(&field("position"), self.position)?;
@@ -352,8 +352,8 @@ impl FixtureSpec {
         )?;
         let sampling = self.gobo_sampling.into();
         let mut light = match &self.gdtf {
-            None => self.keyed(at, folder, sampling)?,
-            Some(file) => self.gdtf_light(at, unit, &folder.join(file), sampling)?,
+            None => self.keyed(at, assets, sampling)?,
+            Some(file) => self.gdtf_light(at, unit, assets, file, sampling)?,
         };
         // A prism the scene gives is in the beam at rest; a GDTF file's is out, as a
         // desk's prism channel at its default (the wheel's open slot).
@@ -431,7 +431,7 @@ impl FixtureSpec {
     }
 
     /// The light as the fixture's own keys give it.
-    pub(super) fn keyed(&self, at: &str, folder: &Path, sampling: Sampling) -> Result<Light> {
+    pub(super) fn keyed(&self, at: &str, assets: &Assets, sampling: Sampling) -> Result<Light> {
         if self.mode.is_some() {
             return Err(Error::Invalid(format!(
                 "{at}.mode names a DMX mode of a GDTF file; give `gdtf` with it"
@@ -446,7 +446,7 @@ impl FixtureSpec {
             .gobo_wheel
             .iter()
             .flatten()
-            .map(|file| load_gobo(&folder.join(file), sampling))
+            .map(|file| assets.gobo(file, sampling))
             .collect::<Result<Vec<_>>>()?;
         Ok(Light {
             intensity,
@@ -465,7 +465,7 @@ impl FixtureSpec {
         })
     }
 
-    /// The light as the GDTF file `path` gives it in the fixture's `mode`: GDTF's beam
+    /// The light as the GDTF file `file` gives it in the fixture's `mode`: GDTF's beam
     /// and field angles (half and a tenth of the peak) turned into atmo's smooth edge,
     /// the intensity from the beam's luminous flux spread over that profile at the
     /// widest zoom.
@@ -473,7 +473,8 @@ impl FixtureSpec {
         &self,
         at: &str,
         unit: IntensityUnit,
-        path: &Path,
+        assets: &Assets,
+        file: &Path,
         sampling: Sampling,
     ) -> Result<Light> {
         refuse_given(
@@ -498,7 +499,8 @@ impl FixtureSpec {
                 "{at}: `mode` is missing: the GDTF file's DMX mode to use"
             ))
         })?;
-        let file = read_gdtf(path, mode, sampling)?;
+        let path = assets.path(file);
+        let file = assets.fixture(file, mode, sampling)?;
         // The file's prism, unless the scene gives the fixture its own.
         let prism = match (&file.prism, self.prism) {
             (Some(p), None) => Some(p.circular().map_err(|why| {

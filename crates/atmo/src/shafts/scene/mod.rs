@@ -12,6 +12,7 @@ use super::gdtf;
 use super::haze::Haze;
 use super::objects::{Object, Objects};
 use super::photometry::Photometry;
+use super::shadow_map::ShadowMap;
 use super::show::{profile_solid_angle, Change, Cue, Fixture, Prism, Show, State, CHANNELS};
 use super::spotlight::{light_frame, Falloff, Gobo, Profile, Sampling, Spotlight};
 use super::PlaneSettings;
@@ -57,6 +58,9 @@ pub struct Scene {
     /// The files the scene names (gobo images, meshes, photometric files) as they
     /// were read, so that a command does not write over one of them.
     pub files: Vec<PathBuf>,
+    /// What the scene's gobos, photometric files, GDTF fixtures and meshes hold, bytes:
+    /// counted beside the shadow maps and the picture in [`Scene::validate_planes`].
+    pub files_bytes: u64,
     /// The moving heads and their cues, posed at one time of the show
     /// ([`Scene::at_time`]; its start as loaded).
     pub show: Show,
@@ -146,18 +150,19 @@ impl Scene {
             .spotlight
             .first()
             .map_or(IntensityUnit::Candela, |l| l.intensity_unit);
+        let assets = Assets::new(folder);
         let mut spotlights: Vec<Spotlight> = Vec::with_capacity(spec.spotlight.len());
         for (i, l) in spec.spotlight.iter().enumerate() {
-            let light = l.validate(&format!("spotlight[{i}]"), unit, folder)?;
+            let light = l.validate(&format!("spotlight[{i}]"), unit, &assets)?;
             spotlights.push(share_profile(&spotlights, light));
         }
         let list = spec
             .object
             .iter()
             .enumerate()
-            .map(|(i, o)| o.validate(&format!("object[{i}]"), folder))
+            .map(|(i, o)| o.validate(&format!("object[{i}]"), &assets))
             .collect::<Result<Vec<_>>>()?;
-        let show = show(&spec, unit, folder)?;
+        let show = show(&spec, unit, &assets)?;
         let wheels = spec
             .fixture
             .iter()
@@ -186,6 +191,7 @@ impl Scene {
                 .chain(meshes)
                 .map(|f| folder.join(f))
                 .collect(),
+            files_bytes: assets.held(),
             show,
         };
         scene.validate_planes()?;
@@ -218,13 +224,18 @@ impl Scene {
     /// them.
     pub fn validate_planes(&self) -> Result<()> {
         self.planes.validate()?;
-        // Each light's shadow map, 4 bytes a texel, on the CPU or on the GPU, at the
-        // time of the show with the most (every prism in).
+        crate::budget::beside(self.files_bytes, assets::FILES, || self.check_buffers())
+    }
+
+    /// The budget checks of [`Scene::validate_planes`].
+    fn check_buffers(&self) -> Result<()> {
+        // Each light's shadow map, on the CPU or on the GPU, at the time of the show
+        // with the most (every prism in).
         let most = self.spotlights.len() + self.show.most_lights();
-        let texels = most as u64 * (self.planes.shadow_map as u64).pow(2);
+        let maps = most as u64 * ShadowMap::bytes(self.planes.shadow_map as usize);
         crate::budget::check(
             &format!("{most} shadow maps of {}^2", self.planes.shadow_map),
-            4 * texels,
+            maps,
             "render.shadow_map (--shadow-map) or the number of spotlights",
         )?;
         // And the picture's buffers beside them (a frame was charged 12 bytes a pixel,
@@ -232,7 +243,7 @@ impl Scene {
         let (width, height) = (self.camera.width, self.camera.height);
         crate::budget::check(
             &format!("{most} shadow maps and a {width} x {height} picture's buffers"),
-            4 * texels + width as u64 * height as u64 * PLANES_BYTES_PER_PIXEL,
+            maps + width as u64 * height as u64 * PLANES_BYTES_PER_PIXEL,
             "camera.width and camera.height",
         )
     }
