@@ -169,10 +169,15 @@ pub enum GpuError {
 
 /// A frame of `width` x `height` from RGBA f32 pixels read back, alpha dropped.
 pub fn frame_of(width: u32, height: u32, bytes: &[u8]) -> atmo::image::Frame {
-    let values: &[f32] = bytemuck::cast_slice(bytes);
     let mut frame = atmo::image::Frame::new(width, height);
-    for (pixel, v) in frame.pixels.iter_mut().zip(values.chunks(4)) {
+    rgb_of(bytes, &mut frame.pixels);
+    frame
+}
+
+/// `pixels` from RGBA f32 `bytes`, their alpha left out.
+pub(crate) fn rgb_of(bytes: &[u8], pixels: &mut [glam::Vec3]) {
+    for (pixel, v) in pixels.iter_mut().zip(bytes.chunks_exact(16)) {
+        let v: [f32; 4] = bytemuck::pod_read_unaligned(v);
         *pixel = glam::Vec3::new(v[0], v[1], v[2]);
     }
-    frame
 }

@@ -492,6 +492,7 @@ impl GpuClouds {
                 .into());
             }
         }
+        gpu.check_picture("the cloud frame", (w, h), "the image size")?;
         let target = target_texture(gpu, w, h, background);
         let view = target.create_view(&Default::default());
         let mut composite = self.composite.borrow_mut();
@@ -504,7 +505,7 @@ impl GpuClouds {
         });
         prepared?;
         let gpu_ms = gpu_ms?;
-        let frame = crate::frame_of(w, h, &gpu.read_texture("the cloud frame", &target, w, h)?);
+        let frame = gpu.read_frame("the cloud frame", &target, (w, h))?;
         Ok(Rendered { frame, gpu_ms })
     }
 

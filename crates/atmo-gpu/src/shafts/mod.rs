@@ -230,12 +230,19 @@ impl GpuShafts {
         gpu.check_texture_side("the image width", w, "camera.width")?;
         gpu.check_texture_side("the image height", h, "camera.height")?;
         gpu.check_texture_side("the light maps", lights.max(1), "the number of lights")?;
+        // The maps, the rays' ends and the picture on the device and back, beside the
+        // scene's files, before any of them is made.
+        let maps = lights.max(1) as u64 * (size as u64).pow(2) * 4;
+        let ends_bytes = w as u64 * h as u64 * (k * k) as u64 * 4;
+        atmo::budget::beside(scene.files_bytes, "the scene's files", || {
+            atmo::budget::check(
+                &format!("the light shafts' maps and {w} x {h} picture on the GPU"),
+                maps + ends_bytes + w as u64 * h as u64 * crate::device::PICTURE_BYTES_PER_PIXEL,
+                "camera.width, camera.height, render.supersampling or render.shadow_map",
+            )
+        })?;
         let geometry = Geometry::of(scene);
-        let depth = gpu.output(
-            "the shadow maps",
-            lights.max(1) as u64 * (size as u64).pow(2) * 4,
-            "render.shadow_map",
-        )?;
+        let depth = gpu.output("the shadow maps", maps, "render.shadow_map")?;
         let extents = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("the lit volumes' extents"),
             size: 40 * lights.max(1) as u64,
@@ -258,7 +265,7 @@ impl GpuShafts {
         let pixels = w as u64 * h as u64;
         let ends = gpu.output(
             "the rays' ends",
-            pixels * (k * k) as u64 * 4,
+            ends_bytes,
             "camera.width, camera.height or render.supersampling",
         )?;
         let out = gpu.output("the picture", pixels * 16, "camera.width or camera.height")?;
@@ -389,11 +396,10 @@ impl GpuShafts {
             self.encode(gpu, encoder, method)
         })?;
         let p = &self.params;
-        let bytes = gpu.read("the light shafts", &self.out, 0, self.out.size())?;
-        Ok(Rendered {
-            frame: crate::frame_of(p.width, p.height, &bytes),
-            gpu_ms,
-        })
+        let frame = gpu.read_with("the light shafts", &self.out, 0, self.out.size(), |bytes| {
+            crate::frame_of(p.width, p.height, bytes)
+        })?;
+        Ok(Rendered { frame, gpu_ms })
     }
 
     /// Records the passes into the caller's `encoder` and sets `pass` to draw their

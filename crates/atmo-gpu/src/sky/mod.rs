@@ -338,6 +338,7 @@ fn picture(
     for side in [width, height] {
         gpu.check_texture_side("the sky frame", side, "the image size")?;
     }
+    gpu.check_picture("the sky frame", (width, height), "the image size")?;
     let texture = gpu.texture_2d(
         "the sky frame",
         (width, height),
@@ -356,9 +357,8 @@ fn picture(
         ));
     })?;
     prepared?;
-    let bytes = gpu.read_texture("the sky frame", &texture, width, height)?;
     Ok(Rendered {
-        frame: crate::frame_of(width, height, &bytes),
+        frame: gpu.read_frame("the sky frame", &texture, (width, height))?,
         gpu_ms,
     })
 }
