@@ -24,7 +24,7 @@
 
 mod app;
 pub mod clouds;
-pub mod input;
+pub use atmo::view::input;
 mod layer;
 mod panel;
 mod pixels;

@@ -23,6 +23,7 @@
 //! ```
 
 mod camera;
+pub mod input;
 #[cfg(feature = "place")]
 pub mod place;
 

@@ -142,14 +142,24 @@ pub struct CloudStill {
 /// nothing); `particles-file` relative to the scene's folder. An error naming the file,
 /// the line and the key for anything else.
 pub fn scene_arguments(path: &std::path::Path, long_flags: &[&str]) -> atmo::Result<Vec<String>> {
-    let name = path.display();
     // Through the bounded reader, as every file a user names.
     let text = atmo::files::read_toml(path, "cloud scene file")
         .map_err(|e| atmo::Error::Invalid(format!("--scene {e}")))?;
+    let folder = path.parent().unwrap_or(std::path::Path::new("."));
+    scene_arguments_of(&text, &path.display().to_string(), folder, long_flags)
+}
+
+/// [`scene_arguments`] of a scene file's `text`, `name` naming it in messages, its
+/// relative paths from `folder`.
+pub fn scene_arguments_of(
+    text: &str,
+    name: &str,
+    folder: &std::path::Path,
+    long_flags: &[&str],
+) -> atmo::Result<Vec<String>> {
     let table: toml::Table = text
         .parse()
         .map_err(|e| atmo::Error::Invalid(format!("--scene {name}: {e}")))?;
-    let folder = path.parent().unwrap_or(std::path::Path::new("."));
     let mut argv = Vec::new();
     for (key, value) in table {
         let bad = |why: &str| atmo::Error::Invalid(format!("--scene {name}: `{key}` {why}"));

@@ -27,7 +27,7 @@ use clap::Args;
 use glam::Vec3;
 
 use args::{fixed_flags, placement, Animate, FovAxis, PhaseArg, ScatteringArg, SplatArg};
-pub use args::{scene_arguments, CloudStill};
+pub use args::{scene_arguments, scene_arguments_of, CloudStill};
 pub use window::WindowClouds;
 
 use crate::backend::{gpu_error, BackendArgs};

@@ -1,10 +1,11 @@
 //! What a user does to the picture, from the window or from a script: the one path by
 //! which the viewer's state changes, so that a scripted run and a person at the window
-//! reach the same pictures.
+//! reach the same pictures. Here, not in the viewer's crate, so that the script reader
+//! is fuzzed without a window system (docs/fuzzing.md).
 
 use std::path::Path;
 
-use atmo::Error;
+use crate::Error;
 
 /// One thing a user does.
 #[derive(Debug, Clone, PartialEq)]
@@ -101,13 +102,13 @@ pub const SCRIPT_LINE_BYTES: usize = 4096;
 
 impl Script {
     /// Reads and parses a script file; errors name the file and line.
-    pub fn read(path: &Path) -> atmo::Result<Script> {
-        let text = atmo::files::read_text(path, "script", SCRIPT_LIMIT_BYTES)?;
+    pub fn read(path: &Path) -> crate::Result<Script> {
+        let text = crate::files::read_text(path, "script", SCRIPT_LIMIT_BYTES)?;
         Script::parse(&text, &path.display().to_string())
     }
 
     /// Parses a script's text; `origin` names it in errors (`origin:line`).
-    pub fn parse(text: &str, origin: &str) -> atmo::Result<Script> {
+    pub fn parse(text: &str, origin: &str) -> crate::Result<Script> {
         let mut events = Vec::new();
         for (i, line) in text.lines().enumerate() {
             let bad = |message: String| Error::Parse {
@@ -128,7 +129,7 @@ impl Script {
             let frame: u64 = words[0]
                 .parse()
                 .map_err(|_| bad(format!("'{}' is not a frame number", words[0])))?;
-            let number = |word: &str| -> atmo::Result<f32> {
+            let number = |word: &str| -> crate::Result<f32> {
                 word.parse::<f32>()
                     .ok()
                     .filter(|v| v.is_finite())
@@ -172,7 +173,7 @@ impl Script {
 
     /// Refuses a panel edit of a parameter not among `names`, the parameters of `mode`
     /// ("the sky"), before the window opens.
-    pub fn check_parameters(&self, mode: &str, names: &[&str]) -> atmo::Result<()> {
+    pub fn check_parameters(&self, mode: &str, names: &[&str]) -> crate::Result<()> {
         match self.parameters().find(|n| !names.contains(n)) {
             Some(name) => Err(unknown_parameter(name, mode, names)),
             None => Ok(()),
