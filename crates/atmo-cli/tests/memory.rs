@@ -185,3 +185,107 @@ fn a_mesh_is_charged_by_its_triangles() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// What a command holds together is counted together: the sky's maps beside its
+/// picture (maps of 60 MiB and a 50 MiB frame each passed 64M alone, and took
+/// 129 MB), a cloud's buffer beside its particles and picture, `compare`'s second
+/// picture beside its first. Each is refused naming both, before the work.
+#[cfg(target_os = "linux")]
+#[test]
+fn what_a_command_holds_together_is_counted_together() {
+    let dir = scratch("held-together");
+    let refused = |args: &[&str], beside: &str| {
+        let (o, peak) = atmo_measured(&[args, &["--memory-limit", "64M"][..]].concat());
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(beside), "{stderr}");
+        assert!(peak < 64 << 20, "peak {} MB", peak >> 20);
+    };
+    let sky = dir.join("sky.exr");
+    let sky = sky.to_str().unwrap();
+    refused(
+        &[
+            "sky", "--shells", "10", "--width", "2896", "--height", "1448", "-o", sky,
+        ],
+        "the sky maps of earth beside the picture",
+    );
+    let cloud = dir.join("cloud.png");
+    refused(
+        &[
+            "clouds",
+            "--generate",
+            "cumulus",
+            "--particles",
+            "100000",
+            "--resolution",
+            "150",
+            "--width",
+            "1600",
+            "--height",
+            "900",
+            "-o",
+            cloud.to_str().unwrap(),
+        ],
+        "intensity buffer beside the particles and the picture",
+    );
+    // Two 1600 x 800 pictures: each decodes within the budget alone, not the second
+    // beside the first (two of 1878 x 939 took 89 MB together).
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    for (file, elevation) in [(&a, "20"), (&b, "21")] {
+        let o = common::atmo(&[
+            "sky",
+            "--shells",
+            "8",
+            "--sun-elevation",
+            elevation,
+            "--width",
+            "1600",
+            "--height",
+            "800",
+            "--backend",
+            "cpu",
+            "-o",
+            file.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    refused(
+        &["compare", a.to_str().unwrap(), b.to_str().unwrap()],
+        "beside the first picture",
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A picture drawn on the GPU is charged its texture, read-back and frame before they
+/// are made (a 16384-wide sky under 1100M took 5.6-8.4 GB on the software driver).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_gpu_picture_is_charged_before_it_is_made() {
+    if !common::has_gpu() {
+        return;
+    }
+    let dir = scratch("gpu-picture");
+    let (o, peak) = atmo_measured(&[
+        "sky",
+        "--shells",
+        "8",
+        "--backend",
+        "gpu",
+        "--width",
+        "16384",
+        "--height",
+        "4096",
+        "--memory-limit",
+        "1100M",
+        "-o",
+        dir.join("sky.png").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("the sky frame (16384 x 4096) on the GPU"),
+        "{stderr}"
+    );
+    assert!(peak < 1100 << 20, "peak {} MB", peak >> 20);
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -9,7 +9,7 @@
 //! the checks made while it reads the next ([`beside`]), so that many files each
 //! within the budget cannot add up past it.
 
-use std::cell::Cell;
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
@@ -47,24 +47,31 @@ pub fn limit() -> u64 {
 }
 
 thread_local! {
-    /// Bytes the thread's current build already holds, and what holds them (the
-    /// innermost named): see [`beside`].
-    static HELD: Cell<(u64, &'static str)> = const { Cell::new((0, "")) };
+    /// Bytes the thread's current build already holds, and what holds them, outermost
+    /// first: see [`beside`].
+    static HELD: RefCell<(u64, Vec<&'static str>)> = const { RefCell::new((0, Vec::new())) };
 }
 
 /// Runs `work` with `held_bytes` (what the caller keeps while it runs, named `held` in
 /// messages) counted in every [`check`] it makes on this thread; nested calls add up.
 pub fn beside<T>(held_bytes: u64, held: &'static str, work: impl FnOnce() -> T) -> T {
     /// Puts the outer count back however `work` ends, a panic included.
-    struct Restore((u64, &'static str));
+    struct Restore(u64);
     impl Drop for Restore {
         fn drop(&mut self) {
-            HELD.set(self.0);
+            HELD.with_borrow_mut(|(bytes, holders)| {
+                *bytes = self.0;
+                holders.pop();
+            });
         }
     }
-    let outer = HELD.get();
+    let outer = HELD.with_borrow_mut(|(bytes, holders)| {
+        let outer = *bytes;
+        *bytes = outer.saturating_add(held_bytes);
+        holders.push(held);
+        outer
+    });
     let _restore = Restore(outer);
-    HELD.set((outer.0.saturating_add(held_bytes), held));
     work()
 }
 
@@ -73,7 +80,7 @@ pub fn beside<T>(held_bytes: u64, held: &'static str, work: impl FnOnce() -> T) 
 /// lower.
 pub fn check(what: &str, needed_bytes: u64, setting: &str) -> Result<()> {
     let budget_bytes = limit();
-    let (held, holder) = HELD.get();
+    let (held, holder) = HELD.with_borrow(|(bytes, holders)| (*bytes, holders.join(" and ")));
     let total = needed_bytes.saturating_add(held);
     if total <= budget_bytes {
         Ok(())

@@ -41,18 +41,34 @@ static SWEPT: Mutex<Option<HashSet<PathBuf>>> = Mutex::new(None);
 /// `limit` bytes or than the run's memory budget; reads at most one byte past the
 /// limit, so a file that never ends (a FIFO, `/dev/zero`) stops there.
 pub fn read_bounded(path: &Path, what: &str, limit: u64) -> Result<Vec<u8>> {
-    let limit = limit.min(crate::budget::limit());
+    let budget = crate::budget::limit();
+    let too_long = || {
+        let why = if budget < limit {
+            " (the memory budget; raise --memory-limit)"
+        } else {
+            ""
+        };
+        Error::Invalid(format!(
+            "{}: the {what} is longer than the limit of {} MiB{why}",
+            path.display(),
+            limit.min(budget) >> 20
+        ))
+    };
+    let limit = limit.min(budget);
     let file = File::open(path).map_err(Error::io_at(path))?;
+    // A file that says its length is refused before anything is read.
+    if file
+        .metadata()
+        .is_ok_and(|m| m.is_file() && m.len() > limit)
+    {
+        return Err(too_long());
+    }
     let mut bytes = Vec::new();
     file.take(limit + 1)
         .read_to_end(&mut bytes)
         .map_err(Error::io_at(path))?;
     if bytes.len() as u64 > limit {
-        return Err(Error::Invalid(format!(
-            "{}: the {what} is longer than the limit of {} MiB",
-            path.display(),
-            limit >> 20
-        )));
+        return Err(too_long());
     }
     Ok(bytes)
 }

@@ -491,7 +491,15 @@ impl Frame {
             ));
         }
         let bytes = crate::files::read_bounded(path, "picture", crate::files::DATA_LIMIT_BYTES)?;
-        Frame::exr_from_bytes(&bytes, &path.display().to_string())
+        // Decoded beside the file's bytes, which are held until it is done.
+        crate::budget::beside(bytes.len() as u64, "the file", || {
+            Frame::exr_from_bytes(&bytes, &path.display().to_string())
+        })
+    }
+
+    /// What the frame holds, bytes.
+    pub fn bytes(&self) -> u64 {
+        self.pixels.len() as u64 * Self::BYTES_PER_PIXEL
     }
 
     #[cfg(not(feature = "exr"))]

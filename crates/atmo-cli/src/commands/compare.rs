@@ -37,7 +37,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
         }
         check_folder(output)?;
     }
-    let (a, b) = (Frame::read_exr(&args.a)?, Frame::read_exr(&args.b)?);
+    let a = Frame::read_exr(&args.a)?;
+    // The second beside the first, which is held with it.
+    let b = atmo::budget::beside(a.bytes(), "the first picture", || Frame::read_exr(&args.b))?;
     let display = Display {
         exposure: args.exposure,
         tone: args.tone_map.into(),

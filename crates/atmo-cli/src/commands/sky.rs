@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Result;
-use atmo::image::{Display, ImageKind};
+use atmo::image::{Display, Frame, ImageKind};
 use atmo::sky::envmap::{self, EnvmapKind, CUBE_FACES};
 use atmo::sky::lighting::Lighting;
 use atmo::sky::{SkyModel, SkyPicture, SkylightTable};
@@ -182,7 +182,13 @@ pub fn run(args: SkyArgs) -> Result<()> {
     // Without a table: the atmosphere and the shell method's settings.
     let atmosphere = args.medium.load()?;
     let settings = args.method.settings(&args.medium);
-    settings.validate(&atmosphere)?;
+    // The maps beside the picture, which is held with them.
+    let picture_bytes = view.as_ref().map_or(0, |v| {
+        v.camera.width as u64 * v.camera.height as u64 * Frame::BYTES_PER_PIXEL
+    });
+    atmo::budget::beside(picture_bytes, "the picture", || {
+        settings.validate(&atmosphere)
+    })?;
     let start = Instant::now();
     // The maps take about 3 s for every order (the default), 0.4 s for the paper's two.
     let spinner = ProgressBar::new_spinner().with_message("computing the sampling-shell maps");

@@ -139,7 +139,12 @@ impl Cloud {
             }
         };
         check_range("--wind-s", still.wind_s as f64, 0.0, 1e5)?;
-        IntensityBuffer::check_resolution(still.resolution)?;
+        // The buffer beside the particles and the picture, which are held with it.
+        let held = calm.len() as u64 * atmo::clouds::particles::BYTES_PER_PARTICLE
+            + still.width as u64 * still.height as u64 * Frame::BYTES_PER_PIXEL;
+        atmo::budget::beside(held, "the particles and the picture", || {
+            IntensityBuffer::check_resolution(still.resolution)
+        })?;
         check_range("buffer.forward", still.forward as f64, 0.0, 1.0)?;
         let ambient = args::ambient(still.ambient.as_deref(), still.sky)?;
         if let Some(albedo) = still.ground_albedo {
