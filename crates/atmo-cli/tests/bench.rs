@@ -102,3 +102,41 @@ fn the_farm_bench_compares_pieces_with_one_process() {
     assert_eq!(lines[0]["params"]["chunks"], 4);
     assert_eq!(lines[3]["params"]["parts"], 8);
 }
+
+/// `atmo bench memory --quick`: for each input a knob sizes, the largest value accepted
+/// under 64 MiB and the next refused, each measured from its own process; none reaches
+/// past the budget by more than a quarter beyond its command's footprint (the bench
+/// fails if one does), and a refused run stops before it holds the budget.
+#[test]
+fn the_memory_bench_holds_each_input_to_the_budget() {
+    let scenes = common::scene(".");
+    let o = atmo(&["bench", "memory", "--quick", "--json", "--scenes", &scenes]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let measured: Vec<&serde_json::Value> = lines
+        .iter()
+        .filter(|l| l.get("skipped").is_none())
+        .collect();
+    // Every CPU input (the GPU's is skipped where there is no adapter).
+    assert!(measured.len() >= 5, "{lines:?}");
+    for line in measured {
+        let p = &line["params"];
+        let (accepted, refused) = (
+            p["largest_accepted"].as_u64().unwrap(),
+            p["refused_at"].as_u64().unwrap(),
+        );
+        assert!(
+            accepted < refused && accepted > p["smallest"].as_u64().unwrap(),
+            "{line}"
+        );
+        assert!(line["ratio_to_budget"].as_f64().unwrap() <= 1.25, "{line}");
+        assert!(
+            line["refused_peak_rss_mb"].as_f64().unwrap()
+                < line["footprint_mb"].as_f64().unwrap() + 64.0,
+            "{line}"
+        );
+    }
+}

@@ -3,8 +3,10 @@
 //! `--json`. The files under docs/bench/ are its output, and `atmo bench page` makes
 //! docs/benchmarks.md from them ([`page`]).
 
+mod child;
 mod clouds;
 mod farm;
+mod memory;
 pub mod page;
 mod shafts;
 mod sky;
@@ -77,6 +79,11 @@ enum Area {
     /// against one process of the whole (wall and CPU time, bytes compared), and the
     /// per-frame and per-map costs a farm is projected from (docs/farm.md).
     Farm,
+    /// Whether --memory-limit holds: for each input a knob sizes (a picture, shadow
+    /// maps, a cloud's particles and buffer, compare's pictures), the largest value
+    /// accepted under 64 MiB found by bisection, each run a process measured from
+    /// outside, its peak beyond the command's fixed footprint against the budget.
+    Memory,
     /// Times nothing: makes docs/benchmarks.md from the JSON files under --from.
     Page,
 }
@@ -103,6 +110,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
         };
         return view::run(args.quick, args.json, backends, &args.scenes);
     }
+    if let Area::Memory = args.area {
+        return memory::run(args.quick, args.json, &args.scenes);
+    }
     if let Area::Farm = args.area {
         if args.backend != Backend::Cpu {
             anyhow::bail!("--backend: `atmo bench farm` times pieces on the CPU; allowed: cpu");
@@ -122,14 +132,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
             Area::SkyTable => sky_table::gpu(&gpu, args.quick, args.json),
             Area::Shafts => shafts::gpu(&gpu, args.quick, args.json, &args.scenes),
             Area::Clouds => clouds::gpu(&gpu, args.quick, args.json),
-            Area::View | Area::Farm | Area::Page => unreachable!("handled above"),
+            Area::View | Area::Farm | Area::Memory | Area::Page => unreachable!("handled above"),
         };
     }
     match args.area {
         Area::Sky => sky::cpu(args.quick, args.json),
         Area::SkyTable => sky_table::cpu(args.quick, args.json),
         Area::Clouds => clouds::cpu(args.quick, args.json),
-        Area::View | Area::Farm | Area::Page => unreachable!("handled above"),
+        Area::View | Area::Farm | Area::Memory | Area::Page => unreachable!("handled above"),
         Area::Shafts => {
             if let Some(dir) = &args.sweep_dir {
                 atmo::files::check_folder(&dir.join("shafts-sweep.csv"))?;
