@@ -293,6 +293,44 @@ impl Spotlight {
         self.light_from_world * (p - self.position)
     }
 
+    /// Whether the segment between the world points `from` and `to` passes through the
+    /// field cone, where [`Spotlight::intensity_toward`] may be non-zero. In light
+    /// space the cone is `x^2 + y^2 <= tan^2(field / 2) z^2` with `z > 0`, a quadratic
+    /// along the segment: the parts of the segment inside begin and end at its ends,
+    /// the quadratic's roots or the lamp's plane `z = 0`, so those points and the
+    /// midpoints between them decide it. A segment that only touches the cone's
+    /// surface may be given `false`.
+    pub fn segment_meets_field(&self, from: Vec3, to: Vec3) -> bool {
+        let (a, b) = (self.to_light(from).as_dvec3(), self.to_light(to).as_dvec3());
+        let d = b - a;
+        let t2 = (self.tan_field as f64).powi(2);
+        let inside = |t: f64| {
+            let p = a + t * d;
+            p.z > 0.0 && p.x * p.x + p.y * p.y <= t2 * p.z * p.z
+        };
+        let qa = t2 * d.z * d.z - d.x * d.x - d.y * d.y;
+        let qb = 2.0 * (t2 * a.z * d.z - a.x * d.x - a.y * d.y);
+        let qc = t2 * a.z * a.z - a.x * a.x - a.y * a.y;
+        let mut at = [0.0, 1.0, f64::NAN, f64::NAN, f64::NAN];
+        if qa.abs() > 1e-12 * (qb.abs() + qc.abs()).max(1e-300) {
+            let disc = qb * qb - 4.0 * qa * qc;
+            if disc >= 0.0 {
+                at[2] = (-qb - disc.sqrt()) / (2.0 * qa);
+                at[3] = (-qb + disc.sqrt()) / (2.0 * qa);
+            }
+        } else if qb != 0.0 {
+            at[2] = -qc / qb;
+        }
+        if d.z != 0.0 {
+            at[4] = -a.z / d.z;
+        }
+        // NaN (no such point) to the end, where it is skipped; the rest within the ends.
+        let mut ts = at.map(|t| if t.is_nan() { f64::NAN } else { t.clamp(0.0, 1.0) });
+        ts.sort_unstable_by(f64::total_cmp);
+        let ts = &ts[..ts.iter().take_while(|t| !t.is_nan()).count()];
+        ts.iter().any(|&t| inside(t)) || ts.windows(2).any(|w| inside(0.5 * (w[0] + w[1])))
+    }
+
     /// `I_l`: the intensity sent toward the light-space point `local` (any distance),
     /// per channel; zero outside the field cone.
     #[inline]
@@ -460,6 +498,41 @@ mod tests {
         let outer = Vec3::new(0.3, 0.0, 1.0);
         let (linear, smooth) = (light(Falloff::Linear), light(Falloff::Smooth));
         assert!(smooth.intensity_toward(outer).x < linear.intensity_toward(outer).x - 5.0);
+    }
+
+    /// Segments meet the field cone as points along them say: 20,000 random
+    /// segments about the lamp, each against 2,000 points along it (a segment whose
+    /// points all miss may still cross the cone between them, so only a hit among the
+    /// points must be found).
+    #[test]
+    fn a_segment_meets_the_field_where_its_points_do() {
+        let l = light(Falloff::Smooth);
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32 * 16.0 - 8.0
+        };
+        let (mut hits, mut misses) = (0, 0);
+        for _ in 0..20_000 {
+            let (from, to) = (
+                Vec3::new(next(), next() * 0.5 + 4.0, next()),
+                Vec3::new(next(), next() * 0.5 + 4.0, next()),
+            );
+            let sampled = (0..=2000).any(|k| {
+                let p = from.lerp(to, k as f32 / 2000.0);
+                l.intensity_toward(l.to_light(p)) != Vec3::ZERO
+            });
+            let met = l.segment_meets_field(from, to);
+            if sampled {
+                assert!(met, "{from} -> {to}");
+                hits += 1;
+            } else if !met {
+                misses += 1;
+            }
+        }
+        // Both kinds are there, and nearly every segment no point of which is lit is
+        // also found to miss (the others graze the cone between two points).
+        assert!(hits > 1000 && misses > 1000, "{hits} {misses}");
     }
 
     #[test]

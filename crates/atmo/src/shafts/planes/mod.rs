@@ -33,6 +33,7 @@
 //! `dz |r|` is shafts' `Delta t`, the length of ray between two planes.
 
 use std::borrow::Cow;
+use std::sync::atomic::{AtomicU8, Ordering};
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -326,7 +327,7 @@ impl<'a> SamplePlanes<'a> {
                     self.scattered_rays(rays, offsets, &lane_ends, out, &refined);
                 });
         };
-        self.scattered_adaptive(&ends, compute, pixels)
+        self.scattered_adaptive(ray, &ends, compute, pixels)
     }
 
     /// Adds the scattered light of the lamps without a gobo at every pixel to `out` by
@@ -338,9 +339,13 @@ impl<'a> SamplePlanes<'a> {
     /// between corners), and not near a lamp's image: within [`LAMP_REACH`] pixels,
     /// where `1/s^2` peaks inside one pixel, and as far again as the beam is narrower
     /// than a cell (a beam seen across opens by `tan(field / 2)` a pixel of distance
-    /// from its apex).
+    /// from its apex). Nor does a pixel whose ray (`ray`, to its end) passes outside
+    /// every lamp's field cone take light from corners whose rays pass inside one: it
+    /// is black, as computing it gives (interpolation put up to 1.3e-6 of the range on
+    /// 1,337 such pixels of the Fig. 6 scene).
     fn scattered_adaptive(
         &self,
+        ray: &(impl Fn(u32) -> Vec3 + Sync),
         ends: &[f32],
         compute: impl Fn(&[u32], &mut [Vec3]),
         out: &mut [Vec3],
@@ -366,12 +371,30 @@ impl<'a> SamplePlanes<'a> {
             })
             .collect();
         let width = camera.width;
+        // Whether each pixel's ray meets a refined lamp's field cone, found once: a
+        // cell's corners are asked about for every pixel in it. 0: not yet known.
+        let known: Vec<AtomicU8> = (0..ends.len()).map(|_| AtomicU8::new(0)).collect();
+        let lit = |p: u32| match known[p as usize].load(Ordering::Relaxed) {
+            0 => {
+                let end = camera.position + ray(p).normalize() * ends[p as usize];
+                let meets = scene
+                    .lights()
+                    .filter(|light| refined(light))
+                    .any(|light| light.segment_meets_field(camera.position, end));
+                known[p as usize].store(1 + meets as u8, Ordering::Relaxed);
+                meets
+            }
+            state => state == 2,
+        };
         let guard = |p: u32, corners: [u32; 4], weights: [f32; 4]| {
             let (x, y) = ((p % width) as f32 + 0.5, (p / width) as f32 + 0.5);
             if lamps
                 .iter()
                 .any(|(lx, ly, reach)| (x - lx).abs().max((y - ly).abs()) <= *reach)
             {
+                return false;
+            }
+            if !lit(p) && corners.iter().any(|&c| lit(c)) {
                 return false;
             }
             let end = ends[p as usize];
