@@ -4,7 +4,8 @@
 //! allowed range; no output file is left behind), 1 for anything else.
 //!
 //! A library with the binary `atmo` over it ([`main`]), so that the command line's
-//! reading ([`parse_from`], [`parse_clouds_scene`]) is fuzzed as it runs
+//! reading ([`parse_from`], [`parse_clouds_scene`]) and an animation folder's
+//! ([`Manifest::parse`], [`frame_from_bytes`]) are fuzzed as they run
 //! (docs/fuzzing.md).
 
 // First: its macros (`outln!`, `note!`) are for every module after it.
@@ -15,6 +16,8 @@ mod backend;
 mod bench;
 mod commands;
 mod output;
+
+pub use output::{frame_from_bytes, Manifest};
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use commands::{assemble, clouds, compare, inspect, precompute, shafts, sky, sun, view};

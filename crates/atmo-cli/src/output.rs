@@ -183,18 +183,26 @@ impl Manifest {
             return Ok(None);
         }
         let text = atmo::files::read_text(&path, "frame manifest", 1 << 20)?;
-        let manifest: Manifest = serde_json::from_str(&text).map_err(|e| Error::Parse {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        manifest.display().map_err(|e| in_manifest(&path, e))?;
-        if manifest.frames == 0 || manifest.width == 0 || manifest.height == 0 {
-            return Err(in_manifest(
-                &path,
-                Error::Invalid("frames, width and height must be at least 1".into()),
-            ));
+        Manifest::parse(&text, &path.display().to_string()).map(Some)
+    }
+
+    /// A manifest's text, checked: its display, at least one frame, a frame's size
+    /// within the pictures' limits and the budget (`origin` names it in messages).
+    pub fn parse(text: &str, origin: &str) -> atmo::Result<Manifest> {
+        let bad = |message: String| Error::Parse {
+            path: origin.to_string(),
+            message,
+        };
+        let manifest: Manifest = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+        manifest.display().map_err(|e| bad(e.to_string()))?;
+        if manifest.frames == 0 || manifest.frames > MAX_FRAMES {
+            return Err(bad(format!(
+                "frames = {} is out of range: allowed 1 to {MAX_FRAMES}",
+                manifest.frames
+            )));
         }
-        Ok(Some(manifest))
+        Frame::check_size(manifest.width, manifest.height).map_err(|e| bad(e.to_string()))?;
+        Ok(manifest)
     }
 
     /// Whether frame `k` is in `folder` whole: it decodes, at the manifest's size.
@@ -203,56 +211,58 @@ impl Manifest {
     }
 }
 
-fn in_manifest(path: &Path, e: Error) -> Error {
-    Error::Parse {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    }
-}
-
 /// Frame `path` as 8-bit sRGB at the manifest's size and display.
 fn read_frame(path: &Path, manifest: &Manifest) -> atmo::Result<Vec<u8>> {
+    let bytes = atmo::files::read_bounded(path, "frame", atmo::files::DATA_LIMIT_BYTES)?;
+    atmo::budget::beside(bytes.len() as u64, "the file", || {
+        frame_from_bytes(&bytes, &path.display().to_string(), manifest)
+    })
+}
+
+/// A frame file's `bytes` (`origin` names it) as 8-bit sRGB, refused unless it is of
+/// the manifest's format and size; a PNG's size is read from its header and checked
+/// before its pixels are allocated (a 150-byte file claiming 100,000^2 pixels asked
+/// for 30 GB and aborted).
+pub fn frame_from_bytes(bytes: &[u8], origin: &str, manifest: &Manifest) -> atmo::Result<Vec<u8>> {
     let size = (manifest.width, manifest.height);
-    let (got, rgb) = match manifest.format {
+    let bad = |message: String| Error::Image {
+        path: PathBuf::from(origin),
+        message,
+    };
+    let wrong_size = |got: (u32, u32)| {
+        Error::Invalid(format!(
+            "{origin}: {} x {} where the animation's frames are {} x {}",
+            got.0, got.1, size.0, size.1
+        ))
+    };
+    match manifest.format {
         FrameFormat::Exr => {
-            let frame = Frame::read_exr(path)?;
+            let frame = Frame::exr_from_bytes(bytes, origin)?;
+            if (frame.width, frame.height) != size {
+                return Err(wrong_size((frame.width, frame.height)));
+            }
             let display = manifest.display()?;
-            (
-                (frame.width, frame.height),
-                frame.to_srgb8(display.exposure, display.tone),
-            )
+            Ok(frame.to_srgb8(display.exposure, display.tone))
         }
         FrameFormat::Png => {
-            let bytes = atmo::files::read_bounded(path, "frame", atmo::files::DATA_LIMIT_BYTES)?;
-            let bad = |m: String| Error::Image {
-                path: path.to_path_buf(),
-                message: m,
-            };
             let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
                 .read_info()
                 .map_err(|e| bad(e.to_string()))?;
+            let info = reader.info();
+            if (info.width, info.height) != size {
+                return Err(wrong_size((info.width, info.height)));
+            }
+            if info.color_type != png::ColorType::Rgb || info.bit_depth != png::BitDepth::Eight {
+                return Err(bad("not an 8-bit RGB frame".into()));
+            }
             let mut buffer = vec![0; reader.output_buffer_size().unwrap_or(0)];
             let info = reader
                 .next_frame(&mut buffer)
                 .map_err(|e| bad(e.to_string()))?;
-            if info.color_type != png::ColorType::Rgb || info.bit_depth != png::BitDepth::Eight {
-                return Err(bad("not an 8-bit RGB frame".into()));
-            }
             buffer.truncate(info.buffer_size());
-            ((info.width, info.height), buffer)
+            Ok(buffer)
         }
-    };
-    if got != size {
-        return Err(Error::Invalid(format!(
-            "{}: {} x {} where the animation's frames are {} x {}",
-            path.display(),
-            got.0,
-            got.1,
-            size.0,
-            size.1
-        )));
     }
-    Ok(rgb)
 }
 
 /// The fingerprint of this run's command: SHA-256 of its arguments, less those that do

@@ -215,3 +215,85 @@ fn a_table_in_parts_merges_to_the_whole_run_byte_for_byte() {
     assert!(e.contains("K runs from 1 to N"), "{e}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A frame or manifest that claims pictures no animation has is refused naming it,
+/// before the pixels are allocated: a 150-byte PNG claiming 100,000^2 pixels asked
+/// for 30 GB and aborted (exit 134), and so did a manifest saying its frames are that
+/// size.
+#[test]
+fn frames_and_manifests_past_the_pictures_limits_are_refused() {
+    let dir = scratch("chunks-hostile");
+    let show = small_show(&dir);
+    let folder = dir.join("frames");
+    let f = folder.to_str().unwrap();
+    ok(&[
+        "shafts",
+        show.to_str().unwrap(),
+        "--animate",
+        "--fps",
+        "2",
+        "--frames",
+        "0..2",
+        "-o",
+        f,
+    ]);
+    // Two frames of the 15: the manifest says 15; keep the two as the whole.
+    let manifest = folder.join("atmo-frames.json");
+    let text = std::fs::read_to_string(&manifest)
+        .unwrap()
+        .replace("\"frames\": 15", "\"frames\": 2");
+    std::fs::write(&manifest, &text).unwrap();
+    let out = dir.join("show.apng");
+    ok(&["assemble", f, "-o", out.to_str().unwrap()]);
+    // A frame whose header claims 100,000^2 pixels.
+    let chunk = |t: &[u8], d: &[u8]| {
+        let mut c = (d.len() as u32).to_be_bytes().to_vec();
+        c.extend(t);
+        c.extend(d);
+        c.extend(crc32(&[t, d].concat()).to_be_bytes());
+        c
+    };
+    let mut ihdr = 100_000u32.to_be_bytes().repeat(2);
+    ihdr.extend([8, 2, 0, 0, 0]);
+    // Its data one zero byte, stored (zlib without compression).
+    let idat = [0x78, 1, 1, 1, 0, 0xfe, 0xff, 0, 0, 1, 0, 1];
+    let png = [
+        &b"\x89PNG\r\n\x1a\n"[..],
+        &chunk(b"IHDR", &ihdr),
+        &chunk(b"IDAT", &idat),
+        &chunk(b"IEND", &[]),
+    ]
+    .concat();
+    std::fs::write(folder.join("frame_000001.png"), &png).unwrap();
+    let stderr = refused(&["assemble", f, "-o", out.to_str().unwrap()]);
+    assert!(
+        stderr.contains("frame_000001.png") && stderr.contains("100000 x 100000"),
+        "{stderr}"
+    );
+    // A manifest whose frames are that size.
+    let huge = text.replace("\"width\": 72", "\"width\": 100000");
+    assert_ne!(huge, text);
+    std::fs::write(&manifest, huge).unwrap();
+    let stderr = refused(&["assemble", f, "-o", out.to_str().unwrap()]);
+    assert!(
+        stderr.contains("atmo-frames.json") && stderr.contains("width"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// The CRC-32 of PNG chunks (ISO 3309), for the test's own PNG.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= b as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
