@@ -10,6 +10,7 @@ use common::{probe_file, scratch, COARSE_SHELLS};
 /// What a run of `atmo` with `args` gave: its exit status, standard output and error,
 /// and its peak resident size, bytes.
 #[cfg(target_os = "linux")]
+#[allow(clippy::zombie_processes)] // reaped by wait4, which gives its own rusage
 fn atmo_measured(args: &[&str]) -> (std::process::Output, u64) {
     let dir = scratch(&format!("measured-{:?}", std::thread::current().id()));
     let (out, err) = (dir.join("stdout"), dir.join("stderr"));
