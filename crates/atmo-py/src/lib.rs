@@ -648,6 +648,7 @@ fn cumulus(
     let list = py
         .detach(|| -> atmo::Result<Vec<Particle>> {
             check_range("particles", particles as f64, 1.0, 1e7)?;
+            atmo::clouds::particles::check_count(particles, "particles")?;
             check_range("width", width_m as f64, 1.0, 1e5)?;
             check_range("base", base_m as f64, 0.0, 2e4)?;
             Ok(Cumulus {
@@ -701,6 +702,8 @@ fn render_clouds<'py>(
             array.ncols()
         )));
     }
+    // Charged before the rows are copied, as a file's particles are.
+    atmo::clouds::particles::check_count(array.nrows(), "particles").map_err(value_error)?;
     let list: Vec<Particle> = array
         .rows()
         .into_iter()

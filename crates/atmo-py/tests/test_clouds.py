@@ -43,3 +43,10 @@ def test_a_cloud_before_the_sky_and_its_higher_orders(cloud):
 def test_bad_particles_are_refused_naming_them(particles, scattering, names):
     with pytest.raises(ValueError, match=names):
         atmo.clouds.render(particles, scattering=scattering, width=8, height=8)
+
+
+def test_particles_past_the_memory_budget_are_refused_before_they_are_made():
+    # 6 million particles would hold about 3 GB: past the library's 2 GiB budget,
+    # refused naming the count before the generator runs (it took the memory before).
+    with pytest.raises(ValueError, match="6000000 particles.*memory budget"):
+        atmo.clouds.cumulus(particles=6_000_000)
