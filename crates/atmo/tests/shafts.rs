@@ -1182,13 +1182,19 @@ fn adaptive_sampling_puts_no_light_outside_the_field_cone() {
     let width = camera.width as usize;
     let edge = (light.tan_field().atan() + 0.25f32.to_radians()).tan();
     let outside = |k: usize| {
-        let ray = camera.ray((k % width) as f32 + 0.5, (k / width) as f32 + 0.5).normalize();
+        let ray = camera
+            .ray((k % width) as f32 + 0.5, (k / width) as f32 + 0.5)
+            .normalize();
         (0..=1000).all(|i| {
             let p = light.to_light(camera.position + ray * (camera.far * i as f32 / 1000.0));
             p.z <= 0.0 || p.x.hypot(p.y) > edge * p.z
         })
     };
-    let range = exact.pixels.iter().map(|p| p.max_element()).fold(0.0, f32::max);
+    let range = exact
+        .pixels
+        .iter()
+        .map(|p| p.max_element())
+        .fold(0.0, f32::max);
     let mut dark = 0;
     let mut leaks = Vec::new();
     for (k, (e, f)) in exact.pixels.iter().zip(&fast.pixels).enumerate() {

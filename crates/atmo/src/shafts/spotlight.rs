@@ -325,7 +325,13 @@ impl Spotlight {
             at[4] = -a.z / d.z;
         }
         // NaN (no such point) to the end, where it is skipped; the rest within the ends.
-        let mut ts = at.map(|t| if t.is_nan() { f64::NAN } else { t.clamp(0.0, 1.0) });
+        let mut ts = at.map(|t| {
+            if t.is_nan() {
+                f64::NAN
+            } else {
+                t.clamp(0.0, 1.0)
+            }
+        });
         ts.sort_unstable_by(f64::total_cmp);
         let ts = &ts[..ts.iter().take_while(|t| !t.is_nan()).count()];
         ts.iter().any(|&t| inside(t)) || ts.windows(2).any(|w| inside(0.5 * (w[0] + w[1])))
@@ -509,7 +515,9 @@ mod tests {
         let l = light(Falloff::Smooth);
         let mut seed = 7u64;
         let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 40) as f32 / (1u64 << 24) as f32 * 16.0 - 8.0
         };
         let (mut hits, mut misses) = (0, 0);

@@ -394,7 +394,9 @@ impl<'a> SamplePlanes<'a> {
             {
                 return false;
             }
-            if !lit(p) && corners.iter().any(|&c| lit(c)) {
+            // The corners first: their answers are shared by the cell's pixels, and a
+            // cell with no corner in a cone has only black to interpolate.
+            if corners.iter().any(|&c| lit(c)) && !lit(p) {
                 return false;
             }
             let end = ends[p as usize];
