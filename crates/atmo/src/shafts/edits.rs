@@ -270,6 +270,10 @@ fn apply_one(root: &mut dyn TableLike, edit: &Edit) -> Result<()> {
     let (last, tables) = parts.split_last().expect("split gives one part at least");
     let mut table = root;
     let mut at = String::new();
+    // Whether `table` is an inline table (`start = { ... }`), which holds values only:
+    // a table made in it must be inline too, or it is kept but never written (found by
+    // the `set_edits` fuzz target: `fixture[1].start.pan.deg` left the file as it was).
+    let mut inline = false;
     for &(name, index) in tables {
         at = if at.is_empty() {
             name.to_string()
@@ -279,7 +283,13 @@ fn apply_one(root: &mut dyn TableLike, edit: &Edit) -> Result<()> {
         table = match index {
             // A missing table is made (`fixture[0].start` where the fixture had none).
             None => {
-                let item = table.entry(name).or_insert(toml_edit::table());
+                let made = if inline {
+                    Item::Value(Value::InlineTable(Default::default()))
+                } else {
+                    toml_edit::table()
+                };
+                let item = table.entry(name).or_insert(made);
+                inline = item.is_value();
                 let what = match item {
                     Item::ArrayOfTables(_) => "an array of tables: give it an [INDEX]",
                     _ => "a value, not a table",
@@ -292,6 +302,7 @@ fn apply_one(root: &mut dyn TableLike, edit: &Edit) -> Result<()> {
                 let tables = table.get_mut(name).and_then(|t| t.as_array_of_tables_mut());
                 let count = tables.as_ref().map_or(0, |a| a.len());
                 at = format!("{at}[{i}]");
+                inline = false;
                 match tables.and_then(|a| a.get_mut(i)) {
                     Some(t) => t,
                     None => {
@@ -403,6 +414,25 @@ mod tests {
         assert_eq!(doc.number("spotlight[1].kelvin"), None);
         assert_eq!(doc.text("spotlight[3].falloff"), Some("linear"));
         assert_eq!(doc.count("spotlight"), 5);
+    }
+
+    /// A table made inside an inline table is inline: `start = { ... }` given
+    /// `start.pan.deg` kept the new table out of the text it wrote (the `set_edits`
+    /// fuzz target's input, as found, is `corpus/set_edits/inline-table.txt`).
+    #[test]
+    fn an_edit_inside_an_inline_table_is_written() {
+        let text = "[[fixture]]\nname = \"a\"\nstart = { tilt_deg = 15.0 }\n";
+        for key in [
+            "fixture[0].start.pa.deg",
+            "fixture[0].start.pa.b.c",
+            "fixture[0].new.x",
+        ] {
+            let edit = Edit::set(key, "2.5");
+            let edited = Document::edited(text, "t", std::slice::from_ref(&edit)).unwrap();
+            let again = Document::parse(&edited.to_string(), "t").unwrap();
+            assert_eq!(again.number(key), Some(2.5), "{key}: {edited}");
+            assert_eq!(again.number("fixture[0].start.tilt_deg"), Some(15.0));
+        }
     }
 
     #[test]
