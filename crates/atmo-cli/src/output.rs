@@ -154,7 +154,7 @@ pub struct Manifest {
 pub const MAX_FRAMES: usize = 1_000_000;
 
 impl Manifest {
-    /// The file name of frame `k` (below [`MAX_FRAMES`]).
+    /// The file name of frame `k` (below `MAX_FRAMES`, a million).
     pub fn frame_name(&self, k: usize) -> String {
         format!("frame_{k:06}.{}", self.format.extension())
     }
