@@ -295,46 +295,42 @@ impl Spotlight {
 
     /// Whether the segment between the world points `from` and `to` passes through the
     /// field cone, where [`Spotlight::intensity_toward`] may be non-zero. In light
-    /// space the cone is `x^2 + y^2 <= tan^2(field / 2) z^2` with `z > 0`, a quadratic
-    /// along the segment: the parts of the segment inside begin and end at its ends,
-    /// the quadratic's roots or the lamp's plane `z = 0`, so those points and the
-    /// midpoints between them decide it. A segment that only touches the cone's
-    /// surface may be given `false`.
+    /// space the cone is `g = tan^2(field / 2) z^2 - x^2 - y^2 > 0` with `z > 0`; along
+    /// the segment `g` is a quadratic in its parameter, so it is positive somewhere on
+    /// the part with `z > 0` where its greatest value there is: at an end of that part
+    /// or at the quadratic's vertex. A segment that only touches the cone's surface is
+    /// given `false`.
     pub fn segment_meets_field(&self, from: Vec3, to: Vec3) -> bool {
-        let (a, b) = (self.to_light(from).as_dvec3(), self.to_light(to).as_dvec3());
-        let d = b - a;
+        let a = self.to_light(from).as_dvec3();
+        let d = self.to_light(to).as_dvec3() - a;
+        // The part of [0, 1] in front of the lamp (z > 0).
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        if d.z == 0.0 {
+            if a.z <= 0.0 {
+                return false;
+            }
+        } else {
+            let t = -a.z / d.z;
+            if d.z > 0.0 {
+                lo = lo.max(t);
+            } else {
+                hi = hi.min(t);
+            }
+        }
+        if lo > hi {
+            return false;
+        }
         let t2 = (self.tan_field as f64).powi(2);
-        let inside = |t: f64| {
-            let p = a + t * d;
-            p.z > 0.0 && p.x * p.x + p.y * p.y <= t2 * p.z * p.z
-        };
         let qa = t2 * d.z * d.z - d.x * d.x - d.y * d.y;
         let qb = 2.0 * (t2 * a.z * d.z - a.x * d.x - a.y * d.y);
         let qc = t2 * a.z * a.z - a.x * a.x - a.y * a.y;
-        let mut at = [0.0, 1.0, f64::NAN, f64::NAN, f64::NAN];
-        if qa.abs() > 1e-12 * (qb.abs() + qc.abs()).max(1e-300) {
-            let disc = qb * qb - 4.0 * qa * qc;
-            if disc >= 0.0 {
-                at[2] = (-qb - disc.sqrt()) / (2.0 * qa);
-                at[3] = (-qb + disc.sqrt()) / (2.0 * qa);
-            }
-        } else if qb != 0.0 {
-            at[2] = -qc / qb;
-        }
-        if d.z != 0.0 {
-            at[4] = -a.z / d.z;
-        }
-        // NaN (no such point) to the end, where it is skipped; the rest within the ends.
-        let mut ts = at.map(|t| {
-            if t.is_nan() {
-                f64::NAN
-            } else {
-                t.clamp(0.0, 1.0)
-            }
-        });
-        ts.sort_unstable_by(f64::total_cmp);
-        let ts = &ts[..ts.iter().take_while(|t| !t.is_nan()).count()];
-        ts.iter().any(|&t| inside(t)) || ts.windows(2).any(|w| inside(0.5 * (w[0] + w[1])))
+        let g = |t: f64| (qa * t + qb) * t + qc;
+        let vertex = if qa < 0.0 {
+            (-qb / (2.0 * qa)).clamp(lo, hi)
+        } else {
+            lo
+        };
+        g(lo) > 0.0 || g(hi) > 0.0 || g(vertex) > 0.0
     }
 
     /// `I_l`: the intensity sent toward the light-space point `local` (any distance),
