@@ -168,7 +168,7 @@ pub enum GpuError {
 }
 
 /// A frame of `width` x `height` from RGBA f32 pixels read back, alpha dropped.
-pub fn frame_of(width: u32, height: u32, bytes: &[u8]) -> atmo::image::Frame {
+pub(crate) fn frame_of(width: u32, height: u32, bytes: &[u8]) -> atmo::image::Frame {
     let mut frame = atmo::image::Frame::new(width, height);
     rgb_of(bytes, &mut frame.pixels);
     frame

@@ -212,8 +212,7 @@ mod tests {
         assert!(layer.due(Instant::now() + REFRESH));
         layer.invalidate();
         assert!(layer.due(Instant::now()));
-        let bytes = gpu.read_texture("the frame", &target, w, h).unwrap();
-        let frame = atmo_gpu::frame_of(w, h, &bytes);
+        let frame = gpu.read_frame("the frame", &target, (w, h)).unwrap();
         let encoded = atmo::image::srgb_encode(0.25);
         for (x, y, inside) in [
             (4, 4, true),

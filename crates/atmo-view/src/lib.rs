@@ -369,8 +369,7 @@ impl Picture {
             return Ok(cpu.whole(self.size));
         }
         let (width, height) = self.size;
-        let bytes = gpu.read_texture("the screenshot", &self.texture, width, height)?;
-        Ok(atmo_gpu::frame_of(width, height, &bytes))
+        gpu.read_frame("the screenshot", &self.texture, (width, height))
     }
 }
 

@@ -316,13 +316,18 @@ impl Frame {
     /// What a frame holds a pixel, bytes: linear RGB, an f32 each.
     pub const BYTES_PER_PIXEL: u64 = 12;
 
+    /// What a `width` x `height` frame holds, bytes.
+    pub fn bytes_of(width: u32, height: u32) -> u64 {
+        width as u64 * height as u64 * Self::BYTES_PER_PIXEL
+    }
+
     /// Checks that a `width` x `height` frame is allowed, before anything is allocated.
     pub fn check_size(width: u32, height: u32) -> Result<()> {
         check_range("width", width as f64, 1.0, 16384.0)?;
         check_range("height", height as f64, 1.0, 16384.0)?;
         crate::budget::check(
             &format!("a {width} x {height} frame"),
-            width as u64 * height as u64 * Self::BYTES_PER_PIXEL,
+            Self::bytes_of(width, height),
             "width or height",
         )
     }
@@ -499,7 +504,7 @@ impl Frame {
 
     /// What the frame holds, bytes.
     pub fn bytes(&self) -> u64 {
-        self.pixels.len() as u64 * Self::BYTES_PER_PIXEL
+        Self::bytes_of(self.width, self.height)
     }
 
     #[cfg(not(feature = "exr"))]

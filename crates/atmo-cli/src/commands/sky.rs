@@ -183,9 +183,9 @@ pub fn run(args: SkyArgs) -> Result<()> {
     let atmosphere = args.medium.load()?;
     let settings = args.method.settings(&args.medium);
     // The maps beside the picture, which is held with them.
-    let picture_bytes = view.as_ref().map_or(0, |v| {
-        v.camera.width as u64 * v.camera.height as u64 * Frame::BYTES_PER_PIXEL
-    });
+    let picture_bytes = view
+        .as_ref()
+        .map_or(0, |v| Frame::bytes_of(v.camera.width, v.camera.height));
     atmo::budget::beside(picture_bytes, "the picture", || {
         settings.validate(&atmosphere)
     })?;

@@ -234,7 +234,7 @@ impl GpuShafts {
         // scene's files, before any of them is made.
         let maps = lights.max(1) as u64 * (size as u64).pow(2) * 4;
         let ends_bytes = w as u64 * h as u64 * (k * k) as u64 * 4;
-        atmo::budget::beside(scene.files_bytes, "the scene's files", || {
+        scene.beside_files(|| {
             atmo::budget::check(
                 &format!("the light shafts' maps and {w} x {h} picture on the GPU"),
                 maps + ends_bytes + w as u64 * h as u64 * crate::device::PICTURE_BYTES_PER_PIXEL,

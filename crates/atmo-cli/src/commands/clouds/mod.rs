@@ -141,7 +141,7 @@ impl Cloud {
         check_range("--wind-s", still.wind_s as f64, 0.0, 1e5)?;
         // The buffer beside the particles and the picture, which are held with it.
         let held = calm.len() as u64 * atmo::clouds::particles::BYTES_PER_PARTICLE
-            + still.width as u64 * still.height as u64 * Frame::BYTES_PER_PIXEL;
+            + Frame::bytes_of(still.width, still.height);
         atmo::budget::beside(held, "the particles and the picture", || {
             IntensityBuffer::check_resolution(still.resolution)
         })?;

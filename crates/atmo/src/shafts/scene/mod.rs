@@ -224,7 +224,13 @@ impl Scene {
     /// them.
     pub fn validate_planes(&self) -> Result<()> {
         self.planes.validate()?;
-        crate::budget::beside(self.files_bytes, assets::FILES, || self.check_buffers())
+        self.beside_files(|| self.check_buffers())
+    }
+
+    /// Runs `work` with what the scene's files hold counted in its budget checks
+    /// ([`crate::budget::beside`]): the checks of buffers made for the scene.
+    pub fn beside_files<T>(&self, work: impl FnOnce() -> T) -> T {
+        crate::budget::beside(self.files_bytes, assets::FILES, work)
     }
 
     /// The budget checks of [`Scene::validate_planes`].
@@ -255,10 +261,11 @@ impl Scene {
 /// spotlight-sphere.toml, adaptive); charged at 40.
 pub const PLANES_BYTES_PER_PIXEL: u64 = 40;
 
-/// `light` holding the profile of the first of `before` measured from the same file,
-/// and its intensity map where the two are equal: each light read its file again and
-/// tabulated it again (200 lights sharing an IES file held 200 copies of each, 120 MB
-/// of maps). Done as each light is built, so only one copy is ever extra.
+/// `light` holding the profile of the first of `before` with an equal one, and its
+/// intensity map where the two are equal: a file is read once ([`Assets`]), but each
+/// light tabulates its map again (200 lights sharing an IES file held 200 copies of
+/// it, 120 MB), and two files may hold the same profile. Done as each light is built,
+/// so only one copy is ever extra.
 fn share_profile(before: &[Spotlight], mut light: Spotlight) -> Spotlight {
     let Profile::Measured(photometry) = &light.profile else {
         return light;
