@@ -50,6 +50,8 @@ pub struct GdtfFixture {
     pub wheel: Vec<Gobo>,
     /// The prism of the mode's prism wheel, if it has one.
     pub prism: Option<GdtfPrism>,
+    /// The mode's channels, as a desk drives them.
+    pub dmx: super::dmx::Mode,
 }
 
 /// A prism as a GDTF wheel's slot gives it: one beam direction a facet.
@@ -259,13 +261,17 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
         }
     }
     let mut wheel = Vec::new();
+    let mut wheels = super::dmx::gdtf_mode::Wheels::default();
     let gobo = wheel_turned_by(fixture, &functions, "gobo", |a| a.starts_with("Gobo"));
     if let Some(node) = gobo.map_err(&fail)? {
         let name = node.attribute("Name").unwrap_or("");
-        for slot in node.children().filter(|n| n.has_tag_name("Slot")) {
+        wheels.gobo.0 = name.to_string();
+        for slot in slots(node) {
             let Some(media) = slot.attribute("MediaFileName").filter(|m| !m.is_empty()) else {
+                wheels.gobo.1.push(0);
                 continue;
             };
+            wheels.gobo.1.push(wheel.len() + 1);
             let image = [format!("wheels/{media}"), format!("wheels/{media}.png")]
                 .iter()
                 .find_map(|path| entry(&mut zip, path, crate::files::DATA_LIMIT_BYTES).transpose())
@@ -292,6 +298,13 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
     });
     if let Some(node) = prism_wheel.map_err(&fail)? {
         let name = node.attribute("Name").unwrap_or("");
+        wheels.prism = (
+            name.to_string(),
+            slots(node)
+                .iter()
+                .map(|s| s.children().any(|f| f.has_tag_name("PrismFacet")) as usize)
+                .collect(),
+        );
         let slot = node.children().find(|slot| {
             slot.has_tag_name("Slot") && slot.children().any(|f| f.has_tag_name("PrismFacet"))
         });
@@ -317,7 +330,25 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
             });
         }
     }
+    let colour_wheel = wheel_turned_by(fixture, &functions, "colour", |a| a == "Color1");
+    if let Some(node) = colour_wheel.map_err(&fail)? {
+        wheels.colour = (
+            node.attribute("Name").unwrap_or("").to_string(),
+            slots(node)
+                .iter()
+                .map(|s| {
+                    s.attribute("Color")
+                        .and_then(super::dmx::gdtf_mode::colour_xyy)
+                        .unwrap_or(Vec3::ONE)
+                })
+                .collect(),
+        );
+    }
+    let dmx = super::dmx::gdtf_mode::read(*dmx_mode, &wheels)
+        .map_err(|why| fail(format!("DMX mode {mode:?}: {why}")))?;
+    dmx.validate(&format!("GDTF file {origin}: DMX mode {mode:?}"))?;
     Ok(GdtfFixture {
+        dmx,
         name: fixture.attribute("Name").unwrap_or("").to_string(),
         beam_deg,
         field_deg,
@@ -359,6 +390,15 @@ fn facet_beam(text: &str) -> std::result::Result<Vec3, String> {
         ));
     }
     Ok(beam.normalize())
+}
+
+/// A wheel's slots, in order (GDTF's `WheelSlotIndex` 1 is the first).
+#[cfg(feature = "gdtf")]
+fn slots<'a, 'i>(wheel: roxmltree::Node<'a, 'i>) -> Vec<roxmltree::Node<'a, 'i>> {
+    wheel
+        .children()
+        .filter(|n| n.has_tag_name("Slot"))
+        .collect()
 }
 
 /// The wheel that the first of the mode's channel `functions` whose attribute passes

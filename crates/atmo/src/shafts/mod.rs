@@ -29,6 +29,7 @@
 //!   reference ([`crate::reference::shafts`]).
 
 pub mod adaptive;
+pub mod dmx;
 pub mod edits;
 pub mod gdtf;
 pub mod haze;

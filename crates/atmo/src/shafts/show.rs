@@ -18,6 +18,7 @@
 
 use glam::{Mat3, Quat, Vec3};
 
+use super::dmx::Patch;
 use super::spotlight::{light_frame, Falloff, Gobo, Profile, Spotlight};
 
 /// The attributes of a fixture that fade, in this order in a [`State`].
@@ -102,8 +103,8 @@ pub struct Fixture {
     /// On-axis intensity at the widest zoom, cd (or W/sr); a narrower zoom gathers the
     /// same flux into a smaller cone.
     pub intensity: f32,
-    /// The widest zoom, degrees.
-    pub widest_zoom_deg: f32,
+    /// The zoom's range, degrees (narrowest, widest).
+    pub zoom_range_deg: [f32; 2],
     /// atmo's beam angle (full intensity) per degree of zoom: 1, or for a GDTF
     /// fixture, whose zoom is its half-intensity angle, the ratio of the smooth edge's
     /// beam to it ([`super::gdtf::to_smooth_edge`]).
@@ -123,6 +124,11 @@ pub struct Fixture {
     pub start: State,
     /// A prism in the beam, if the head has one.
     pub prism: Option<Prism>,
+    /// The lamp's white (linear RGB, the colour with no filter in), which DMX colour
+    /// channels filter ([`super::dmx::Reading::state`]).
+    pub white: Vec3,
+    /// Where a desk drives it, if it is patched.
+    pub patch: Option<Patch>,
 }
 
 /// A prism in a head's beam: `facets` copies of the beam, each turned `angle_deg` off
@@ -195,6 +201,18 @@ impl Show {
     /// changes [`Show::fixtures`] or [`Show::cues`].
     pub fn at_time(&mut self, time_s: f32) {
         self.lights = self.pose(time_s);
+        self.time_s = time_s;
+    }
+
+    /// Poses the heads in `states` (one per fixture, each with its gobo's turn,
+    /// degrees), as a desk drives them ([`super::dmx::playback`]), at `time_s`.
+    pub fn drive(&mut self, time_s: f32, states: &[(State, f32)]) {
+        self.lights = self
+            .fixtures
+            .iter()
+            .zip(states)
+            .flat_map(|(f, (state, gobo_deg))| f.lights(state, *gobo_deg))
+            .collect();
         self.time_s = time_s;
     }
 
@@ -271,7 +289,8 @@ impl Show {
 
     /// How far fixture `f`'s gobo has turned by time `t`, degrees: its start plus the
     /// integral of its speed, which is linear between cue starts and fade ends, so the
-    /// trapezoid rule over those times is exact.
+    /// midpoint rule over those times is exact (the trapezoid's ends would take a
+    /// snapped speed's new value for the time before the snap).
     pub fn gobo_angle_deg(&self, f: usize, t: f32) -> f32 {
         let mut times: Vec<f32> = vec![0.0, t.max(0.0)];
         for (cue, _) in self
@@ -286,7 +305,7 @@ impl Show {
         let speed = |at: f32| self.fade(f, SPEED, at).at(at);
         let turned: f32 = times
             .windows(2)
-            .map(|w| 0.5 * (speed(w[0]) + speed(w[1])) * (w[1] - w[0]))
+            .map(|w| speed(0.5 * (w[0] + w[1])) * (w[1] - w[0]))
             .sum();
         self.fixtures[f].gobo_rotation_deg + turned
     }
@@ -399,7 +418,7 @@ impl Fixture {
         let frame: Mat3 = light_frame(beam, up).expect("up is perpendicular to the beam");
         // The same flux in a narrower cone: the on-axis intensity grows as the profile's
         // solid angle shrinks. The iris cuts the cone, not the intensity on the axis.
-        let gather = self.solid_angle(self.widest_zoom_deg) / self.solid_angle(c[ZOOM]);
+        let gather = self.solid_angle(self.zoom_range_deg[1]) / self.solid_angle(c[ZOOM]);
         let colour = Vec3::new(c[RED], c[RED + 1], c[RED + 2]);
         let beam_half = 0.5 * (c[ZOOM] * self.zoom_scale * c[IRIS]).to_radians();
         let field_half = (beam_half * self.field_ratio).min(85f32.to_radians());
@@ -452,17 +471,18 @@ pub fn profile_solid_angle(beam_half: f32, field_half: f32, falloff: Falloff) ->
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn head() -> Fixture {
+    /// A hanging head at 6 m, widest zoom 40 deg, gobo at 10 deg, no wheel or prism.
+    pub(crate) fn head() -> Fixture {
         Fixture {
             name: "head".into(),
             position: Vec3::new(0.0, 6.0, 0.0),
             axis: Vec3::NEG_Y,
             front: Vec3::Z,
             intensity: 1000.0,
-            widest_zoom_deg: 40.0,
+            zoom_range_deg: [10.0, 40.0],
             zoom_scale: 1.0,
             field_ratio: 1.25,
             falloff: Falloff::Smooth,
@@ -476,6 +496,8 @@ mod tests {
                 prism_in: true,
             },
             prism: None,
+            white: Vec3::ONE,
+            patch: None,
         }
     }
 
@@ -620,6 +642,38 @@ mod tests {
         show.at_time(3.0);
         assert_eq!(show.time_s(), 3.0);
         assert_eq!(show.lights()[0].intensity, Vec3::ZERO);
+    }
+
+    /// A snapped speed turns the gobo at the old speed up to the snap and the new one
+    /// after it (the trapezoid rule over the snap's time averaged the two before it).
+    #[test]
+    fn a_snapped_gobo_speed_turns_at_the_old_speed_until_the_snap() {
+        let show = Show::new(
+            vec![head()],
+            vec![
+                Cue {
+                    time_s: 1.0,
+                    fade_s: 0.0,
+                    changes: vec![(0, set(&[(SPEED, 90.0)]))],
+                },
+                Cue {
+                    time_s: 3.0,
+                    fade_s: 0.0,
+                    changes: vec![(0, set(&[(SPEED, -30.0)]))],
+                },
+            ],
+        );
+        // Start 10 deg; still until 1 s, 90 deg/s to 3 s, then -30 deg/s.
+        for (t, angle) in [
+            (0.5, 10.0),
+            (1.0, 10.0),
+            (2.0, 100.0),
+            (3.0, 190.0),
+            (5.0, 130.0),
+        ] {
+            let got = show.gobo_angle_deg(0, t);
+            assert!((got - angle).abs() < 1e-3, "at {t} s: {got}, not {angle}");
+        }
     }
 
     #[test]

@@ -410,13 +410,20 @@ impl FixtureSpec {
             gobo: change.gobo.unwrap_or(0),
             prism_in: change.prism_in.unwrap_or(rest.prism_in),
         };
+        let patch = self
+            .dmx
+            .as_ref()
+            .map(|d| d.patch(&field("dmx"), &light))
+            .transpose()?;
         let fixture = Fixture {
+            white,
+            patch,
             name: self.name.clone(),
             position,
             axis,
             front,
             intensity: light.intensity,
-            widest_zoom_deg: wide,
+            zoom_range_deg: limits.zoom,
             zoom_scale: light.zoom_scale,
             field_ratio: light.field_ratio,
             falloff: self.falloff.into(),
@@ -462,6 +469,7 @@ impl FixtureSpec {
             wheel,
             kelvin: None,
             prism: None,
+            dmx_mode: None,
         })
     }
 
@@ -538,7 +546,42 @@ impl FixtureSpec {
             wheel: file.wheel,
             kelvin: Some(file.kelvin),
             prism,
+            dmx_mode: Some(file.dmx),
         })
+    }
+}
+
+impl DmxSpec {
+    /// The patch: the GDTF file's mode, or the personality of `channels` over the
+    /// fixture's ranges; the footprint within the universe.
+    pub(super) fn patch(&self, at: &str, light: &Light) -> Result<dmx::Patch> {
+        let mode = match (&light.dmx_mode, &self.channels) {
+            (Some(mode), None) => mode.clone(),
+            (None, Some(names)) => {
+                let l = &light.limits;
+                dmx::Mode::personality(names, [l.pan, l.tilt, l.zoom], l.slots, at)?
+            }
+            (Some(_), Some(_)) => {
+                return Err(Error::Invalid(format!(
+                    "{at}.channels: a GDTF fixture's channels are its mode's; leave them out"
+                )))
+            }
+            (None, None) => {
+                return Err(Error::Invalid(format!(
+                    "{at}.channels is missing: a fixture without a GDTF file needs its \
+                     personality, as [\"pan\", \"pan_fine\", \"tilt\", \"dimmer\"] ({})",
+                    dmx::PERSONALITY.join(", ")
+                )))
+            }
+        };
+        check_range(
+            &format!("{at}.universe"),
+            self.universe as f64,
+            1.0,
+            63999.0,
+        )?;
+        check_range(&format!("{at}.address"), self.address as f64, 1.0, 512.0)?;
+        dmx::Patch::new(self.universe as u16, self.address as u16, mode, at)
     }
 }
 

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use serde::Deserialize;
 
+use super::dmx;
 use super::gdtf;
 use super::haze::Haze;
 use super::objects::{Object, Objects};

@@ -54,6 +54,24 @@ pub(super) struct FixtureSpec {
     /// A prism in the beam: `{ facets = 3, angle_deg = 8 }` (its turn is the
     /// `prism_deg` attribute).
     pub(super) prism: Option<PrismSpec>,
+    /// Where a desk drives it: `{ universe = 1, address = 1 }`, and for a fixture
+    /// without a GDTF file its personality's `channels`.
+    pub(super) dmx: Option<DmxSpec>,
+}
+
+/// A fixture's DMX patch, as the scene gives it ([`crate::shafts::dmx::Patch`]).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct DmxSpec {
+    #[serde(default = "first_universe")]
+    pub(super) universe: u32,
+    pub(super) address: u32,
+    /// The personality's channel names, in order ([`crate::shafts::dmx::PERSONALITY`]).
+    pub(super) channels: Option<Vec<String>>,
+}
+
+fn first_universe() -> u32 {
+    1
 }
 
 /// A fixture's prism, as the scene gives it (see [`Prism`]).
@@ -105,6 +123,8 @@ pub(super) struct Light {
     /// The prism a GDTF file gives (keys give theirs with `prism`).
     pub(super) prism: Option<Prism>,
     pub(super) limits: Limits,
+    /// The DMX mode a GDTF file gives.
+    pub(super) dmx_mode: Option<crate::shafts::dmx::Mode>,
 }
 
 pub(super) fn down() -> [f32; 3] {
