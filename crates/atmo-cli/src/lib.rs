@@ -20,7 +20,7 @@ mod output;
 pub use output::{frame_from_bytes, Manifest};
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use commands::{assemble, clouds, compare, inspect, precompute, shafts, sky, sun, view};
+use commands::{assemble, clouds, compare, dmx, inspect, precompute, shafts, sky, sun, view};
 
 /// The command line, read.
 #[derive(Parser)]
@@ -75,6 +75,9 @@ enum Command {
     Sun(sun::SunArgs),
     /// Time each method against its baseline in the same run and print the ratios.
     Bench(bench::BenchArgs),
+    /// A lighting desk's DMX (sACN, Art-Net): `atmo dmx record` writes what it sends
+    /// for `atmo shafts --dmx-file`; `atmo dmx info` says what a recording holds.
+    Dmx(dmx::DmxArgs),
 }
 
 /// The `atmo` program: reads the command line, runs the command, exits with its code.
@@ -121,6 +124,7 @@ pub fn main() {
         }
         Command::Sun(args) => sun::run(args).map_err(|e| with_flag(e, sky::FLAGS)),
         Command::Bench(args) => bench::run(args),
+        Command::Dmx(args) => dmx::run(args),
     };
     if let Err(error) = result {
         if atmo::files::interrupted() {

@@ -55,6 +55,19 @@ pub fn run(options: Options, mode: Box<dyn Mode>) -> Result<Timings> {
         timings: Timings::default(),
     };
     event_loop.run_app(&mut app)?;
+    if let Some(mode) = app
+        .window
+        .as_mut()
+        .map(|w| &mut w.mode)
+        .or(app.mode.as_mut())
+    {
+        match mode.close() {
+            Ok(figures) => app.timings.figures = figures,
+            Err(e) => {
+                app.error.get_or_insert(e);
+            }
+        }
+    }
     match app.error {
         Some(e) => Err(e),
         None => Ok(app.timings),
@@ -70,6 +83,8 @@ pub fn run(options: Options, mode: Box<dyn Mode>) -> Result<Timings> {
 pub struct Timings {
     pub frame_ms: Vec<f64>,
     pub method_ms: Vec<f64>,
+    /// The mode's own figures at the end ([`crate::Mode::close`]), by name.
+    pub figures: Vec<(&'static str, f64)>,
 }
 
 struct App {

@@ -76,6 +76,11 @@ pub trait Mode {
     fn aimed_light(&self) -> Option<usize> {
         None
     }
+    /// Ends the mode when the window closes (the stage writes its DMX recording) and
+    /// gives its own figures, by name, for `--timings`.
+    fn close(&mut self) -> Result<Vec<(&'static str, f64)>> {
+        Ok(Vec::new())
+    }
 }
 
 /// The limit of an orbit above and below the point looked at, degrees.

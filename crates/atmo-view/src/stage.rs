@@ -18,6 +18,8 @@ use std::time::{Instant, SystemTime};
 use anyhow::{Context, Result};
 use atmo::geometry::Ray;
 use atmo::image::Display;
+use atmo::shafts::dmx::playback::Playback;
+use atmo::shafts::dmx::receiver::{Receiver, Settings, Stats};
 use atmo::shafts::edits::{merged, Document, Edit};
 use atmo::shafts::Scene;
 use atmo::Error;
@@ -70,6 +72,29 @@ pub struct StageMode {
     coarse: bool,
     /// The last thing done to the file ("saved", "read again"), for the panel.
     status: Option<String>,
+    /// A desk driving the patched fixtures, if the window listens to one.
+    desk: Option<Desk>,
+}
+
+/// A lighting desk's DMX, live: the listening thread, the playback its frames drive,
+/// and how long frames took to reach the picture.
+struct Desk {
+    receiver: Receiver,
+    playback: Playback,
+    /// When listening started: frames are stamped from it, and the heads posed at the
+    /// time since.
+    start: Instant,
+    /// The states last posed, to draw again only when they change, and when, us.
+    posed: Vec<(atmo::shafts::show::State, f32)>,
+    posed_us: u64,
+    /// Arrival times (us from `start`) of the frames applied since the last picture.
+    waiting: Vec<u64>,
+    /// From a frame's arrival to the end of the first picture drawn with it, ms.
+    latency_ms: Vec<f64>,
+    frames: u64,
+    dropped: u64,
+    /// The recording being written, if any.
+    record: Option<PathBuf>,
 }
 
 impl StageMode {
@@ -99,7 +124,95 @@ impl StageMode {
             dirty: true,
             coarse: false,
             status: None,
+            desk: None,
         })
+    }
+
+    /// Listens to a desk (`settings`; the scene's patched universes where it names
+    /// none), writing what arrives to `record` if given (in place when the window
+    /// closes): the patched fixtures then move as the desk says, posed at the time
+    /// since listening started (the time `atmo shafts --dmx-file` renders the
+    /// recording at).
+    pub fn listen(&mut self, settings: Settings, record: Option<PathBuf>) -> Result<()> {
+        let start = Instant::now();
+        let receiver = Receiver::start(settings, start, record.clone())?;
+        self.desk = Some(Desk {
+            receiver,
+            playback: Playback::new(&self.scene.show),
+            start,
+            posed: Vec::new(),
+            posed_us: 0,
+            waiting: Vec::new(),
+            latency_ms: Vec::new(),
+            frames: 0,
+            dropped: 0,
+            record,
+        });
+        self.status = Some(format!(
+            "listening for DMX at {}",
+            self.desk
+                .as_ref()
+                .map(|d| d.receiver.local_addr())
+                .expect("set")
+        ));
+        Ok(())
+    }
+
+    /// The frames from the desk since the last call applied, and the heads posed at
+    /// now: the picture is drawn again where a state changed (a frame, a turning gobo,
+    /// a strobe).
+    fn follow_desk(&mut self) -> Result<()> {
+        let Some(desk) = &mut self.desk else {
+            return Ok(());
+        };
+        let (frames, dropped) = desk.receiver.take();
+        desk.dropped += dropped;
+        for frame in &frames {
+            desk.playback.apply(&self.scene.show, frame);
+            desk.waiting.push(frame.time_us);
+        }
+        desk.frames += frames.len() as u64;
+        let now_us = (desk.start.elapsed().as_micros() as u64).max(desk.playback.time_us());
+        let states = desk.playback.states(&self.scene.show, now_us);
+        if states != desk.posed {
+            self.scene
+                .show
+                .drive((now_us as f64 * 1e-6) as f32, &states);
+            (desk.posed, desk.posed_us) = (states, now_us);
+            self.dirty = true;
+        }
+        if let (_, Some(error)) = desk.receiver.stats() {
+            return Err(anyhow::anyhow!("DMX: {error}"));
+        }
+        Ok(())
+    }
+
+    /// Listening's figures so far: frames taken and dropped, and the latency from a
+    /// frame's arrival to its first picture (median and 95th percentile, ms).
+    pub fn desk_figures(&self) -> Option<DeskFigures> {
+        let desk = self.desk.as_ref()?;
+        let mut latency = desk.latency_ms.clone();
+        latency.sort_by(f64::total_cmp);
+        let at = |q: f64| {
+            (!latency.is_empty())
+                .then(|| latency[((latency.len() - 1) as f64 * q).round() as usize])
+        };
+        Some(DeskFigures {
+            posed_s: desk.posed_us as f64 * 1e-6,
+            frames: desk.frames,
+            dropped: desk.dropped,
+            latency_median_ms: at(0.5),
+            latency_p95_ms: at(0.95),
+            stats: desk.receiver.stats().0,
+        })
+    }
+
+    /// Stops listening, writing the recording in place.
+    pub fn stop_listening(&mut self) -> Result<()> {
+        match self.desk.take() {
+            Some(desk) => Ok(desk.receiver.stop()?),
+            None => Ok(()),
+        }
     }
 
     /// The scene as it is drawn now.
@@ -162,6 +275,10 @@ impl StageMode {
             self.scene = scene;
         }
         (self.text, self.edits, self.edited) = (text, edits, edited);
+        if let Some(desk) = &mut self.desk {
+            desk.playback = desk.playback.for_show(&self.scene.show);
+            desk.posed.clear();
+        }
         self.dirty = true;
         Ok(())
     }
@@ -373,6 +490,22 @@ impl StageMode {
     }
 }
 
+/// What listening to a desk came to ([`StageMode::desk_figures`]).
+#[derive(Debug, Clone)]
+pub struct DeskFigures {
+    /// The time the heads were last posed at, s from listening's start: the picture
+    /// shows them then.
+    pub posed_s: f64,
+    /// Frames (changed universes) applied, and dropped because the window fell behind.
+    pub frames: u64,
+    pub dropped: u64,
+    /// From a frame's arrival to the end of the first picture drawn with it, ms.
+    pub latency_median_ms: Option<f64>,
+    pub latency_p95_ms: Option<f64>,
+    /// The listener's counts.
+    pub stats: Stats,
+}
+
 /// The scene of the edited file with `more` edits (the picture's size), posed.
 fn load(path: &Path, edited: &Document, more: &[Edit], time_s: f32) -> atmo::Result<Scene> {
     let mut scene = Scene::from_text_at(&sized(edited, more)?, path)?;
@@ -516,7 +649,9 @@ impl Mode for StageMode {
     }
 
     fn update(&mut self) -> Result<()> {
-        if self.playing {
+        if self.desk.is_some() {
+            self.follow_desk()?;
+        } else if self.playing {
             let duration = self.scene.show.duration();
             let next = self.time_s + SHOW_STEP_S;
             self.set_time(if next > duration { 0.0 } else { next })?;
@@ -564,6 +699,14 @@ impl Mode for StageMode {
             })?;
         }
         self.dirty = false;
+        if let Some(desk) = &mut self.desk {
+            let now_us = desk.start.elapsed().as_micros() as u64;
+            desk.latency_ms.extend(
+                desk.waiting
+                    .drain(..)
+                    .map(|t| now_us.saturating_sub(t) as f64 * 1e-3),
+            );
+        }
         Ok(true)
     }
 
@@ -576,8 +719,19 @@ impl Mode for StageMode {
         let mut words = vec![format!("atmo shafts {}", self.path.display())];
         let size = self.size_edits();
         words.extend(self.edits.iter().chain(&size).map(Edit::flag));
-        if self.time_s > 0.0 {
-            words.push(format!("--time {}", self.time_s));
+        match &self.desk {
+            // The recording renders the heads as the desk had them when last posed.
+            Some(Desk {
+                record: Some(record),
+                posed_us,
+                ..
+            }) => words.push(format!(
+                "--dmx-file {} --time {:.6}",
+                record.display(),
+                *posed_us as f64 * 1e-6
+            )),
+            _ if self.time_s > 0.0 => words.push(format!("--time {}", self.time_s)),
+            _ => {}
         }
         words.push(format!("--backend {backend} -o {}", output.display()));
         words.join(" ")
@@ -597,6 +751,16 @@ impl Mode for StageMode {
         ));
         if let Some(status) = &self.status {
             ui.label(status);
+        }
+        if let Some(f) = self.desk_figures() {
+            ui.label(format!(
+                "DMX: {} frames ({} datagrams, {} ignored){}",
+                f.frames,
+                f.stats.datagrams,
+                f.stats.ignored,
+                f.latency_median_ms
+                    .map_or(String::new(), |ms| format!("; {ms:.0} ms to the picture"))
+            ));
         }
         let duration = self.scene.show.duration();
         if duration > 0.0 {
@@ -668,6 +832,25 @@ impl Mode for StageMode {
 
     fn aimed_light(&self) -> Option<usize> {
         (self.selected < self.light_count()).then_some(self.selected)
+    }
+
+    /// Stops listening to the desk (its recording written in place) and gives the
+    /// DMX figures: frames taken and dropped, latency to the picture.
+    fn close(&mut self) -> Result<Vec<(&'static str, f64)>> {
+        let Some(f) = self.desk_figures() else {
+            return Ok(Vec::new());
+        };
+        self.stop_listening()?;
+        let mut figures = vec![
+            ("dmx_frames", f.frames as f64),
+            ("dmx_dropped", f.dropped as f64),
+            ("dmx_datagrams", f.stats.datagrams as f64),
+            ("dmx_ignored", f.stats.ignored as f64),
+            ("dmx_posed_s", f.posed_s),
+        ];
+        figures.extend(f.latency_median_ms.map(|v| ("dmx_latency_median_ms", v)));
+        figures.extend(f.latency_p95_ms.map(|v| ("dmx_latency_p95_ms", v)));
+        Ok(figures)
     }
 }
 

@@ -142,6 +142,109 @@ fn clouds_still_ms(runs: usize) -> Result<f64> {
     Ok(median(times))
 }
 
+/// Heads of the DMX case, and each one's channels: 16-bit pan and tilt, dimmer.
+const HEADS: usize = 24;
+const HEAD_CHANNELS: [&str; 5] = ["pan", "pan_fine", "tilt", "tilt_fine", "dimmer"];
+
+/// A stage of [`HEADS`] moving heads patched on universe 1, hung in a 6 x 4 grid over a
+/// floor with a ball, in the haze of scenes/dmx-rig.toml.
+fn rig_scene(heads: usize) -> String {
+    let mut toml = String::from(
+        "[camera]\nposition = [0.0, 1.7, 11.0]\nlook_at = [0.0, 2.5, -1.0]\nfov_deg = 60.0\n\
+         width = 1280\nheight = 720\nfar_m = 40.0\n\n[haze]\nextinction = 0.08\nalbedo = 0.9\n\
+         phase = { kind = \"paper\", exponent = 16 }\n\
+         box = { min = [-9.0, 0.0, -5.0], max = [9.0, 8.0, 6.0] }\n\n[display]\nexposure = 0.1\n\n\
+         [[object]]\nkind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 1.0, 0.0]\nalbedo = 0.35\n\n\
+         [[object]]\nkind = \"sphere\"\ncenter = [0.0, 0.8, -1.0]\nradius = 0.8\nalbedo = 0.7\n",
+    );
+    let channels = HEAD_CHANNELS.map(|c| format!("\"{c}\"")).join(", ");
+    for k in 0..heads {
+        let (x, z) = (-7.5 + 3.0 * (k % 6) as f32, -3.0 + 2.0 * (k / 6) as f32);
+        toml.push_str(&format!(
+            "\n[[fixture]]\nname = \"head {k}\"\nposition = [{x}, 7.0, {z}]\nintensity = 20000.0\n\
+             zoom_range_deg = [12.0, 12.0]\n\
+             dmx = {{ universe = 1, address = {}, channels = [{channels}] }}\n",
+            1 + HEAD_CHANNELS.len() * k
+        ));
+    }
+    toml
+}
+
+/// Sends ArtDmx to `to` at 44 Hz until `stop`: every head's pan and tilt swept, each
+/// a little behind the one before (a desk's fan), dimmers full.
+fn send_sweep(
+    to: std::net::SocketAddr,
+    heads: usize,
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<u64> {
+    let socket = std::net::UdpSocket::bind("127.0.0.1:0")?;
+    let start = std::time::Instant::now();
+    let mut sent = 0u64;
+    while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+        let t = start.elapsed().as_secs_f64();
+        let mut packet = b"Art-Net\0".to_vec();
+        packet.extend_from_slice(&[0x00, 0x50, 0, 14, (sent % 255 + 1) as u8, 0, 0, 0, 2, 0]);
+        let mut levels = [0u8; 512];
+        for k in 0..heads {
+            let phase = t * 0.8 + 0.15 * k as f64;
+            let pan = (32768.0 + 3000.0 * phase.sin()) as u16;
+            let tilt = (32768.0 + 2400.0 * (1.3 * phase).cos() + 2400.0) as u16;
+            let at = HEAD_CHANNELS.len() * k;
+            levels[at..at + 5].copy_from_slice(&[
+                (pan >> 8) as u8,
+                pan as u8,
+                (tilt >> 8) as u8,
+                tilt as u8,
+                255,
+            ]);
+        }
+        packet.extend_from_slice(&levels);
+        socket.send_to(&packet, to)?;
+        sent += 1;
+        std::thread::sleep(std::time::Duration::from_micros(22_727));
+    }
+    Ok(sent)
+}
+
+/// The window listening to a desk (Art-Net on loopback) that moves [`HEADS`] heads at
+/// 44 Hz, `frames` frames at `preview`: its times, the DMX figures, and the frames sent.
+fn desk_window(
+    dir: &Path,
+    rig: &str,
+    backend: &str,
+    preview: u32,
+    frames: u64,
+) -> Result<(Value, u64)> {
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")?
+        .local_addr()?
+        .port();
+    let to: std::net::SocketAddr = ([127, 0, 0, 1], port).into();
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let bind = to.to_string();
+    let k = preview.to_string();
+    let args = [
+        "stage",
+        rig,
+        "--dmx",
+        "artnet",
+        "--bind",
+        &bind,
+        "--backend",
+        backend,
+        "--preview",
+        &k,
+    ];
+    std::thread::scope(|scope| {
+        let sender = scope.spawn(|| send_sweep(to, HEADS, &stop));
+        let times = window(dir, &args, frames, "");
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        let sent = sender
+            .join()
+            .map_err(|_| anyhow::anyhow!("the sender panicked"))??;
+        Ok((times?, sent))
+    })
+}
+
 pub fn run(quick: bool, json: bool, backends: &[&str], scenes: &Path) -> Result<()> {
     if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
         return Err(atmo::Error::Invalid(
@@ -260,6 +363,43 @@ pub fn run(quick: bool, json: bool, backends: &[&str], scenes: &Path) -> Result<
                 ),
             );
         }
+    }
+    // The desk's case: 24 heads moved from DMX, every picture a preview at the
+    // window's default (CPU) while they move.
+    let rig = dir.join("rig24.toml");
+    std::fs::write(&rig, rig_scene(HEADS))?;
+    let rig_arg = rig.to_str().context("a UTF-8 path")?;
+    let rig_still = stage_still_ms(&rig, if quick { 1 } else { 3 })?;
+    let desk_frames = if quick { 12 } else { 60 };
+    for &backend in backends {
+        let preview = if backend == "cpu" { PREVIEW } else { 1 };
+        let (times, sent) = desk_window(&dir, rig_arg, backend, preview, desk_frames)?;
+        let frame = &times["frame"];
+        let median_ms = frame["median_ms"].as_f64().context("a frame time")?;
+        let latency = times["dmx_latency_median_ms"].as_f64();
+        emit(
+            json,
+            json!({
+                "bench": "view.stage.desk",
+                "params": {"backend": backend, "width": SIZE.0, "height": SIZE.1,
+                           "frames": desk_frames, "heads": HEADS, "preview": preview,
+                           "script": "24 heads' pan and tilt from Art-Net at 44 Hz"},
+                "median_ms": median_ms, "p95_ms": frame["p95_ms"],
+                "pictures_per_s": 1e3 / median_ms,
+                "method_median_ms": times["method"]["median_ms"],
+                "dmx_frames_sent": sent, "dmx_frames": times["dmx_frames"],
+                "dmx_latency_median_ms": latency,
+                "dmx_latency_p95_ms": times["dmx_latency_p95_ms"],
+                "baseline": whole_still,
+                "baseline_median_ms": rig_still, "ratio": rig_still / median_ms,
+            }),
+            format!(
+                "{:<22} {backend} preview 1/{preview}: frame {median_ms:>7.1} ms ({:.1} pictures/s), DMX to picture {} ms; still draw {rig_still:.1} ms",
+                "view.stage.desk",
+                1e3 / median_ms,
+                latency.map_or("-".into(), |ms| format!("{ms:.0}")),
+            ),
+        );
     }
     std::fs::remove_dir_all(&dir)?;
     Ok(())

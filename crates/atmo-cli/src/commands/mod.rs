@@ -3,6 +3,7 @@
 pub mod assemble;
 pub mod clouds;
 pub mod compare;
+pub mod dmx;
 pub mod inspect;
 pub mod precompute;
 pub mod shafts;

@@ -8,6 +8,7 @@ use anyhow::Result;
 use atmo::files::check_folder;
 use atmo::image::{Frame, ImageKind};
 use atmo::reference::shafts::RayMarcher;
+use atmo::shafts::dmx::recording::{self, Player};
 use atmo::shafts::edits::Edit;
 use atmo::shafts::Scene;
 use atmo_gpu::shafts::{ShaftsMethod, ShaftsRenderer};
@@ -41,6 +42,12 @@ pub struct ShaftsArgs {
     /// A still at this time into the show, s (default 0, the show's start).
     #[arg(long, conflicts_with = "animate")]
     time: Option<f32>,
+    /// Drive the patched fixtures from a DMX recording (`atmo dmx record`, or `atmo
+    /// view stage --dmx ... --record`): with --animate from 0 to its last frame (or the
+    /// cues' end, if later), else a still at --time; the pictures the window drew at
+    /// those times.
+    #[arg(long, value_name = "FILE.dmx", conflicts_with = "reference")]
+    dmx_file: Option<PathBuf>,
     /// Render with the ray-marching reference (shadow rays, exact phase and attenuation)
     /// instead of the sample planes.
     #[arg(long)]
@@ -144,11 +151,26 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         args.sub_planes,
         args.shadow_map,
     )?;
+    let recording = args
+        .dmx_file
+        .as_ref()
+        .map(|path| read_recording(path, &scene))
+        .transpose()?;
     if let Some(t) = args.time {
         atmo::error::check_range("--time", t as f64, 0.0, 1e6)?;
         scene.at_time(t);
     }
+    if let (Some((bytes, _)), Some(path)) = (&recording, &args.dmx_file) {
+        let t = args.time.unwrap_or(0.0);
+        Player::new(bytes, &path.display().to_string(), &scene.show)?
+            .pose(&mut scene.show, (t as f64 * 1e6).round() as u64)?;
+    }
     let inputs: Vec<(&str, &std::path::Path)> = std::iter::once(("the scene", &*args.scene))
+        .chain(
+            args.dmx_file
+                .iter()
+                .map(|f| ("the DMX recording", f.as_path())),
+        )
         .chain(
             scene
                 .files
@@ -187,7 +209,7 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
         note!("atmo: the GPU draws the scattered light at every pixel; render.adaptive applies to the CPU method");
     }
     if args.animate {
-        return animate(&args, scene, display, gpu.as_ref());
+        return animate(&args, scene, display, gpu.as_ref(), recording.as_ref());
     }
     let start = Instant::now();
     let (frame, method): (Frame, String) = if args.reference {
@@ -262,17 +284,36 @@ fn animate(
     mut scene: Scene,
     display: atmo::image::Display,
     gpu: Option<&atmo_gpu::Gpu>,
+    recording: Option<&(Vec<u8>, u64)>,
 ) -> Result<()> {
     atmo::error::check_range("--fps", args.fps as f64, 1.0, 240.0)?;
-    let duration = scene.show.duration();
+    let recorded_s = recording.map_or(0.0, |(_, last_us)| *last_us as f64 * 1e-6) as f32;
+    let duration = scene.show.duration().max(recorded_s);
     if duration <= 0.0 {
         return Err(atmo::Error::Invalid(format!(
-            "{}: --animate plays the scene's cues, and it has none that take time (add \
+            "{}: --animate plays the scene's cues{}, and {} none that take time (add \
              [[cue]]s with time_s or fade_s > 0)",
-            args.scene.display()
+            args.scene.display(),
+            if recording.is_some() {
+                " and the DMX recording"
+            } else {
+                ""
+            },
+            if recording.is_some() {
+                "they have"
+            } else {
+                "it has"
+            },
         ))
         .into());
     }
+    let origin = args
+        .dmx_file
+        .as_ref()
+        .map_or(String::new(), |p| p.display().to_string());
+    let mut player = recording
+        .map(|(bytes, _)| Player::new(bytes, &origin, &scene.show))
+        .transpose()?;
     let frames = (duration * args.fps as f32).ceil() as usize + 1;
     if frames > crate::output::MAX_FRAMES {
         return Err(atmo::Error::Invalid(format!(
@@ -302,7 +343,11 @@ fn animate(
             chunk: &args.chunk,
         },
         |k, frame| {
-            scene.at_time(k as f32 / args.fps as f32);
+            let t_s = k as f64 / args.fps as f64;
+            match &mut player {
+                Some(player) => player.pose(&mut scene.show, (t_s * 1e6).round() as u64)?,
+                None => scene.at_time(t_s as f32),
+            }
             lights += scene.light_count();
             let drawn = shafts.draw(&scene).map_err(gpu_error)?;
             rebuilt += drawn.maps_rebuilt;
@@ -326,4 +371,20 @@ fn animate(
         start.elapsed().as_secs_f64() * 1e3 / drawn as f64
     );
     Ok(())
+}
+
+/// The recording at `path` for `scene`, checked whole (a malformed record is an error
+/// before anything is drawn), and the time of its last frame, us.
+fn read_recording(path: &std::path::Path, scene: &Scene) -> Result<(Vec<u8>, u64)> {
+    if scene.show.fixtures.iter().all(|f| f.patch.is_none()) {
+        return Err(atmo::Error::Invalid(format!(
+            "--dmx-file {}: the scene patches no fixture (give a fixture `dmx = {{ universe \
+             = 1, address = 1 }}`; see docs/previz.md)",
+            path.display()
+        ))
+        .into());
+    }
+    let bytes = atmo::files::read_bounded(path, "DMX recording", atmo::files::DATA_LIMIT_BYTES)?;
+    let (last_us, _) = recording::extent(&bytes, &path.display().to_string())?;
+    Ok((bytes, last_us))
 }

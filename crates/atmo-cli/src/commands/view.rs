@@ -82,6 +82,16 @@ pub struct ViewStageArgs {
     /// The window's height, pixels (default the scene camera's).
     #[arg(long)]
     height: Option<u32>,
+    /// Listen to a lighting desk: its DMX by sACN (E1.31) or Art-Net moves the
+    /// patched fixtures (docs/previz.md).
+    #[arg(long, value_enum, value_name = "PROTOCOL")]
+    dmx: Option<crate::commands::dmx::ProtocolArg>,
+    #[command(flatten)]
+    listen: crate::commands::dmx::ListenArgs,
+    /// With --dmx: write what arrives to this .dmx file (in place when the window
+    /// closes), which `atmo shafts --dmx-file` renders offline.
+    #[arg(long, value_name = "FILE.dmx", requires = "dmx")]
+    record: Option<PathBuf>,
     #[command(flatten)]
     window: WindowArgs,
     #[command(flatten)]
@@ -148,7 +158,22 @@ pub fn run(args: ViewArgs) -> Result<()> {
                 .iter()
                 .map(|e| Edit::parse(e))
                 .collect::<atmo::Result<Vec<_>>>()?;
-            let mode = StageMode::new(&args.scene, edits, args.time)?;
+            let mut mode = StageMode::new(&args.scene, edits, args.time)?;
+            if let Some(protocol) = args.dmx {
+                let patched = crate::commands::dmx::patched_universes(mode.scene());
+                let settings = args.listen.settings(protocol.into(), &patched)?;
+                if let Some(record) = &args.record {
+                    atmo::files::check_folder(record)?;
+                }
+                mode.listen(settings, args.record.clone())?;
+            } else if !args.listen.universes.is_empty() || args.listen.bind.is_some() {
+                return Err(Error::Invalid(
+                    "--universe and --bind say where to listen for DMX: give --dmx sacn or \
+                     --dmx artnet with them"
+                        .into(),
+                )
+                .into());
+            }
             let camera = &mode.scene().camera;
             let size = (
                 args.width.unwrap_or(camera.width),
@@ -191,10 +216,13 @@ pub fn run(args: ViewArgs) -> Result<()> {
             let at = |q| (!v.is_empty()).then(|| percentile(v.to_vec(), q));
             serde_json::json!({"median_ms": at(0.5), "p95_ms": at(0.95), "count": v.len()})
         };
-        let line = serde_json::json!({
+        let mut line = serde_json::json!({
             "frame": stats(&timings.frame_ms),
             "method": stats(&timings.method_ms),
         });
+        for (name, value) in &timings.figures {
+            line[*name] = serde_json::json!(value);
+        }
         outln!("{line}");
     }
     Ok(())
