@@ -1,12 +1,13 @@
 //! The two ways desks send DMX over Ethernet, read from one UDP datagram each:
 //! sACN (ANSI E1.31, port 5568) and Art-Net (ArtDmx and ArtPoll, port 6454).
 //!
-//! sACN is parsed by the `sacn` crate (its packet layer, tested against E1.31-2018).
-//! Art-Net's two packets are parsed here: `artnet_protocol` takes every byte after an
-//! ArtDmx header as levels whatever its Length field says (so a 600-byte datagram gave
-//! 582 "channels"), and ArtDmx and ArtPoll are fixed layouts of a few fields. Anything
-//! that is not a well-formed packet of a universe atmo can use is [`Packet::Ignored`]
-//! with the reason, never a panic (the `dmx_packets` fuzz target holds it to that).
+//! Both are parsed here, as fixed layouts of a few fields: the `sacn` crate's packet
+//! layer panicked on a data packet whose framing layer claims fewer bytes than its own
+//! header (found by the `dmx` fuzz target in 4,542 runs), and `artnet_protocol` takes
+//! every byte after an ArtDmx header as levels whatever its Length field says (a
+//! 600-byte datagram gave 582 "channels"). Anything that is not a well-formed packet of
+//! a universe atmo can use is [`Packet::Ignored`] with the reason, never a panic (the
+//! `dmx` fuzz target holds it to that).
 
 use std::net::Ipv4Addr;
 
@@ -68,43 +69,88 @@ pub fn parse(protocol: Protocol, bytes: &[u8], from: std::net::SocketAddr) -> Pa
     }
 }
 
+/// E1.31's fixed layout of a data packet: the root layer's preamble and packet
+/// identifier, its vector, and the offsets of the fields read (ANSI E1.31-2018, 6).
+const ACN_ID: &[u8; 12] = b"ASC-E1.17\0\0\0";
+const VECTOR_ROOT_DATA: u32 = 0x0000_0004;
+const VECTOR_ROOT_EXTENDED: u32 = 0x0000_0008;
+const VECTOR_FRAMING_DATA: u32 = 0x0000_0002;
+const VECTOR_DMP_SET_PROPERTY: u8 = 0x02;
+/// Where the root, framing and DMP layers' flags-and-length fields are, and where the
+/// property values (the start code, then the levels) begin.
+const ROOT_AT: usize = 16;
+const FRAMING_AT: usize = 38;
+const DMP_AT: usize = 115;
+const VALUES_AT: usize = 125;
+
 fn parse_sacn(bytes: &[u8]) -> Packet {
-    use sacn::packet::{AcnRootLayerProtocol, E131RootLayerData};
-    let packet = match AcnRootLayerProtocol::parse(bytes) {
-        Ok(p) => p,
-        Err(e) => return Packet::Ignored(format!("not an sACN packet: {e}")),
+    let ignore = |why: &str| Packet::Ignored(format!("sACN: {why}"));
+    if bytes.len() < VALUES_AT || bytes[..4] != [0, 0x10, 0, 0] || &bytes[4..16] != ACN_ID {
+        return ignore("not an E1.31 packet (no ACN preamble and identifier)");
+    }
+    let u16_at = |k: usize| u16::from_be_bytes([bytes[k], bytes[k + 1]]);
+    let u32_at =
+        |k: usize| u32::from_be_bytes([bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]]);
+    // Each layer's length (the low 12 bits) runs from its own field to the packet's
+    // end, which the datagram must hold.
+    for (at, name) in [(ROOT_AT, "root"), (FRAMING_AT, "framing"), (DMP_AT, "DMP")] {
+        let length = (u16_at(at) & 0x0fff) as usize;
+        if at + length > bytes.len() || at + length < VALUES_AT {
+            return ignore(&format!(
+                "the {name} layer's length {length} does not fit the {}-byte datagram",
+                bytes.len()
+            ));
+        }
+    }
+    match u32_at(ROOT_AT + 2) {
+        VECTOR_ROOT_DATA => {}
+        VECTOR_ROOT_EXTENDED => return ignore("a synchronisation or discovery packet"),
+        v => return ignore(&format!("root vector {v:#x}, not data")),
+    }
+    if u32_at(FRAMING_AT + 2) != VECTOR_FRAMING_DATA {
+        return ignore("framing vector not data");
+    }
+    let (priority, sequence, options) = (bytes[108], bytes[111], bytes[112]);
+    let universe = u16_at(113);
+    if !(1..=MAX_UNIVERSE).contains(&universe) {
+        return ignore(&format!("universe {universe}: allowed 1 to {MAX_UNIVERSE}"));
+    }
+    if bytes[DMP_AT + 2] != VECTOR_DMP_SET_PROPERTY
+        || bytes[DMP_AT + 3] != 0xa1
+        || u16_at(DMP_AT + 4) != 0
+        || u16_at(DMP_AT + 6) != 1
+    {
+        return ignore("DMP layer not a set-property of consecutive channels");
+    }
+    let count = u16_at(DMP_AT + 8) as usize;
+    let Some(values) = bytes
+        .get(VALUES_AT..VALUES_AT + count)
+        .filter(|_| (1..=UNIVERSE_SIZE + 1).contains(&count))
+    else {
+        return ignore(&format!(
+            "{count} property values (1 to 513, within the datagram)"
+        ));
     };
-    let E131RootLayerData::DataPacket(data) = packet.pdu.data else {
-        return Packet::Ignored("an sACN synchronisation or discovery packet".into());
-    };
-    if !(1..=MAX_UNIVERSE).contains(&data.universe) {
-        return Packet::Ignored(format!(
-            "sACN universe {}: allowed 1 to {MAX_UNIVERSE}",
-            data.universe
+    if options & 0x80 != 0 {
+        return ignore("preview data (for visualisers told to take it)");
+    }
+    let terminated = options & 0x40 != 0;
+    if values[0] != 0 && !terminated {
+        return ignore(&format!(
+            "start code {:#04x}, not DMX levels (0)",
+            values[0]
         ));
     }
-    if data.preview_data {
-        return Packet::Ignored("sACN preview data (for visualisers told to take it)".into());
-    }
-    let values = &data.data.property_values;
-    match values.first() {
-        Some(0) => {}
-        Some(code) => {
-            return Packet::Ignored(format!("sACN start code {code:#04x}, not DMX levels (0)"))
-        }
-        None if data.stream_terminated => {}
-        None => return Packet::Ignored("sACN packet without a start code".into()),
-    }
     let mut levels = Box::new([0u8; UNIVERSE_SIZE]);
-    let slots = values.get(1..).unwrap_or(&[]);
-    let n = slots.len().min(UNIVERSE_SIZE);
-    levels[..n].copy_from_slice(&slots[..n]);
+    levels[..count - 1].copy_from_slice(&values[1..]);
+    let mut cid = [0u8; 16];
+    cid.copy_from_slice(&bytes[22..38]);
     Packet::Dmx(Dmx {
-        universe: data.universe,
-        source: Source::Cid(*packet.pdu.cid.as_bytes()),
-        priority: data.priority.min(200),
-        sequence: data.sequence_number,
-        terminated: data.stream_terminated,
+        universe,
+        source: Source::Cid(cid),
+        priority: priority.min(200),
+        sequence,
+        terminated,
         levels,
     })
 }
@@ -249,31 +295,30 @@ pub(crate) mod tests {
     }
 
     impl Sacn<'_> {
+        /// The datagram, as E1.31-2018 lays it out.
         pub(crate) fn bytes(&self) -> Vec<u8> {
-            use sacn::packet::*;
-            let mut property_values = vec![self.start];
-            property_values.extend_from_slice(self.values);
-            let p = AcnRootLayerProtocol {
-                pdu: E131RootLayer {
-                    cid: uuid::Uuid::from_bytes([self.cid; 16]),
-                    data: E131RootLayerData::DataPacket(DataPacketFramingLayer {
-                        source_name: "desk".into(),
-                        priority: self.priority,
-                        synchronization_address: 0,
-                        sequence_number: self.sequence,
-                        preview_data: self.preview,
-                        stream_terminated: self.terminated,
-                        force_synchronization: false,
-                        universe: self.universe,
-                        data: DataPacketDmpLayer {
-                            property_values: property_values.into(),
-                        },
-                    }),
-                },
-            };
-            let mut buf = vec![0; p.len()];
-            p.pack(&mut buf).unwrap();
-            buf
+            let count = self.values.len() + 1;
+            let total = VALUES_AT + count;
+            let flags_length = |at: usize| (0x7000 | (total - at) as u16).to_be_bytes();
+            let mut p = vec![0, 0x10, 0, 0];
+            p.extend_from_slice(ACN_ID);
+            p.extend_from_slice(&flags_length(ROOT_AT));
+            p.extend_from_slice(&VECTOR_ROOT_DATA.to_be_bytes());
+            p.extend_from_slice(&[self.cid; 16]);
+            p.extend_from_slice(&flags_length(FRAMING_AT));
+            p.extend_from_slice(&VECTOR_FRAMING_DATA.to_be_bytes());
+            let mut name = [0u8; 64];
+            name[..4].copy_from_slice(b"desk");
+            p.extend_from_slice(&name);
+            let options = (self.preview as u8) << 7 | (self.terminated as u8) << 6;
+            p.extend_from_slice(&[self.priority, 0, 0, self.sequence, options]);
+            p.extend_from_slice(&self.universe.to_be_bytes());
+            p.extend_from_slice(&flags_length(DMP_AT));
+            p.extend_from_slice(&[VECTOR_DMP_SET_PROPERTY, 0xa1, 0, 0, 0, 1]);
+            p.extend_from_slice(&(count as u16).to_be_bytes());
+            p.push(self.start);
+            p.extend_from_slice(self.values);
+            p
         }
     }
 
@@ -357,6 +402,25 @@ pub(crate) mod tests {
         cut.truncate(100);
         assert!(matches!(
             parse(Protocol::Sacn, &cut, from()),
+            Packet::Ignored(_)
+        ));
+        // A framing layer that claims fewer bytes than its own header (what made the
+        // sacn crate panic), one that claims more than the datagram, and the fuzz
+        // target's input that found it.
+        for claim in [0x7000u16, 0x7fff] {
+            let mut lying = packet(7, 0, false);
+            lying[FRAMING_AT..FRAMING_AT + 2].copy_from_slice(&claim.to_be_bytes());
+            assert!(matches!(
+                parse(Protocol::Sacn, &lying, from()),
+                Packet::Ignored(_)
+            ));
+        }
+        let found = include_bytes!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../fuzz/corpus/dmx/sacn-framing-shorter-than-its-header"
+        ));
+        assert!(matches!(
+            parse(Protocol::Sacn, &found[1..], from()),
             Packet::Ignored(_)
         ));
     }
