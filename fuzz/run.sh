@@ -18,7 +18,7 @@ shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
   targets=(atmosphere_toml scene_toml sky_table particles obj gobo probe_csv photometry gdtf
-    set_edits exr view_script cli_args cloud_scene table_part frames dmx)
+    set_edits exr view_script cli_args cloud_scene table_part frames dmx mvr)
 fi
 command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked --version 0.13.2
 cargo +nightly fuzz build 2>&1 | tail -n 1

@@ -39,6 +39,9 @@ small=(--set camera.width=240 --set camera.height=160 --backend cpu)
 # full, zoom 0 (8 deg); spots 2 and 3 dark.
 pans=("64 0" "128 0" "200 17")
 tilt_coarse=156
+# Spots 2 and 3 as all-zero DMX leaves them: dark, at one end of pan, tilt and zoom
+# (their bodies are in the picture).
+dark="{ pan_deg = -270.0, tilt_deg = -135.0, zoom_deg = 8.0, dimmer = 0.0 }"
 
 cat > "$work/send.py" <<'EOF'
 """Sweeps spot 1's pan by sACN or Art-Net; argv: protocol, port, then the pans."""
@@ -109,7 +112,7 @@ for protocol in sacn artnet; do
     tilt_deg=$(awk -v c="$tilt_coarse" 'BEGIN {printf "%.6f", -135 + 270 * (c * 256) / 65535}')
     "$atmo" shafts scenes/dmx-rig.toml "${small[@]}" \
       --set "fixture[0].start={ pan_deg = $pan_deg, tilt_deg = $tilt_deg, zoom_deg = 8.0 }" \
-      --set "fixture[1].start.dimmer=0" --set "fixture[2].start.dimmer=0" \
+      --set "fixture[1].start=$dark" --set "fixture[2].start=$dark" \
       -o "$work/still-$k.exr" 2>/dev/null
     rms=$("$atmo" compare "$work/dmx-$k.exr" "$work/still-$k.exr" --exposure 0.12 \
       | grep -oE 'rms [0-9.]+' | head -n 1 | awk '{print $2}')

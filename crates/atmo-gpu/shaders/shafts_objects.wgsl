@@ -51,7 +51,7 @@ fn intersect(k: u32, origin: vec3<f32>, dir: vec3<f32>, best: ptr<function, Hit>
     let b = geometry[4u * k + 1u];
     let c = geometry[4u * k + 2u];
     let albedo = geometry[4u * k + 3u];
-    let kind = bitcast<u32>(albedo.w);
+    let kind = bitcast<u32>(albedo.w) & ~OBJECT_NO_SHADOW;
     let t_max = (*best).t;
     var t = NO_HIT;
     var normal = vec3<f32>(0.0);
@@ -67,15 +67,21 @@ fn intersect(k: u32, origin: vec3<f32>, dir: vec3<f32>, best: ptr<function, Hit>
             normal = normalize(cross(b.xyz, c.xyz));
         }
     } else if kind == OBJECT_SPHERE {
-        // Sphere: a centre and radius.
-        let oc = origin - a.xyz;
-        let bb = dot(oc, dir);
-        let cc = dot(oc, oc) - a.w * a.w;
-        let disc = bb * bb - cc;
+        // Sphere: a centre and radius; the stable intersection of geometry.rs
+        // (Haines et al.: the discriminant from the closest approach, the near root
+        // as c / q).
+        let f = origin - a.xyz;
+        let bb = -dot(f, dir);
+        let closest = f + bb * dir;
+        let disc = a.w * a.w - dot(closest, closest);
         if disc >= 0.0 {
-            let root = sqrt(disc);
-            t = select(-bb + root, -bb - root, valid(-bb - root, t_max));
-            normal = (origin + t * dir - a.xyz) / a.w;
+            let cc = dot(f, f) - a.w * a.w;
+            let q = bb + select(-1.0, 1.0, bb >= 0.0) * sqrt(disc);
+            let t0 = select(cc / q, 0.0, q == 0.0);
+            let near = min(t0, q);
+            let far = max(t0, q);
+            t = select(far, near, valid(near, t_max));
+            normal = normalize(origin + t * dir - a.xyz);
         }
     } else if kind == OBJECT_BOX {
         // Box: a min, b max.

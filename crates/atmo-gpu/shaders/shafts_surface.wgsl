@@ -46,7 +46,10 @@ fn shadow_ray(l: GpuLight, p: vec3<f32>, normal: vec3<f32>) -> f32 {
     var best: Hit;
     best.t = s;
     for (var i = 0u; i < params.objects; i++) {
-        intersect(i, origin, to_lamp / s, &best);
+        // A head's body holds its lamp: it casts no shadow.
+        if (bitcast<u32>(geometry[4u * i + 3u].w) & OBJECT_NO_SHADOW) == 0u {
+            intersect(i, origin, to_lamp / s, &best);
+        }
     }
     return f32(best.t >= s);
 }

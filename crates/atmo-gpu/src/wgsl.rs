@@ -37,6 +37,8 @@ shared_codes! {
     OBJECT_BOX = 3;
     /// A triangle mesh with its BVH.
     OBJECT_MESH = 4;
+    /// Or-ed into an object's kind: it casts no shadow (a moving head's body).
+    OBJECT_NO_SHADOW = 128;
     /// A spotlight's soft edge falls linearly with the angle.
     FALLOFF_LINEAR = 0;
     /// A spotlight's soft edge falls as a smoothstep.

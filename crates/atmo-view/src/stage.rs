@@ -175,9 +175,7 @@ impl StageMode {
         let now_us = (desk.start.elapsed().as_micros() as u64).max(desk.playback.time_us());
         let states = desk.playback.states(&self.scene.show, now_us);
         if states != desk.posed {
-            self.scene
-                .show
-                .drive((now_us as f64 * 1e-6) as f32, &states);
+            self.scene.drive((now_us as f64 * 1e-6) as f32, &states);
             (desk.posed, desk.posed_us) = (states, now_us);
             self.dirty = true;
         }
@@ -379,6 +377,18 @@ impl StageMode {
 
     /// Writes the edited scene into its file (atomically) and starts again from it.
     fn save(&mut self) -> Result<()> {
+        if self
+            .path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("mvr"))
+        {
+            return Err(Error::Invalid(format!(
+                "{} is an MVR rig, not a scene file: copy the scene atmo made around it \
+                 into a .toml file (its [mvr] names the rig) to save edits",
+                self.path.display()
+            ))
+            .into());
+        }
         let text = self.edited.to_string();
         atmo::files::write_atomically(&self.path, |w| {
             use std::io::Write;

@@ -163,7 +163,7 @@ pub fn run(args: ShaftsArgs) -> Result<()> {
     if let (Some((bytes, _)), Some(path)) = (&recording, &args.dmx_file) {
         let t = args.time.unwrap_or(0.0);
         Player::new(bytes, &path.display().to_string(), &scene.show)?
-            .pose(&mut scene.show, (t as f64 * 1e6).round() as u64)?;
+            .pose(&mut scene, (t as f64 * 1e6).round() as u64)?;
     }
     let inputs: Vec<(&str, &std::path::Path)> = std::iter::once(("the scene", &*args.scene))
         .chain(
@@ -345,7 +345,7 @@ fn animate(
         |k, frame| {
             let t_s = k as f64 / args.fps as f64;
             match &mut player {
-                Some(player) => player.pose(&mut scene.show, (t_s * 1e6).round() as u64)?,
+                Some(player) => player.pose(&mut scene, (t_s * 1e6).round() as u64)?,
                 None => scene.at_time(t_s as f32),
             }
             lights += scene.light_count();

@@ -19,7 +19,7 @@ use glam::Vec3;
 
 use crate::wgsl::{
     self, FALLOFF_LINEAR, FALLOFF_MEASURED, FALLOFF_SMOOTH, GOBO_BILINEAR, GOBO_NEAREST, GOBO_NONE,
-    OBJECT_BOX, OBJECT_MESH, OBJECT_PLANE, OBJECT_RECT, OBJECT_SPHERE,
+    OBJECT_BOX, OBJECT_MESH, OBJECT_NO_SHADOW, OBJECT_PLANE, OBJECT_RECT, OBJECT_SPHERE,
 };
 use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
@@ -675,7 +675,12 @@ impl Geometry {
                     )
                 }
             };
-            values.extend([a, b, c, v4(object.albedo, bits(kind))]);
+            let flags = if object.casts_shadow {
+                0
+            } else {
+                OBJECT_NO_SHADOW
+            };
+            values.extend([a, b, c, v4(object.albedo, bits(kind | flags))]);
         }
         let nodes_at = values.len() as u32;
         values.extend(nodes);

@@ -52,6 +52,9 @@ pub struct GdtfFixture {
     pub prism: Option<GdtfPrism>,
     /// The mode's channels, as a desk drives them.
     pub dmx: super::dmx::Mode,
+    /// Where the beam starts in the fixture's frame (z up), m: its `Beam` geometry's
+    /// place through the geometries it hangs from (each one's `Position`).
+    pub beam_offset: Vec3,
 }
 
 /// A prism as a GDTF wheel's slot gives it: one beam direction a facet.
@@ -165,7 +168,7 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
     let fail = |why: String| Error::Invalid(format!("GDTF file {origin}: {why}"));
     let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes))
         .map_err(|e| fail(format!("not a readable zip ({e})")))?;
-    let text = entry(&mut zip, "description.xml", DESCRIPTION_LIMIT)
+    let text = zip_entry(&mut zip, "description.xml", DESCRIPTION_LIMIT)
         .map_err(&fail)?
         .ok_or_else(|| fail("no description.xml in the zip".into()))?;
     let text = String::from_utf8(text).map_err(|_| fail("description.xml is not UTF-8".into()))?;
@@ -274,7 +277,9 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
             wheels.gobo.1.push(wheel.len() + 1);
             let image = [format!("wheels/{media}"), format!("wheels/{media}.png")]
                 .iter()
-                .find_map(|path| entry(&mut zip, path, crate::files::DATA_LIMIT_BYTES).transpose())
+                .find_map(|path| {
+                    zip_entry(&mut zip, path, crate::files::DATA_LIMIT_BYTES).transpose()
+                })
                 .transpose()
                 .map_err(&fail)?
                 .ok_or_else(|| {
@@ -348,6 +353,7 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
         .map_err(|why| fail(format!("DMX mode {mode:?}: {why}")))?;
     dmx.validate(&format!("GDTF file {origin}: DMX mode {mode:?}"))?;
     Ok(GdtfFixture {
+        beam_offset: beam_offset(beam),
         dmx,
         name: fixture.attribute("Name").unwrap_or("").to_string(),
         beam_deg,
@@ -392,6 +398,35 @@ fn facet_beam(text: &str) -> std::result::Result<Vec3, String> {
     Ok(beam.normalize())
 }
 
+/// Where `beam` (a geometry node) starts in the fixture's frame, m: the translation
+/// of the product of its and its ancestors' `Position` matrices (4 x 4, rows, the
+/// translation in the last column); a `Position` that does not parse counts as none.
+#[cfg(feature = "gdtf")]
+fn beam_offset(beam: roxmltree::Node) -> Vec3 {
+    let matrix = |text: &str| -> Option<glam::Mat4> {
+        let v: Vec<f32> = text
+            .split(['{', '}', ','])
+            .map(str::trim)
+            .filter(|t| !t.is_empty())
+            .map(|t| t.parse::<f32>().ok().filter(|x| x.is_finite()))
+            .collect::<Option<_>>()?;
+        let rows: [f32; 16] = v.try_into().ok()?;
+        Some(glam::Mat4::from_cols_array(&rows).transpose())
+    };
+    let chain: Vec<glam::Mat4> = beam
+        .ancestors()
+        .take_while(|n| !n.has_tag_name("Geometries"))
+        .filter_map(|n| n.attribute("Position").and_then(matrix))
+        .collect();
+    let world = chain.iter().rev().fold(glam::Mat4::IDENTITY, |m, p| m * *p);
+    let offset = world.w_axis.truncate();
+    if offset.is_finite() && offset.length() < 100.0 {
+        offset
+    } else {
+        Vec3::ZERO
+    }
+}
+
 /// A wheel's slots, in order (GDTF's `WheelSlotIndex` 1 is the first).
 #[cfg(feature = "gdtf")]
 fn slots<'a, 'i>(wheel: roxmltree::Node<'a, 'i>) -> Vec<roxmltree::Node<'a, 'i>> {
@@ -426,9 +461,10 @@ fn wheel_turned_by<'a, 'i>(
 }
 
 /// The bytes of the zip's entry `name`, `None` if there is none; an entry claiming
-/// more than `limit` bytes is refused before it is read.
+/// more than `limit` bytes, or past the run's memory budget, is refused before it is
+/// read (GDTF and MVR files alike).
 #[cfg(feature = "gdtf")]
-fn entry(
+pub(crate) fn zip_entry(
     zip: &mut zip::ZipArchive<std::io::Cursor<&[u8]>>,
     name: &str,
     limit: u64,
@@ -444,12 +480,8 @@ fn entry(
             "{name} is {size} bytes, above the limit of {limit}"
         ));
     }
-    crate::budget::check(
-        &format!("{name} in a GDTF file"),
-        size,
-        "the GDTF file's contents",
-    )
-    .map_err(|e| e.to_string())?;
+    crate::budget::check(&format!("{name} from a zip"), size, "the zip's contents")
+        .map_err(|e| e.to_string())?;
     let mut bytes = Vec::with_capacity(size as usize);
     use std::io::Read;
     // Read no more than the size the entry claims (a lying header cannot grow it).
@@ -534,7 +566,7 @@ mod reading {
         );
         let bytes = std::fs::read(path).unwrap();
         let mut zip = zip::ZipArchive::new(std::io::Cursor::new(&bytes[..])).unwrap();
-        let text = entry(&mut zip, "description.xml", DESCRIPTION_LIMIT)
+        let text = zip_entry(&mut zip, "description.xml", DESCRIPTION_LIMIT)
             .unwrap()
             .unwrap();
         String::from_utf8(text)

@@ -33,6 +33,8 @@ pub mod dmx;
 pub mod edits;
 pub mod gdtf;
 pub mod haze;
+#[cfg(feature = "gdtf")]
+pub mod mvr;
 pub mod objects;
 pub mod photometry;
 pub mod planes;

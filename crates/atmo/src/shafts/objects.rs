@@ -25,6 +25,9 @@ pub struct Object {
     pub shape: Shape,
     /// Lambertian albedo, linear RGB in [0, 1].
     pub albedo: Vec3,
+    /// Whether it casts shadows: false for a moving head's body, which holds its own
+    /// lamp ([`super::show::Fixture::body`]); it is still seen and lit.
+    pub casts_shadow: bool,
 }
 
 /// All objects of a scene.
@@ -54,6 +57,7 @@ impl Objects {
         let (sin, cos) = light.field_half.sin_cos();
         let axis = light.light_from_world.row(2);
         (0..self.list.len() as u32)
+            .filter(|&i| self.list[i as usize].casts_shadow)
             .filter(|&i| match self.list[i as usize].shape.bounds() {
                 None => true,
                 Some(b) => {
@@ -75,7 +79,7 @@ impl Objects {
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         self.list
             .iter()
-            .any(|o| o.shape.intersect(ray, t_max).is_some())
+            .any(|o| o.casts_shadow && o.shape.intersect(ray, t_max).is_some())
     }
 }
 

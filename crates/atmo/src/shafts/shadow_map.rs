@@ -654,6 +654,7 @@ mod tests {
         let object = |shape| Object {
             shape,
             albedo: Vec3::splat(0.5),
+            casts_shadow: true,
         };
         let objects = Objects {
             list: vec![
@@ -852,6 +853,7 @@ mod tests {
         let object = |shape| Object {
             shape,
             albedo: Vec3::splat(0.5),
+            casts_shadow: true,
         };
         fig6.list.push(object(Shape::Box(Aabb {
             min: Vec3::new(-2.8, 1.7, -0.9),

@@ -19,7 +19,9 @@
 use glam::{Mat3, Quat, Vec3};
 
 use super::dmx::Patch;
+use super::objects::Object;
 use super::spotlight::{light_frame, Falloff, Gobo, Profile, Spotlight};
+use crate::geometry::{Mesh, Shape};
 
 /// The attributes of a fixture that fade, in this order in a [`State`].
 pub const CHANNELS: [&str; 10] = [
@@ -129,6 +131,8 @@ pub struct Fixture {
     pub white: Vec3,
     /// Where a desk drives it, if it is patched.
     pub patch: Option<Patch>,
+    /// Whether its body is drawn ([`Fixture::body`]).
+    pub body: bool,
 }
 
 /// A prism in a head's beam: `facets` copies of the beam, each turned `angle_deg` off
@@ -161,6 +165,8 @@ pub struct Show {
     time_s: f32,
     /// The heads' spotlights at `time_s`, in fixture order ([`Show::pose`]).
     lights: Vec<Spotlight>,
+    /// Each fixture's pan and tilt at `time_s`, degrees.
+    pan_tilt: Vec<(f32, f32)>,
 }
 
 /// One attribute's course through the cues: the fade running at the latest cue that
@@ -201,6 +207,9 @@ impl Show {
     /// changes [`Show::fixtures`] or [`Show::cues`].
     pub fn at_time(&mut self, time_s: f32) {
         self.lights = self.pose(time_s);
+        self.pan_tilt = (0..self.fixtures.len())
+            .map(|f| self.state(f, time_s).pan_tilt())
+            .collect();
         self.time_s = time_s;
     }
 
@@ -213,7 +222,17 @@ impl Show {
             .zip(states)
             .flat_map(|(f, (state, gobo_deg))| f.lights(state, *gobo_deg))
             .collect();
+        self.pan_tilt = states.iter().map(|(s, _)| s.pan_tilt()).collect();
         self.time_s = time_s;
+    }
+
+    /// The bodies of the fixtures that show theirs, as posed ([`Fixture::body`]).
+    pub fn bodies(&self) -> impl Iterator<Item = Object> + '_ {
+        self.fixtures
+            .iter()
+            .zip(&self.pan_tilt)
+            .filter(|(f, _)| f.body)
+            .map(|(f, &(pan, tilt))| f.body(pan, tilt))
     }
 
     /// The time the heads are posed at, s ([`Show::at_time`]; 0 as made).
@@ -338,7 +357,81 @@ impl Show {
     }
 }
 
+/// The albedo of a fixture's body: a black-painted head, as stage fixtures are.
+pub const BODY_ALBEDO: f32 = 0.08;
+
+/// Adds the twelve triangles of a cuboid at `centre` whose half-extents run along
+/// three perpendicular unit vectors.
+fn cuboid(out: &mut Vec<[Vec3; 3]>, centre: Vec3, half: [(Vec3, f32); 3]) {
+    let corner = |i: usize| {
+        half.iter().enumerate().fold(centre, |p, (k, &(dir, h))| {
+            p + dir * if i >> k & 1 == 1 { h } else { -h }
+        })
+    };
+    // Each face's corners in order around it (bit k: the k-th extent's + side).
+    for face in [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ] {
+        let [a, b, c, d] = face.map(corner);
+        out.extend([[a, b, c], [a, c, d]]);
+    }
+}
+
+/// A moving head's body hung at `position` (the lamp, m) with its pan `axis` and
+/// `front` (unit, as [`Fixture`]'s), at `pan` and `tilt`, degrees: a base where it
+/// hangs, a yoke that pans with two arms holding the head at its tilt pivot (the lamp),
+/// and the head, its lens 2 cm ahead of the lamp so that the beam leaves through it: a
+/// generic moving head about 0.3 m across, its parts cuboids. It is seen and lit but
+/// casts no shadow, since it holds its own lamp.
+pub fn body_object(position: Vec3, axis: Vec3, front: Vec3, pan_deg: f32, tilt_deg: f32) -> Object {
+    let tilt_axis = axis.cross(front);
+    let pan = Quat::from_axis_angle(axis, pan_deg.to_radians());
+    let turn = pan * Quat::from_axis_angle(tilt_axis, tilt_deg.to_radians());
+    let (beam, up) = (turn * axis, turn * front);
+    let right = beam.cross(up);
+    let (side, yoke_front) = (pan * tilt_axis, pan * front);
+    let (p, a) = (position, axis);
+    let mut triangles = Vec::with_capacity(5 * 12);
+    cuboid(
+        &mut triangles,
+        p - 0.14 * beam,
+        [(beam, 0.16), (up, 0.12), (right, 0.12)],
+    );
+    for sign in [-1.0, 1.0] {
+        cuboid(
+            &mut triangles,
+            p + side * (0.19 * sign) - a * 0.17,
+            [(side, 0.025), (a, 0.19), (yoke_front, 0.05)],
+        );
+    }
+    cuboid(
+        &mut triangles,
+        p - a * 0.36,
+        [(side, 0.215), (a, 0.025), (yoke_front, 0.05)],
+    );
+    cuboid(
+        &mut triangles,
+        p - a * 0.45,
+        [(tilt_axis, 0.2), (a, 0.06), (front, 0.17)],
+    );
+    Object {
+        shape: Shape::Mesh(Mesh::new(triangles)),
+        albedo: Vec3::splat(BODY_ALBEDO),
+        casts_shadow: false,
+    }
+}
+
 impl Fixture {
+    /// The fixture's body at `pan` and `tilt`, degrees ([`body_object`]).
+    pub fn body(&self, pan_deg: f32, tilt_deg: f32) -> Object {
+        body_object(self.position, self.axis, self.front, pan_deg, tilt_deg)
+    }
+
     /// The beam's direction and the head's up (unit) at `pan` and `tilt`, degrees.
     pub fn aim(&self, pan_deg: f32, tilt_deg: f32) -> (Vec3, Vec3) {
         let tilt_axis = self.axis.cross(self.front);
@@ -498,6 +591,7 @@ pub(crate) mod tests {
             prism: None,
             white: Vec3::ONE,
             patch: None,
+            body: false,
         }
     }
 

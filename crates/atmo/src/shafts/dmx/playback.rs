@@ -10,6 +10,7 @@
 
 use super::{Levels, Reading, Turn};
 use crate::shafts::show::{Show, State, CHANNELS};
+use crate::shafts::Scene;
 
 /// One universe's levels as they became at `time_us`, microseconds from the start.
 #[derive(Debug, Clone, PartialEq)]
@@ -190,17 +191,17 @@ impl Playback {
             .collect()
     }
 
-    /// Poses the show's heads at `time_us`.
-    pub fn pose(&self, show: &mut Show, time_us: u64) {
-        let states = self.states(show, time_us);
-        show.drive((time_us as f64 * 1e-6) as f32, &states);
+    /// Poses the scene's heads (and their bodies) at `time_us`.
+    pub fn pose(&self, scene: &mut Scene, time_us: u64) {
+        let states = self.states(&scene.show, time_us);
+        scene.drive((time_us as f64 * 1e-6) as f32, &states);
     }
 
     /// Applies every frame of `frames` up to `time_us` (they are in time order), and
-    /// poses the show then: one step of an offline render of a recording.
+    /// poses the scene then: one step of an offline render of a recording.
     pub fn play_to<I>(
         &mut self,
-        show: &mut Show,
+        scene: &mut Scene,
         frames: &mut std::iter::Peekable<I>,
         time_us: u64,
     ) -> crate::error::Result<()>
@@ -209,9 +210,9 @@ impl Playback {
     {
         while let Some(next) = frames.next_if(|e| e.as_ref().map_or(true, |e| e.time_us <= time_us))
         {
-            self.apply(show, &next?);
+            self.apply(&scene.show, &next?);
         }
-        self.pose(show, time_us);
+        self.pose(scene, time_us);
         Ok(())
     }
 }

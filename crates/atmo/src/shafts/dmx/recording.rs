@@ -241,13 +241,13 @@ impl<'a> Player<'a> {
         })
     }
 
-    /// Poses `show`'s heads at `time_us` as the recording has them.
-    pub fn pose(&mut self, show: &mut crate::shafts::show::Show, time_us: u64) -> Result<()> {
+    /// Poses `scene`'s heads at `time_us` as the recording has them.
+    pub fn pose(&mut self, scene: &mut crate::shafts::Scene, time_us: u64) -> Result<()> {
         if time_us < self.posed_us {
-            *self = Player::new(self.bytes, &self.origin, show)?;
+            *self = Player::new(self.bytes, &self.origin, &scene.show)?;
         }
         self.posed_us = time_us;
-        self.playback.play_to(show, &mut self.frames, time_us)
+        self.playback.play_to(scene, &mut self.frames, time_us)
     }
 }
 

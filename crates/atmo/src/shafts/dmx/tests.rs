@@ -229,7 +229,13 @@ fn frame(time_us: u64, values: &[u8]) -> Event {
 #[test]
 fn frames_drive_the_heads_and_a_recording_plays_them_back_the_same() {
     let patch = personality(&["pan", "dimmer", "red", "cyan", "gobo_spin", "shutter"], 0);
-    let mut show = Show::new(vec![head(patch)], Vec::new());
+    let show = Show::new(
+        vec![Fixture {
+            body: true,
+            ..head(patch)
+        }],
+        Vec::new(),
+    );
     let frames = [
         frame(100_000, &[0, 255, 255, 0, 127, 16]),
         frame(600_000, &[255, 128, 128, 255, 255, 255]),
@@ -267,9 +273,26 @@ fn frames_drive_the_heads_and_a_recording_plays_them_back_the_same() {
     assert!((seen[5][0].1 - (190.0 - 36.0)).abs() < 1e-3);
     // The shutter closed: dark.
     assert_eq!(seen[6][0].0.channels[4], 0.0);
-    // Posed: one spotlight, dark with the shutter closed.
-    live.pose(&mut show, 950_000);
-    assert_eq!(show.lights()[0].intensity, glam::Vec3::ZERO);
+    // Posed in a scene: one spotlight, dark with the shutter closed, and the head's
+    // body panned with it (the head's centre 0.14 m behind the lamp, along the beam).
+    let mut scene = crate::shafts::Scene::builder(
+        glam::Vec3::new(0.0, 1.0, 8.0),
+        glam::Vec3::ZERO,
+        40.0,
+        (8, 8),
+    )
+    .haze(0.1, 0.9)
+    .build()
+    .unwrap();
+    scene.show = show.clone();
+    live.pose(&mut scene, 950_000);
+    assert_eq!(scene.show.lights()[0].intensity, glam::Vec3::ZERO);
+    assert_eq!(scene.objects.list.len(), 1, "the body");
+    let body = scene.objects.list[0].shape.bounds().unwrap();
+    let beam = scene.show.lights()[0].light_from_world.row(2);
+    let head_centre = show.fixtures[0].position - 0.14 * beam;
+    assert!(body.min.cmple(head_centre).all() && body.max.cmpge(head_centre).all());
+    assert!(!scene.objects.list[0].casts_shadow);
 
     let mut w = recording::Writer::new(Vec::new()).unwrap();
     frames.iter().for_each(|f| w.write(f).unwrap());
@@ -279,8 +302,8 @@ fn frames_drive_the_heads_and_a_recording_plays_them_back_the_same() {
         .unwrap()
         .peekable();
     for (&t, expected) in times.iter().zip(&seen) {
-        played.play_to(&mut show, &mut reader, t).unwrap();
-        assert_eq!(&played.states(&show, t), expected, "at {t} us");
+        played.play_to(&mut scene, &mut reader, t).unwrap();
+        assert_eq!(&played.states(&scene.show, t), expected, "at {t} us");
     }
 }
 

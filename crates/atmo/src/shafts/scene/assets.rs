@@ -22,6 +22,9 @@ pub(super) struct Assets<'a> {
     gobos: RefCell<HashMap<PathBuf, Gobo>>,
     profiles: RefCell<HashMap<PathBuf, Arc<Photometry>>>,
     fixtures: RefCell<HashMap<(PathBuf, String), gdtf::GdtfFixture>>,
+    /// GDTF files that came inside an MVR file, by the path they are named by
+    /// (the MVR's path joined with the entry's name).
+    embedded: RefCell<HashMap<PathBuf, Arc<Vec<u8>>>>,
 }
 
 impl<'a> Assets<'a> {
@@ -32,6 +35,7 @@ impl<'a> Assets<'a> {
             gobos: RefCell::default(),
             profiles: RefCell::default(),
             fixtures: RefCell::default(),
+            embedded: RefCell::default(),
         }
     }
 
@@ -47,7 +51,7 @@ impl<'a> Assets<'a> {
 
     /// `load`, with what is held counted in its checks, then what it keeps counted too:
     /// refused if the files together pass the budget.
-    fn read<T>(
+    pub(super) fn read<T>(
         &self,
         what: &str,
         load: impl FnOnce() -> Result<T>,
@@ -90,6 +94,12 @@ impl<'a> Assets<'a> {
 
     /// The fixture of GDTF file `file` in DMX `mode`, its gobos looked up with
     /// `sampling`.
+    /// Names the GDTF file `bytes` (from an MVR file) `path`, for [`Assets::fixture`].
+    #[cfg(feature = "gdtf")]
+    pub(super) fn embed(&self, path: PathBuf, bytes: Arc<Vec<u8>>) {
+        self.embedded.borrow_mut().insert(path, bytes);
+    }
+
     pub(super) fn fixture(
         &self,
         file: &Path,
@@ -104,7 +114,13 @@ impl<'a> Assets<'a> {
                 let what = format!("GDTF file {}", key.0.display());
                 let fixture = self.read(
                     &what,
-                    || read_gdtf(&key.0, mode, sampling),
+                    || match self.embedded.borrow().get(&key.0) {
+                        #[cfg(feature = "gdtf")]
+                        Some(bytes) => {
+                            gdtf::read(bytes, &key.0.display().to_string(), mode, sampling)
+                        }
+                        _ => read_gdtf(&key.0, mode, sampling),
+                    },
                     |f| f.wheel.iter().map(Gobo::bytes).sum(),
                 )?;
                 self.fixtures.borrow_mut().insert(key, fixture.clone());
@@ -275,6 +291,7 @@ impl ObjectSpec {
         Ok(Object {
             shape,
             albedo: albedo(&field("albedo"), *a)?,
+            casts_shadow: true,
         })
     }
 }

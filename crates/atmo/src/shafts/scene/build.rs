@@ -418,6 +418,7 @@ impl FixtureSpec {
         let fixture = Fixture {
             white,
             patch,
+            body: self.body,
             name: self.name.clone(),
             position,
             axis,

@@ -63,6 +63,7 @@ impl Scene {
                 object: Vec::new(),
                 fixture: Vec::new(),
                 cue: Vec::new(),
+                mvr: None,
             },
             folder: PathBuf::from("."),
         }

@@ -27,6 +27,8 @@ use crate::view::{Camera, Fov};
 mod assets;
 mod build;
 mod builder;
+#[cfg(feature = "gdtf")]
+mod mvr;
 mod spec;
 
 #[cfg(feature = "obj")]
@@ -95,8 +97,15 @@ impl Scene {
         Scene::from_text_at(&Scene::read_text(path)?, path)
     }
 
-    /// The text of the scene file at `path` (through the bounded reader).
+    /// The text of the scene file at `path` (through the bounded reader); for an MVR
+    /// file (`.mvr`), the scene atmo makes around its rig ([`mvr_scene_text`]).
     pub fn read_text(path: &Path) -> Result<String> {
+        let is_mvr = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("mvr"));
+        if is_mvr {
+            return mvr_scene_text(path);
+        }
         crate::files::read_toml(path, "scene file")
     }
 
@@ -129,7 +138,7 @@ impl Scene {
 
     /// The scene a file's values describe, checked (each message names the key), its
     /// relative paths from `folder`: what a file and a [`SceneBuilder`] both become.
-    fn from_spec(spec: SceneSpec, folder: &Path) -> Result<Scene> {
+    fn from_spec(mut spec: SceneSpec, folder: &Path) -> Result<Scene> {
         let camera = spec.camera.validate()?;
         let haze = spec.haze.validate()?;
         let planes = PlaneSettings {
@@ -157,17 +166,27 @@ impl Scene {
             let light = l.validate(&format!("spotlight[{i}]"), unit, &assets)?;
             spotlights.push(share_profile(&spotlights, light));
         }
-        let list = spec
+        let mut list = spec
             .object
             .iter()
             .enumerate()
             .map(|(i, o)| o.validate(&format!("object[{i}]"), &assets))
             .collect::<Result<Vec<_>>>()?;
+        // The rig's fixtures after the file's own (their GDTF files inside the MVR's
+        // path, which is among the scene's files instead).
+        let mvr_file = spec.mvr.as_ref().map(|m| m.file.clone());
+        if let Some(m) = &spec.mvr {
+            let rig = load_mvr(m, &assets, &spec.fixture)?;
+            spec.fixture.extend(rig.fixtures);
+            list.extend(rig.objects);
+        }
         let show = show(&spec, unit, &assets)?;
         let wheels = spec
             .fixture
             .iter()
-            .flat_map(|f| f.gobo_wheel.iter().flatten().chain(f.gdtf.iter()));
+            .flat_map(|f| f.gobo_wheel.iter().flatten().chain(f.gdtf.iter()))
+            .filter(|f| mvr_file.as_ref().is_none_or(|m| !f.starts_with(m)))
+            .chain(mvr_file.as_ref());
         let gobos = spec.spotlight.iter().flat_map(|l| {
             let profile = l
                 .profile
@@ -179,7 +198,7 @@ impl Scene {
             ObjectSpec::Mesh { file, .. } => Some(file),
             _ => None,
         });
-        let scene = Scene {
+        let mut scene = Scene {
             camera,
             haze,
             spotlights,
@@ -195,6 +214,7 @@ impl Scene {
             files_bytes: assets.held(),
             show,
         };
+        scene.pose_bodies(false);
         scene.validate_planes()?;
         Ok(scene)
     }
@@ -218,6 +238,26 @@ impl Scene {
     /// have them then (the fixed spotlights do not change).
     pub fn at_time(&mut self, time_s: f32) {
         self.show.at_time(time_s);
+        self.pose_bodies(true);
+    }
+
+    /// The heads in `states` (one per fixture, with its gobo's turn, degrees), as a
+    /// desk drives them ([`Show::drive`]), at `time_s`, their bodies with them.
+    pub fn drive(&mut self, time_s: f32, states: &[(State, f32)]) {
+        self.show.drive(time_s, states);
+        self.pose_bodies(true);
+    }
+
+    /// The fixtures' bodies put where the show has the heads now: the last objects,
+    /// one a fixture that shows its body, after the scene's own (`replace`: those of
+    /// the last pose are there to be replaced; false only as the scene is made).
+    fn pose_bodies(&mut self, replace: bool) {
+        if replace {
+            let n = self.show.fixtures.iter().filter(|f| f.body).count();
+            let keep = self.objects.list.len().saturating_sub(n);
+            self.objects.list.truncate(keep);
+        }
+        self.objects.list.extend(self.show.bodies());
     }
 
     /// Checks the plane settings, and that the shadow maps they make for these lights
@@ -305,3 +345,96 @@ impl<'a> Iterator for Lights<'a> {
 }
 
 impl ExactSizeIterator for Lights<'_> {}
+
+/// The rig of `[mvr]`, its fixtures named apart from the file's `fixtures`.
+#[cfg(feature = "gdtf")]
+fn load_mvr(m: &MvrSpec, assets: &Assets, fixtures: &[FixtureSpec]) -> Result<mvr::Rig> {
+    let taken: Vec<String> = fixtures.iter().map(|f| f.name.clone()).collect();
+    m.load(assets, &taken)
+}
+
+/// Without atmo's `gdtf` feature, `[mvr]` is refused with a message saying so.
+#[cfg(not(feature = "gdtf"))]
+fn load_mvr(m: &MvrSpec, _: &Assets, _: &[FixtureSpec]) -> Result<MvrRig> {
+    Err(Error::Invalid(format!(
+        "mvr.file {}: MVR rigs need atmo's `gdtf` feature, which this build leaves out",
+        m.file.display()
+    )))
+}
+
+/// What a rig adds, where MVR files cannot be read.
+#[cfg(not(feature = "gdtf"))]
+struct MvrRig {
+    fixtures: Vec<FixtureSpec>,
+    objects: Vec<Object>,
+}
+
+/// The scene atmo makes around the MVR file at `path` when it is given as the scene:
+/// the camera in front of the rig (MVR's -y, atmo's +z) looking at it, haze filling its
+/// bounds and a metre more, a floor under it, its fixtures lit where atmo can light them
+/// and drawn dark where it cannot (`keep_dark`; a scene file's `[mvr]` can `replace`
+/// their GDTF files instead, docs/previz.md).
+#[cfg(feature = "gdtf")]
+pub fn mvr_scene_text(path: &Path) -> Result<String> {
+    let origin = path.display().to_string();
+    let bytes = crate::files::read_bounded(path, "MVR file", crate::files::DATA_LIMIT_BYTES)?;
+    let rig = crate::shafts::mvr::read(&bytes, &origin)?;
+    let points = rig
+        .triangles
+        .iter()
+        .flatten()
+        .copied()
+        .chain(rig.fixtures.iter().map(|f| f.origin));
+    let (mut lo, mut hi) = points.fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    );
+    if lo.x > hi.x {
+        (lo, hi) = (Vec3::new(-5.0, 0.0, -5.0), Vec3::new(5.0, 6.0, 5.0));
+    }
+    lo.y = lo.y.min(0.0);
+    let size = (hi - lo).max(Vec3::splat(1.0));
+    let look_at = Vec3::new(
+        0.5 * (lo.x + hi.x),
+        lo.y + 0.35 * size.y,
+        0.5 * (lo.z + hi.z),
+    );
+    let position = look_at + Vec3::new(0.0, 0.15 * size.y, 0.5 * size.z + 1.1 * size.x.max(size.y));
+    let (box_lo, box_hi) = (lo - Vec3::new(1.0, 0.0, 1.0), hi + Vec3::ONE);
+    let name = path
+        .file_name()
+        .map(|n| {
+            n.to_string_lossy()
+                .replace('\\', "\\\\")
+                .replace('"', "\\\"")
+        })
+        .unwrap_or_default();
+    let v = |p: Vec3| format!("[{:.3}, {:.3}, {:.3}]", p.x, p.y, p.z);
+    Ok(format!(
+        "# The scene atmo makes around {name}: its {fixtures} fixtures and its truss and \
+         scenery,\n# seen from the front; copy it to a file to change the camera or the haze.\n\
+         [camera]\nposition = {position}\nlook_at = {look_at}\nfov_deg = 50.0\nwidth = 1280\n\
+         height = 720\nfar_m = {far:.1}\n\n[haze]\nextinction = 0.03\nalbedo = 0.9\n\
+         phase = {{ kind = \"paper\", exponent = 16 }}\nbox = {{ min = {box_lo}, max = {box_hi} }}\n\n\
+         [display]\nexposure = 0.05\n\n[render]\nshadow_map = 256\n\n\
+         [mvr]\nfile = \"{name}\"\nkeep_dark = true\n\n\
+         [[object]]\nkind = \"plane\"\npoint = [0.0, {floor:.3}, 0.0]\nnormal = [0.0, 1.0, 0.0]\nalbedo = 0.3\n",
+        fixtures = rig.fixtures.len(),
+        position = v(position),
+        look_at = v(look_at),
+        far = 4.0 * size.max_element() + (position - look_at).length(),
+        box_lo = v(box_lo),
+        box_hi = v(box_hi),
+        floor = lo.y,
+    ))
+}
+
+/// Without atmo's `gdtf` feature, an MVR file as the scene is refused with a message
+/// saying so.
+#[cfg(not(feature = "gdtf"))]
+pub fn mvr_scene_text(path: &Path) -> Result<String> {
+    Err(Error::Invalid(format!(
+        "{}: MVR rigs need atmo's `gdtf` feature, which this build leaves out",
+        path.display()
+    )))
+}

@@ -20,6 +20,44 @@ pub(super) struct SceneSpec {
     pub(super) fixture: Vec<FixtureSpec>,
     #[serde(default)]
     pub(super) cue: Vec<CueSpec>,
+    /// A rig from an MVR file: its fixtures after `fixture`'s, its truss and scenery
+    /// among the objects.
+    pub(super) mvr: Option<MvrSpec>,
+}
+
+/// `[mvr]`: the MVR file and what to make of it (docs/previz.md).
+#[derive(Deserialize)]
+#[cfg_attr(not(feature = "gdtf"), allow(dead_code))]
+#[serde(deny_unknown_fields)]
+pub(super) struct MvrSpec {
+    pub(super) file: PathBuf,
+    /// GDTF files that stand in for the MVR's own, by the name the MVR gives them.
+    #[serde(default)]
+    pub(super) replace: Vec<ReplaceSpec>,
+    /// Draw fixtures whose GDTF atmo cannot light (no beam, no such mode) dark, instead
+    /// of refusing the rig.
+    #[serde(default)]
+    pub(super) keep_dark: bool,
+    /// The truss's and the scenery's albedo.
+    #[serde(default = "truss_albedo")]
+    pub(super) albedo: f32,
+    /// Whether the fixtures' bodies are drawn.
+    #[serde(default = "yes")]
+    pub(super) bodies: bool,
+}
+
+fn truss_albedo() -> f32 {
+    0.35
+}
+
+/// A GDTF file and mode for the MVR's fixtures of type `spec`.
+#[derive(Deserialize)]
+#[cfg_attr(not(feature = "gdtf"), allow(dead_code))]
+#[serde(deny_unknown_fields)]
+pub(super) struct ReplaceSpec {
+    pub(super) spec: String,
+    pub(super) gdtf: PathBuf,
+    pub(super) mode: String,
 }
 
 /// A moving head ([`super::show::Fixture`]); angles in degrees. With `gdtf` the file
@@ -57,6 +95,13 @@ pub(super) struct FixtureSpec {
     /// Where a desk drives it: `{ universe = 1, address = 1 }`, and for a fixture
     /// without a GDTF file its personality's `channels`.
     pub(super) dmx: Option<DmxSpec>,
+    /// Whether its body (base, yoke, head) is drawn; default true.
+    #[serde(default = "yes")]
+    pub(super) body: bool,
+}
+
+pub(super) fn yes() -> bool {
+    true
 }
 
 /// A fixture's DMX patch, as the scene gives it ([`crate::shafts::dmx::Patch`]).
