@@ -226,9 +226,9 @@ PRISM_FACETS        </Slot>
     </Wheels>
     <PhysicalDescriptions/>
     <Models>
-      <Model Name="Base" Length="0.40" Width="0.30" Height="0.12" PrimitiveType="Cube"/>
-      <Model Name="Yoke" Length="0.40" Width="0.10" Height="0.35" PrimitiveType="Cube"/>
-      <Model Name="Head" Length="0.25" Width="0.25" Height="0.35" PrimitiveType="Cylinder"/>
+      <Model Name="Base" Length="0.40" Width="0.30" Height="0.12" PrimitiveType="Base" File="base"/>
+      <Model Name="Yoke" Length="0.40" Width="0.10" Height="0.31" PrimitiveType="Yoke" File="yoke"/>
+      <Model Name="Head" Length="0.28" Width="0.28" Height="0.32" PrimitiveType="Head" File="head"/>
     </Models>
     <Geometries>
       <Geometry Name="Base" Model="Base" Position="{1,0,0,0}{0,1,0,0}{0,0,1,0}{0,0,0,1}">
@@ -317,17 +317,53 @@ GDTF_DESCRIPTION = GDTF_DESCRIPTION.replace(
     "PRISM_FACETS", "".join(prism_facet(8.0, a) for a in (90.0, 210.0, 330.0)))
 
 
+def boxes_3ds(boxes):
+    """A 3DS file (main, editor, one object, its mesh) of axis-aligned boxes given as
+    ((x0, y0, z0), (x1, y1, z1)), metres: the models of the spot's geometries."""
+    def chunk(kind, body):
+        return struct.pack("<HI", kind, len(body) + 6) + body
+    vertices, faces = [], []
+    for lo, hi in boxes:
+        base = len(vertices)
+        for i in range(8):
+            vertices.append(tuple(hi[k] if i >> k & 1 else lo[k] for k in range(3)))
+        for a, b, c, d in [(0, 2, 6, 4), (1, 5, 7, 3), (0, 4, 5, 1), (2, 3, 7, 6), (0, 1, 3, 2), (4, 6, 7, 5)]:
+            faces += [(base + a, base + b, base + c), (base + a, base + c, base + d)]
+    v = struct.pack("<H", len(vertices)) + b"".join(struct.pack("<3f", *p) for p in vertices)
+    f = struct.pack("<H", len(faces)) + b"".join(struct.pack("<4H", *t, 0) for t in faces)
+    mesh = chunk(0x4110, v) + chunk(0x4120, f)
+    return chunk(0x4D4D, chunk(0x3D3D, chunk(0x4000, b"body\0" + chunk(0x4100, mesh))))
+
+
+# The spot's models, each in its geometry's frame (z up; the fixture hangs, its beam
+# along -z): the base around its origin; the yoke from under the base (its origin, the
+# pan pivot) down past the head's tilt pivot 0.25 m below; the head around that pivot,
+# its lens 3 cm past the lamp (the Beam geometry, 0.17 m below the pivot).
+SPOT_MODELS = {
+    "base": [((-0.20, -0.15, -0.06), (0.20, 0.15, 0.06))],
+    "yoke": [
+        ((-0.20, -0.05, -0.03), (0.20, 0.05, 0.0)),
+        ((-0.20, -0.05, -0.31), (-0.17, 0.05, -0.03)),
+        ((0.17, -0.05, -0.31), (0.20, 0.05, -0.03)),
+    ],
+    "head": [((-0.14, -0.14, -0.20), (0.14, 0.14, 0.12))],
+}
+
+
 def gdtf_spot(path):
     """A GDTF fixture of a moving spot: description.xml (a beam of 12,000 lm at 6500 K,
     18 degrees to half and 24 to a tenth, a zoom of 8-36 degrees, pan -270-270, tilt
     -135-135, a gobo wheel with the spokes and the dots, a prism wheel with a
-    three-facet prism; a second, basic mode) and the wheel's images. Fixed timestamps, so the file is the same byte for byte."""
+    three-facet prism; a second, basic mode), the wheel's images and the models of its
+    base, yoke and head (SPOT_MODELS). Fixed timestamps, so the file is the same byte for byte."""
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
         def put(name, data):
             info = zipfile.ZipInfo(name, date_time=(2026, 12, 2, 0, 0, 0))
             info.compress_type = zipfile.ZIP_DEFLATED
             z.writestr(info, data)
         put("description.xml", GDTF_DESCRIPTION)
+        for name, boxes in SPOT_MODELS.items():
+            put("models/3ds/%s.3ds" % name, boxes_3ds(boxes))
         for gobo in ("spokes", "dots"):
             with open(os.path.join(HERE, "gobos", gobo + ".png"), "rb") as f:
                 put("wheels/%s.png" % gobo, f.read())

@@ -55,6 +55,9 @@ pub struct GdtfFixture {
     /// Where the beam starts in the fixture's frame (z up), m: its `Beam` geometry's
     /// place through the geometries it hangs from (each one's `Position`).
     pub beam_offset: Vec3,
+    /// The body its geometries' models draw ([`super::gdtf_body`]; empty without any).
+    #[cfg(feature = "gdtf")]
+    pub body: super::gdtf_body::GdtfBody,
 }
 
 /// A prism as a GDTF wheel's slot gives it: one beam direction a facet.
@@ -352,7 +355,29 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
     let dmx = super::dmx::gdtf_mode::read(*dmx_mode, &wheels)
         .map_err(|why| fail(format!("DMX mode {mode:?}: {why}")))?;
     dmx.validate(&format!("GDTF file {origin}: DMX mode {mode:?}"))?;
+    // The geometries the mode's pan and tilt channels move.
+    let moved_by = |attribute: &str| {
+        dmx_mode
+            .descendants()
+            .filter(|n| n.has_tag_name("DMXChannel"))
+            .find(|c| {
+                c.descendants().any(|l| {
+                    l.has_tag_name("LogicalChannel") && l.attribute("Attribute") == Some(attribute)
+                })
+            })
+            .and_then(|c| c.attribute("Geometry"))
+    };
+    let body = super::gdtf_body::read(fixture, moved_by("Pan"), moved_by("Tilt"), &mut |file| {
+        let name = if file.contains('.') {
+            format!("models/3ds/{file}")
+        } else {
+            format!("models/3ds/{file}.3ds")
+        };
+        zip_entry(&mut zip, &name, crate::files::DATA_LIMIT_BYTES)
+    })
+    .map_err(|why| fail(format!("the fixture's models: {why}")))?;
     Ok(GdtfFixture {
+        body,
         beam_offset: beam_offset(beam),
         dmx,
         name: fixture.attribute("Name").unwrap_or("").to_string(),
@@ -403,20 +428,10 @@ fn facet_beam(text: &str) -> std::result::Result<Vec3, String> {
 /// translation in the last column); a `Position` that does not parse counts as none.
 #[cfg(feature = "gdtf")]
 fn beam_offset(beam: roxmltree::Node) -> Vec3 {
-    let matrix = |text: &str| -> Option<glam::Mat4> {
-        let v: Vec<f32> = text
-            .split(['{', '}', ','])
-            .map(str::trim)
-            .filter(|t| !t.is_empty())
-            .map(|t| t.parse::<f32>().ok().filter(|x| x.is_finite()))
-            .collect::<Option<_>>()?;
-        let rows: [f32; 16] = v.try_into().ok()?;
-        Some(glam::Mat4::from_cols_array(&rows).transpose())
-    };
     let chain: Vec<glam::Mat4> = beam
         .ancestors()
         .take_while(|n| !n.has_tag_name("Geometries"))
-        .filter_map(|n| n.attribute("Position").and_then(matrix))
+        .filter_map(|n| n.attribute("Position").and_then(super::gdtf_body::position))
         .collect();
     let world = chain.iter().rev().fold(glam::Mat4::IDENTITY, |m, p| m * *p);
     let offset = world.w_axis.truncate();

@@ -32,6 +32,8 @@ pub mod adaptive;
 pub mod dmx;
 pub mod edits;
 pub mod gdtf;
+#[cfg(feature = "gdtf")]
+pub mod gdtf_body;
 pub mod haze;
 #[cfg(feature = "gdtf")]
 pub mod mvr;

@@ -133,6 +133,9 @@ pub struct Fixture {
     pub patch: Option<Patch>,
     /// Whether its body is drawn ([`Fixture::body`]).
     pub body: bool,
+    /// The body its GDTF file draws, if it has models; else atmo's generic head.
+    #[cfg(feature = "gdtf")]
+    pub model: Option<std::sync::Arc<super::gdtf_body::GdtfBody>>,
 }
 
 /// A prism in a head's beam: `facets` copies of the beam, each turned `angle_deg` off
@@ -427,9 +430,57 @@ pub fn body_object(position: Vec3, axis: Vec3, front: Vec3, pan_deg: f32, tilt_d
 }
 
 impl Fixture {
-    /// The fixture's body at `pan` and `tilt`, degrees ([`body_object`]).
+    /// The fixture's body at `pan` and `tilt`, degrees: its GDTF file's models
+    /// ([`Fixture::model_at`]) or atmo's generic head ([`body_object`]).
     pub fn body(&self, pan_deg: f32, tilt_deg: f32) -> Object {
+        #[cfg(feature = "gdtf")]
+        if let Some(model) = &self.model {
+            return self.model_at(model, pan_deg, tilt_deg);
+        }
         body_object(self.position, self.axis, self.front, pan_deg, tilt_deg)
+    }
+
+    /// The GDTF models of `model` posed: GDTF's frame (z up) turned into the fixture's
+    /// (x along `axis x front`, y along `front`, z against `axis`), the tilt pivot (or,
+    /// without one, the pan pivot) at the lamp's `position`; parts under the tilt axis
+    /// tilt about its pivot, then everything under the pan axis pans about its pivot,
+    /// as [`Fixture::aim`] turns the beam. Seen and lit; no shadow.
+    #[cfg(feature = "gdtf")]
+    pub fn model_at(
+        &self,
+        model: &super::gdtf_body::GdtfBody,
+        pan_deg: f32,
+        tilt_deg: f32,
+    ) -> Object {
+        use super::gdtf_body::Turns;
+        let side = self.axis.cross(self.front);
+        let turn = |p: Vec3| side * p.x + self.front * p.y - self.axis * p.z;
+        let origin = self.position - turn(model.tilt_pivot);
+        let (pan_pivot, tilt_pivot) = (origin + turn(model.pan_pivot), self.position);
+        let pan = Quat::from_axis_angle(self.axis, pan_deg.to_radians());
+        let tilt = Quat::from_axis_angle(side, tilt_deg.to_radians());
+        let triangles = model
+            .parts
+            .iter()
+            .flat_map(|part| {
+                part.triangles.iter().map(move |t| {
+                    t.map(|p| {
+                        let w = origin + turn(p);
+                        let w = match part.turns {
+                            Turns::Not => return w,
+                            Turns::Pan => w,
+                            Turns::PanAndTilt => tilt_pivot + tilt * (w - tilt_pivot),
+                        };
+                        pan_pivot + pan * (w - pan_pivot)
+                    })
+                })
+            })
+            .collect();
+        Object {
+            shape: Shape::Mesh(Mesh::new(triangles)),
+            albedo: Vec3::splat(BODY_ALBEDO),
+            casts_shadow: false,
+        }
     }
 
     /// The beam's direction and the head's up (unit) at `pan` and `tilt`, degrees.
@@ -592,6 +643,8 @@ pub(crate) mod tests {
             white: Vec3::ONE,
             patch: None,
             body: false,
+            #[cfg(feature = "gdtf")]
+            model: None,
         }
     }
 

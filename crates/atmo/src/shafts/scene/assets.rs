@@ -121,7 +121,19 @@ impl<'a> Assets<'a> {
                         }
                         _ => read_gdtf(&key.0, mode, sampling),
                     },
-                    |f| f.wheel.iter().map(Gobo::bytes).sum(),
+                    |f| {
+                        let gobos: u64 = f.wheel.iter().map(Gobo::bytes).sum();
+                        #[cfg(feature = "gdtf")]
+                        let models: u64 = f
+                            .body
+                            .parts
+                            .iter()
+                            .map(|p| 36 * p.triangles.len() as u64)
+                            .sum();
+                        #[cfg(not(feature = "gdtf"))]
+                        let models = 0;
+                        gobos + models
+                    },
                 )?;
                 self.fixtures.borrow_mut().insert(key, fixture.clone());
                 fixture

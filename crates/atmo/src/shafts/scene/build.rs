@@ -419,6 +419,8 @@ impl FixtureSpec {
             white,
             patch,
             body: self.body,
+            #[cfg(feature = "gdtf")]
+            model: light.body.take().map(std::sync::Arc::new),
             name: self.name.clone(),
             position,
             axis,
@@ -471,6 +473,8 @@ impl FixtureSpec {
             kelvin: None,
             prism: None,
             dmx_mode: None,
+            #[cfg(feature = "gdtf")]
+            body: None,
         })
     }
 
@@ -548,6 +552,8 @@ impl FixtureSpec {
             kelvin: Some(file.kelvin),
             prism,
             dmx_mode: Some(file.dmx),
+            #[cfg(feature = "gdtf")]
+            body: Some(file.body).filter(|b| !b.is_empty()),
         })
     }
 }

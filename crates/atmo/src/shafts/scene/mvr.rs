@@ -73,7 +73,15 @@ impl MvrSpec {
             }
             fixtures.push(FixtureSpec {
                 name,
-                position: f.place(light.beam_offset).to_array(),
+                // The lamp where the body puts it: the head's tilt pivot with models,
+                // else the beam's own place.
+                position: f
+                    .place(if light.body.is_empty() {
+                        light.beam_offset
+                    } else {
+                        light.body.tilt_pivot
+                    })
+                    .to_array(),
                 axis: f.axis.to_array(),
                 front: f.front.to_array(),
                 gdtf: Some(gdtf),

@@ -170,6 +170,9 @@ pub(super) struct Light {
     pub(super) limits: Limits,
     /// The DMX mode a GDTF file gives.
     pub(super) dmx_mode: Option<crate::shafts::dmx::Mode>,
+    /// The body a GDTF file's models draw, if it has any.
+    #[cfg(feature = "gdtf")]
+    pub(super) body: Option<crate::shafts::gdtf_body::GdtfBody>,
 }
 
 pub(super) fn down() -> [f32; 3] {
