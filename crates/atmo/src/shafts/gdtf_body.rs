@@ -76,27 +76,13 @@ fn primitive(kind: &str, size: Vec3) -> Vec<[Vec3; 3]> {
             })
             .collect();
     }
-    let corner = |i: usize| {
-        Vec3::new(
-            if i & 1 == 1 { h.x } else { -h.x },
-            if i & 2 == 2 { h.y } else { -h.y },
-            if i & 4 == 4 { h.z } else { -h.z },
-        )
-    };
-    [
-        [0, 2, 6, 4],
-        [1, 5, 7, 3],
-        [0, 4, 5, 1],
-        [2, 3, 7, 6],
-        [0, 1, 3, 2],
-        [4, 6, 7, 5],
-    ]
-    .iter()
-    .flat_map(|f| {
-        let [a, b, c, d] = f.map(corner);
-        [[a, b, c], [a, c, d]]
-    })
-    .collect()
+    let mut out = Vec::with_capacity(12);
+    crate::shafts::show::cuboid(
+        &mut out,
+        Vec3::ZERO,
+        [(Vec3::X, h.x), (Vec3::Y, h.y), (Vec3::Z, h.z)],
+    );
+    out
 }
 
 /// Gives a model file's bytes by its `File` name, `None` where the zip lacks it.
@@ -277,6 +263,25 @@ mod tests {
             // The base (highest above the head, 0.31 + 0.06 up to 0.37 + 0.06) stays.
             let top = |o: &crate::shafts::objects::Object| o.shape.bounds().unwrap().max.y;
             assert!((top(&object) - top(&base_at_rest)).abs() < 1e-4);
+        }
+    }
+
+    /// A model without a file is its primitive, centred, measuring its dimensions.
+    #[test]
+    fn primitives_measure_their_dimensions() {
+        let size = Vec3::new(0.4, 0.3, 0.2);
+        for (kind, count) in [("Cube", 12), ("Cylinder", 64), ("Head", 12)] {
+            let tris = primitive(kind, size);
+            assert_eq!(tris.len(), count, "{kind}");
+            let (lo, hi) = tris.iter().flatten().fold(
+                (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+                |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+            );
+            assert!(
+                (hi - lo - size).abs().max_element() < 1e-6,
+                "{kind}: {lo} .. {hi}"
+            );
+            assert!((hi + lo).abs().max_element() < 1e-6, "{kind} is centred");
         }
     }
 }

@@ -364,8 +364,8 @@ impl Show {
 pub const BODY_ALBEDO: f32 = 0.08;
 
 /// Adds the twelve triangles of a cuboid at `centre` whose half-extents run along
-/// three perpendicular unit vectors.
-fn cuboid(out: &mut Vec<[Vec3; 3]>, centre: Vec3, half: [(Vec3, f32); 3]) {
+/// three perpendicular unit vectors (also a GDTF model's box primitive).
+pub(crate) fn cuboid(out: &mut Vec<[Vec3; 3]>, centre: Vec3, half: [(Vec3, f32); 3]) {
     let corner = |i: usize| {
         half.iter().enumerate().fold(centre, |p, (k, &(dir, h))| {
             p + dir * if i >> k & 1 == 1 { h } else { -h }
