@@ -278,6 +278,28 @@ impl Mesh {
         self.nodes.iter().map(|n| (n.bounds, n.start, n.count))
     }
 
+    /// The triangles (as [`Mesh::triangles`] gives them) under the BVH's leaves whose
+    /// every ancestor's bounds `keep` accepts: a rejected node skips its subtree, so a
+    /// light's shadow map draws only the part of a large mesh its cone may meet.
+    pub fn triangles_within(&self, keep: impl Fn(&Aabb) -> bool) -> Vec<&[Vec3; 3]> {
+        let mut out = Vec::new();
+        let mut stack = vec![0u32];
+        while let Some(index) = stack.pop() {
+            let node = self.nodes[index as usize];
+            if !keep(&node.bounds) {
+                continue;
+            }
+            if node.count == 0 {
+                stack.extend([index + 1, node.start]);
+            } else {
+                out.extend(
+                    &self.triangles[node.start as usize..(node.start + node.count) as usize],
+                );
+            }
+        }
+        out
+    }
+
     /// True when the mesh has no triangles.
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()

@@ -54,26 +54,32 @@ impl Objects {
 
     /// The indices in `list` of the objects [`Objects::in_cone`] gives.
     pub fn indices_in_cone(&self, light: &super::spotlight::Spotlight) -> Vec<u32> {
-        let (sin, cos) = light.field_half.sin_cos();
-        let axis = light.light_from_world.row(2);
         (0..self.list.len() as u32)
             .filter(|&i| self.list[i as usize].casts_shadow)
-            .filter(|&i| match self.list[i as usize].shape.bounds() {
-                None => true,
-                Some(b) => {
-                    // A sphere meets the cone when its centre is within its radius of it:
-                    // the angle test widened by the radius.
-                    let centre = 0.5 * (b.min + b.max);
-                    let radius = 0.5 * (b.max - b.min).length();
-                    let w = centre - light.position;
-                    let along = w.dot(axis);
-                    let across = (w.length_squared() - along * along).max(0.0).sqrt();
-                    w.length() <= radius || across * cos - along * sin <= radius
-                }
+            .filter(|&i| {
+                self.list[i as usize]
+                    .shape
+                    .bounds()
+                    .is_none_or(|b| may_meet_cone(light, &b))
             })
             .collect()
     }
+}
 
+/// Whether the box `b` may meet `light`'s field cone: its bounding sphere does (the
+/// centre within the radius of the cone, the angle test widened by the radius).
+pub fn may_meet_cone(light: &super::spotlight::Spotlight, b: &crate::geometry::Aabb) -> bool {
+    let (sin, cos) = light.field_half.sin_cos();
+    let axis = light.light_from_world.row(2);
+    let centre = 0.5 * (b.min + b.max);
+    let radius = 0.5 * (b.max - b.min).length();
+    let w = centre - light.position;
+    let along = w.dot(axis);
+    let across = (w.length_squared() - along * along).max(0.0).sqrt();
+    w.length() <= radius || across * cos - along * sin <= radius
+}
+
+impl Objects {
     /// True when any surface lies on the ray with `t` in `(RAY_EPSILON, t_max)`: the
     /// shadow ray of the reference integrator.
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
