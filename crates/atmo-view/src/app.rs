@@ -83,8 +83,8 @@ pub fn run(options: Options, mode: Box<dyn Mode>) -> Result<Timings> {
 pub struct Timings {
     pub frame_ms: Vec<f64>,
     pub method_ms: Vec<f64>,
-    /// The mode's own figures at the end ([`crate::Mode::close`]), by name.
-    pub figures: Vec<(&'static str, f64)>,
+    /// The mode's own figures at the end ([`crate::Mode::close`]).
+    pub figures: crate::Figures,
 }
 
 struct App {

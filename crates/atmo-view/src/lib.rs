@@ -77,10 +77,19 @@ pub trait Mode {
         None
     }
     /// Ends the mode when the window closes (the stage writes its DMX recording) and
-    /// gives its own figures, by name, for `--timings`.
-    fn close(&mut self) -> Result<Vec<(&'static str, f64)>> {
-        Ok(Vec::new())
+    /// gives its own figures for `--timings`.
+    fn close(&mut self) -> Result<Figures> {
+        Ok(Figures::default())
     }
+}
+
+/// A mode's own figures at the end of a run ([`Mode::close`]), by name: single values,
+/// and series (ms) that `--timings` gives as median and 95th percentile as it gives the
+/// frame times.
+#[derive(Debug, Clone, Default)]
+pub struct Figures {
+    pub values: Vec<(&'static str, f64)>,
+    pub series: Vec<(&'static str, Vec<f64>)>,
 }
 
 /// The limit of an orbit above and below the point looked at, degrees.

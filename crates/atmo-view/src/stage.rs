@@ -29,7 +29,7 @@ use glam::Vec3;
 
 use crate::input::{Input, Key, Script};
 use crate::panel::{tone_combo, tone_name};
-use crate::{Mode, Picture};
+use crate::{Figures, Mode, Picture};
 
 /// Show time a frame advances while the show plays, s (the stills' 24 frames/s).
 const SHOW_STEP_S: f32 = 1.0 / 24.0;
@@ -185,22 +185,15 @@ impl StageMode {
         Ok(())
     }
 
-    /// Listening's figures so far: frames taken and dropped, and the latency from a
-    /// frame's arrival to its first picture (median and 95th percentile, ms).
+    /// Listening's figures so far: frames taken and dropped, the latency from each
+    /// frame's arrival to its first picture.
     pub fn desk_figures(&self) -> Option<DeskFigures> {
         let desk = self.desk.as_ref()?;
-        let mut latency = desk.latency_ms.clone();
-        latency.sort_by(f64::total_cmp);
-        let at = |q: f64| {
-            (!latency.is_empty())
-                .then(|| latency[((latency.len() - 1) as f64 * q).round() as usize])
-        };
         Some(DeskFigures {
             posed_s: desk.posed_us as f64 * 1e-6,
             frames: desk.frames,
             dropped: desk.dropped,
-            latency_median_ms: at(0.5),
-            latency_p95_ms: at(0.95),
+            latency_ms: desk.latency_ms.clone(),
             stats: desk.receiver.stats().0,
         })
     }
@@ -509,9 +502,8 @@ pub struct DeskFigures {
     /// Frames (changed universes) applied, and dropped because the window fell behind.
     pub frames: u64,
     pub dropped: u64,
-    /// From a frame's arrival to the end of the first picture drawn with it, ms.
-    pub latency_median_ms: Option<f64>,
-    pub latency_p95_ms: Option<f64>,
+    /// From each frame's arrival to the end of the first picture drawn with it, ms.
+    pub latency_ms: Vec<f64>,
     /// The listener's counts.
     pub stats: Stats,
 }
@@ -762,14 +754,16 @@ impl Mode for StageMode {
         if let Some(status) = &self.status {
             ui.label(status);
         }
-        if let Some(f) = self.desk_figures() {
+        if let Some(desk) = &self.desk {
+            let stats = desk.receiver.stats().0;
             ui.label(format!(
                 "DMX: {} frames ({} datagrams, {} ignored){}",
-                f.frames,
-                f.stats.datagrams,
-                f.stats.ignored,
-                f.latency_median_ms
-                    .map_or(String::new(), |ms| format!("; {ms:.0} ms to the picture"))
+                desk.frames,
+                stats.datagrams,
+                stats.ignored,
+                desk.latency_ms.last().map_or(String::new(), |ms| format!(
+                    "; the last {ms:.0} ms to the picture"
+                ))
             ));
         }
         let duration = self.scene.show.duration();
@@ -846,21 +840,21 @@ impl Mode for StageMode {
 
     /// Stops listening to the desk (its recording written in place) and gives the
     /// DMX figures: frames taken and dropped, latency to the picture.
-    fn close(&mut self) -> Result<Vec<(&'static str, f64)>> {
+    fn close(&mut self) -> Result<Figures> {
         let Some(f) = self.desk_figures() else {
-            return Ok(Vec::new());
+            return Ok(Figures::default());
         };
         self.stop_listening()?;
-        let mut figures = vec![
-            ("dmx_frames", f.frames as f64),
-            ("dmx_dropped", f.dropped as f64),
-            ("dmx_datagrams", f.stats.datagrams as f64),
-            ("dmx_ignored", f.stats.ignored as f64),
-            ("dmx_posed_s", f.posed_s),
-        ];
-        figures.extend(f.latency_median_ms.map(|v| ("dmx_latency_median_ms", v)));
-        figures.extend(f.latency_p95_ms.map(|v| ("dmx_latency_p95_ms", v)));
-        Ok(figures)
+        Ok(Figures {
+            values: vec![
+                ("dmx_frames", f.frames as f64),
+                ("dmx_dropped", f.dropped as f64),
+                ("dmx_datagrams", f.stats.datagrams as f64),
+                ("dmx_ignored", f.stats.ignored as f64),
+                ("dmx_posed_s", f.posed_s),
+            ],
+            series: vec![("dmx_latency", f.latency_ms)],
+        })
     }
 }
 

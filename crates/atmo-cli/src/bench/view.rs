@@ -376,7 +376,7 @@ pub fn run(quick: bool, json: bool, backends: &[&str], scenes: &Path) -> Result<
         let (times, sent) = desk_window(&dir, rig_arg, backend, preview, desk_frames)?;
         let frame = &times["frame"];
         let median_ms = frame["median_ms"].as_f64().context("a frame time")?;
-        let latency = times["dmx_latency_median_ms"].as_f64();
+        let latency = times["dmx_latency"]["median_ms"].as_f64();
         emit(
             json,
             json!({
@@ -389,7 +389,7 @@ pub fn run(quick: bool, json: bool, backends: &[&str], scenes: &Path) -> Result<
                 "method_median_ms": times["method"]["median_ms"],
                 "dmx_frames_sent": sent, "dmx_frames": times["dmx_frames"],
                 "dmx_latency_median_ms": latency,
-                "dmx_latency_p95_ms": times["dmx_latency_p95_ms"],
+                "dmx_latency_p95_ms": times["dmx_latency"]["p95_ms"],
                 "baseline": whole_still,
                 "baseline_median_ms": rig_still, "ratio": rig_still / median_ms,
             }),

@@ -220,8 +220,11 @@ pub fn run(args: ViewArgs) -> Result<()> {
             "frame": stats(&timings.frame_ms),
             "method": stats(&timings.method_ms),
         });
-        for (name, value) in &timings.figures {
+        for (name, value) in &timings.figures.values {
             line[*name] = serde_json::json!(value);
+        }
+        for (name, series) in &timings.figures.series {
+            line[*name] = stats(series);
         }
         outln!("{line}");
     }
