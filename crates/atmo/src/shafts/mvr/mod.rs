@@ -238,7 +238,9 @@ impl<'i> Reader<'_, 'i> {
         }
     }
 
-    /// The objects in `node`'s `ChildList`, placed by `at`.
+    /// What `node` holds in its `ChildList`s and `Geometries`, placed by `at`: groups
+    /// and objects (their geometry) recursively, fixtures, geometry files, and symbols
+    /// (their `Symdef`'s list), every level at most [`MAX_DEPTH`] deep.
     fn children(
         &mut self,
         node: roxmltree::Node<'i, 'i>,
@@ -246,16 +248,34 @@ impl<'i> Reader<'_, 'i> {
         depth: usize,
     ) -> std::result::Result<(), String> {
         if depth > MAX_DEPTH {
-            return Err(format!("objects nested deeper than {MAX_DEPTH}"));
+            return Err(format!(
+                "objects and symbols nested deeper than {MAX_DEPTH}"
+            ));
         }
-        for list in node.children().filter(|n| n.has_tag_name("ChildList")) {
+        let lists = node
+            .children()
+            .filter(|n| n.has_tag_name("ChildList") || n.has_tag_name("Geometries"));
+        for list in lists {
             for child in list.children().filter(|n| n.is_element()) {
                 let here = at.then(&self.placement(child)?);
                 match child.tag_name().name() {
-                    "GroupObject" => self.children(child, &here, depth + 1)?,
+                    "GroupObject" | "Truss" | "SceneObject" | "VideoScreen" | "Support" => {
+                        self.children(child, &here, depth + 1)?
+                    }
                     "Fixture" => self.fixture(child, &here)?,
-                    "Truss" | "SceneObject" | "VideoScreen" | "Support" => {
-                        self.geometries(child, &here, depth + 1)?
+                    "Geometry3D" => {
+                        let file = child
+                            .attribute("fileName")
+                            .or(child.attribute("file"))
+                            .unwrap_or("");
+                        self.geometry_file(file, &here)?;
+                    }
+                    "Symbol" => {
+                        let uuid = child.attribute("symdef").unwrap_or("");
+                        let def = *self.symdefs.get(uuid).ok_or_else(|| {
+                            format!("a Symbol names Symdef {uuid:?}, which the file lacks")
+                        })?;
+                        self.children(def, &here, depth + 1)?;
                     }
                     _ => {}
                 }
@@ -331,44 +351,6 @@ impl<'i> Reader<'_, 'i> {
             ));
         }
         crate::shafts::gdtf::zip_entry(&mut self.zip, name, limit)
-    }
-
-    /// The geometry of an object's `Geometries` (files and symbols), placed by `at`.
-    fn geometries(
-        &mut self,
-        node: roxmltree::Node<'i, 'i>,
-        at: &Placement,
-        depth: usize,
-    ) -> std::result::Result<(), String> {
-        if depth > MAX_DEPTH {
-            return Err(format!("symbols nested deeper than {MAX_DEPTH}"));
-        }
-        let lists = node
-            .children()
-            .filter(|n| n.has_tag_name("Geometries") || n.has_tag_name("ChildList"));
-        for list in lists {
-            for g in list.children().filter(|n| n.is_element()) {
-                let here = at.then(&self.placement(g)?);
-                match g.tag_name().name() {
-                    "Geometry3D" => {
-                        let file = g
-                            .attribute("fileName")
-                            .or(g.attribute("file"))
-                            .unwrap_or("");
-                        self.geometry_file(file, &here)?;
-                    }
-                    "Symbol" => {
-                        let uuid = g.attribute("symdef").unwrap_or("");
-                        let def = *self.symdefs.get(uuid).ok_or_else(|| {
-                            format!("a Symbol names Symdef {uuid:?}, which the file lacks")
-                        })?;
-                        self.geometries(def, &here, depth + 1)?;
-                    }
-                    _ => {}
-                }
-            }
-        }
-        Ok(())
     }
 
     fn geometry_file(&mut self, file: &str, at: &Placement) -> std::result::Result<(), String> {
