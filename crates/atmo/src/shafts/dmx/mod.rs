@@ -284,6 +284,20 @@ impl Mode {
                     })
                     .collect()
             };
+            // A wheel: bands of values from each `(dmx_from, slot)`.
+            let wheel = |attribute, bands: Vec<(u32, usize)>| {
+                vec![Function {
+                    sets: bands
+                        .into_iter()
+                        .map(|(dmx_from, slot)| ChannelSet {
+                            dmx_from,
+                            slot,
+                            closed: false,
+                        })
+                        .collect(),
+                    ..function(attribute, [0.0, 0.0])
+                }]
+            };
             // A speed: stopped, one way slow to fast, stopped, the other way.
             let spin = |attribute| {
                 let slow = 360.0 / 127.0;
@@ -310,28 +324,15 @@ impl Mode {
                 "cyan" => vec![function(Cyan, [0.0, 1.0])],
                 "magenta" => vec![function(Magenta, [0.0, 1.0])],
                 "yellow" => vec![function(Yellow, [0.0, 1.0])],
-                "gobo" => vec![Function {
-                    sets: (0..=slots)
-                        .map(|slot| ChannelSet {
-                            dmx_from: (slot * 256 / (slots + 1)) as u32,
-                            slot,
-                            closed: false,
-                        })
+                "gobo" => wheel(
+                    Gobo,
+                    (0..=slots)
+                        .map(|slot| ((slot * 256 / (slots + 1)) as u32, slot))
                         .collect(),
-                    ..function(Gobo, [0.0, 0.0])
-                }],
+                ),
                 "gobo_index" => vec![function(GoboIndex, [0.0, 360.0])],
                 "gobo_spin" => spin(GoboSpin),
-                "prism" => vec![Function {
-                    sets: [(0, 0), (128, 1)]
-                        .map(|(dmx_from, slot)| ChannelSet {
-                            dmx_from,
-                            slot,
-                            closed: false,
-                        })
-                        .to_vec(),
-                    ..function(Prism, [0.0, 0.0])
-                }],
+                "prism" => wheel(Prism, vec![(0, 0), (128, 1)]),
                 "prism_index" => vec![function(PrismIndex, [0.0, 360.0])],
                 "prism_spin" => spin(PrismSpin),
                 "shutter" => {
