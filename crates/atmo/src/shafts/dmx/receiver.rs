@@ -115,6 +115,8 @@ pub struct Listener {
     start: Instant,
     stats: Stats,
     buffer: Vec<u8>,
+    /// The socket's read timeout as last set (set again only when a wait differs).
+    timeout: Option<Duration>,
 }
 
 impl Listener {
@@ -152,6 +154,7 @@ impl Listener {
             start,
             stats,
             buffer: vec![0; 2048],
+            timeout: None,
         })
     }
 
@@ -172,9 +175,13 @@ impl Listener {
     /// Waits up to `wait` for a datagram and takes it, then forgets sources that timed
     /// out; the frames this made go to `out`.
     pub fn receive(&mut self, wait: Duration, out: &mut Vec<Event>) -> Result<()> {
-        self.socket
-            .set_read_timeout(Some(wait.max(Duration::from_millis(1))))
-            .map_err(|e| Error::Invalid(format!("the DMX socket: {e}")))?;
+        let wait = Some(wait.max(Duration::from_millis(1)));
+        if self.timeout != wait {
+            self.socket
+                .set_read_timeout(wait)
+                .map_err(|e| Error::Invalid(format!("the DMX socket: {e}")))?;
+            self.timeout = wait;
+        }
         match self.socket.recv_from(&mut self.buffer) {
             Ok((n, from)) => {
                 self.stats.datagrams += 1;
