@@ -53,7 +53,8 @@ pub struct GdtfFixture {
     /// The mode's channels, as a desk drives them.
     pub dmx: super::dmx::Mode,
     /// Where the beam starts in the fixture's frame (z up), m: its `Beam` geometry's
-    /// place through the geometries it hangs from (each one's `Position`).
+    /// place through the geometries it hangs from (each one's `Position`;
+    /// [`super::gdtf_body`] walks them).
     pub beam_offset: Vec3,
     /// The body its geometries' models draw ([`super::gdtf_body`]; empty without any).
     #[cfg(feature = "gdtf")]
@@ -367,18 +368,24 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
             })
             .and_then(|c| c.attribute("Geometry"))
     };
-    let body = super::gdtf_body::read(fixture, moved_by("Pan"), moved_by("Tilt"), &mut |file| {
-        let name = if file.contains('.') {
-            format!("models/3ds/{file}")
-        } else {
-            format!("models/3ds/{file}.3ds")
-        };
-        zip_entry(&mut zip, &name, crate::files::DATA_LIMIT_BYTES)
-    })
+    let body = super::gdtf_body::read(
+        fixture,
+        beam,
+        moved_by("Pan"),
+        moved_by("Tilt"),
+        &mut |file| {
+            let name = if file.contains('.') {
+                format!("models/3ds/{file}")
+            } else {
+                format!("models/3ds/{file}.3ds")
+            };
+            zip_entry(&mut zip, &name, crate::files::DATA_LIMIT_BYTES)
+        },
+    )
     .map_err(|why| fail(format!("the fixture's models: {why}")))?;
     Ok(GdtfFixture {
+        beam_offset: body.beam_offset,
         body,
-        beam_offset: beam_offset(beam),
         dmx,
         name: fixture.attribute("Name").unwrap_or("").to_string(),
         beam_deg,
@@ -421,25 +428,6 @@ fn facet_beam(text: &str) -> std::result::Result<Vec3, String> {
         ));
     }
     Ok(beam.normalize())
-}
-
-/// Where `beam` (a geometry node) starts in the fixture's frame, m: the translation
-/// of the product of its and its ancestors' `Position` matrices (4 x 4, rows, the
-/// translation in the last column); a `Position` that does not parse counts as none.
-#[cfg(feature = "gdtf")]
-fn beam_offset(beam: roxmltree::Node) -> Vec3 {
-    let chain: Vec<glam::Mat4> = beam
-        .ancestors()
-        .take_while(|n| !n.has_tag_name("Geometries"))
-        .filter_map(|n| n.attribute("Position").and_then(super::gdtf_body::position))
-        .collect();
-    let world = chain.iter().rev().fold(glam::Mat4::IDENTITY, |m, p| m * *p);
-    let offset = world.w_axis.truncate();
-    if offset.is_finite() && offset.length() < 100.0 {
-        offset
-    } else {
-        Vec3::ZERO
-    }
 }
 
 /// A wheel's slots, in order (GDTF's `WheelSlotIndex` 1 is the first).

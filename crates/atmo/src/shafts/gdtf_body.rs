@@ -36,6 +36,9 @@ pub struct GdtfBody {
     /// The origins pan and tilt turn about (the pan and tilt geometries'), m.
     pub pan_pivot: Vec3,
     pub tilt_pivot: Vec3,
+    /// Where the beam starts (its `Beam` geometry's origin), m; 0 where that place is
+    /// not finite or over 100 m off.
+    pub beam_offset: Vec3,
 }
 
 impl GdtfBody {
@@ -89,11 +92,13 @@ fn primitive(kind: &str, size: Vec3) -> Vec<[Vec3; 3]> {
 pub type ModelFile<'a> = dyn FnMut(&str) -> Result<Option<Vec<u8>>, String> + 'a;
 
 /// The body of the fixture node `fixture` (a `FixtureType`) in a mode whose pan and tilt
-/// channels move the geometries named `pan` and `tilt`; `model_file` gives a model file's
-/// bytes (`models/3ds/NAME.3ds`), if the zip has it. An error names what is wrong (a
-/// model file that is not 3DS, too many triangles).
+/// channels move the geometries named `pan` and `tilt`, and where its geometry `beam`
+/// starts; `model_file` gives a model file's bytes (`models/3ds/NAME.3ds`), if the zip
+/// has it. An error names what is wrong (a model file that is not 3DS, too many
+/// triangles).
 pub fn read(
     fixture: roxmltree::Node,
+    beam: roxmltree::Node,
     pan: Option<&str>,
     tilt: Option<&str>,
     model_file: &mut ModelFile,
@@ -124,6 +129,12 @@ pub fn read(
                 .attribute("Position")
                 .and_then(position)
                 .unwrap_or(Mat4::IDENTITY);
+        if node == beam {
+            let offset = frame.w_axis.truncate();
+            if offset.is_finite() && offset.length() < 100.0 {
+                body.beam_offset = offset;
+            }
+        }
         let name = node.attribute("Name");
         let turns = if name.is_some() && name == tilt {
             body.tilt_pivot = frame.w_axis.truncate();
@@ -236,6 +247,8 @@ mod tests {
         }
         assert!((body.pan_pivot - Vec3::new(0.0, 0.0, -0.06)).length() < 1e-6);
         assert!((body.tilt_pivot - Vec3::new(0.0, 0.0, -0.31)).length() < 1e-6);
+        // The Beam 0.17 m under the tilt pivot.
+        assert!((file.beam_offset - Vec3::new(0.0, 0.0, -0.48)).length() < 1e-6);
         let head = || crate::shafts::show::Fixture {
             model: Some(std::sync::Arc::new(body.clone())),
             body: true,
