@@ -321,7 +321,7 @@ fn an_explicit_camera_and_sun_and_every_order_brighter_than_one() {
         img.pixels().map(|p| p.0[0] as f64).sum::<f64>() / img.pixels().len() as f64
     };
     let mut means = Vec::new();
-    for scattering in ["single", "multiple"] {
+    for scattering in ["single", "multiple", "solve"] {
         let out = dir.join(format!("{scattering}.png"));
         let mut args = vec!["clouds"];
         args.extend(EXPLICIT_VIEW);
@@ -332,9 +332,24 @@ fn an_explicit_camera_and_sun_and_every_order_brighter_than_one() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         means.push(mean(&out));
     }
-    // The cloud shows, and the light of every order makes it brighter.
+    // The cloud shows, and the light of every order makes it brighter, by the table
+    // and by the transfer solve alike (within a fifth of each other).
     assert!(means[0] > 5.0, "{means:?}");
     assert!(means[1] > 1.3 * means[0], "{means:?}");
+    assert!((means[2] / means[1] - 1.0).abs() < 0.2, "{means:?}");
+    // The GPU draws no solve: refused, naming the choices it has.
+    let out = dir.join("gpu.png");
+    let mut args = vec!["clouds"];
+    args.extend(EXPLICIT_VIEW);
+    args.extend(["--scattering", "solve", "--backend", "gpu"]);
+    args.extend(["-o", out.to_str().unwrap()]);
+    args.extend(&SMALL_CLOUD[..8]);
+    let o = atmo(&args);
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("--scattering solve"), "{stderr}");
+    assert!(stderr.contains("octaves"), "{stderr}");
+    assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -47,8 +47,11 @@ use glam::Vec3;
 
 use crate::atmosphere::PhaseFunction;
 use crate::clouds::buffer::{IntensityBuffer, Splat};
-use crate::clouds::render::{needs_depths, render_with_depths, AerialHaze, CloudLight, Scattering};
+use crate::clouds::render::{
+    needs_depths, render_with_depths, solve_for, AerialHaze, CloudLight, Scattering,
+};
 use crate::clouds::shadow::{CloudShadow, Ground};
+use crate::clouds::DiffuseLight;
 use crate::clouds::{CloudDepths, Particle, SkyLight};
 use crate::error::Result;
 use crate::image::Frame;
@@ -290,6 +293,17 @@ pub struct CpuClouds {
     buffer: Option<IntensityBuffer>,
     resolution: usize,
     depths: KeptDepths,
+    /// Light passes made, and the transfer solve for the last one (with the light it
+    /// was made for), made when a picture first needs it and kept to start the next.
+    passes: usize,
+    solved: RefCell<Option<KeptSolve>>,
+}
+
+/// A transfer solve and what it was made for: the light pass it read and the light.
+struct KeptSolve {
+    pass: usize,
+    light: CloudLight,
+    diffuse: DiffuseLight,
 }
 
 impl CpuClouds {
@@ -299,6 +313,8 @@ impl CpuClouds {
             buffer: None,
             resolution,
             depths: KeptDepths::default(),
+            passes: 0,
+            solved: RefCell::new(None),
         }
     }
 
@@ -315,6 +331,7 @@ impl CpuClouds {
         forward: f32,
         splat: Splat,
     ) -> Result<()> {
+        self.passes += 1;
         match &mut self.buffer {
             Some(buffer) => buffer.update(particles, to_sun, forward, splat),
             None => {
@@ -347,7 +364,48 @@ impl CpuClouds {
             .then(|| self.depths.of(particles))
             .transpose()?;
         let depths = depths.as_deref().unwrap_or(&none);
-        render_with_depths(particles, depths, buffer, camera, light, background)
+        let diffuse = self.solve(particles, buffer, light)?;
+        let diffuse = diffuse.as_ref().map(|kept| &kept.diffuse);
+        render_with_depths(
+            particles, depths, buffer, diffuse, camera, light, background,
+        )
+    }
+
+    /// The transfer solve `light` draws with (none if it draws with none), made again
+    /// only after a light pass or for another sun or phase, from the last one.
+    fn solve(
+        &self,
+        particles: &[Particle],
+        buffer: &IntensityBuffer,
+        light: &CloudLight,
+    ) -> Result<Option<Ref<'_, KeptSolve>>> {
+        if light.scattering.diffusion().is_none() {
+            return Ok(None);
+        }
+        let fresh = |kept: &KeptSolve| {
+            kept.pass == self.passes
+                && kept.light.to_sun == light.to_sun
+                && kept.light.phase == light.phase
+                && kept.light.scattering == light.scattering
+        };
+        if !self.solved.borrow().as_ref().is_some_and(fresh) {
+            let previous = self.solved.borrow_mut().take();
+            let diffuse = solve_for(
+                particles,
+                buffer,
+                light,
+                previous.as_ref().map(|k| &k.diffuse),
+            )?
+            .expect("a solve was asked for");
+            *self.solved.borrow_mut() = Some(KeptSolve {
+                pass: self.passes,
+                light: *light,
+                diffuse,
+            });
+        }
+        Ok(Some(Ref::map(self.solved.borrow(), |kept| {
+            kept.as_ref().expect("made above")
+        })))
     }
 
     /// How many times the particles' depths were made: once for each new set of

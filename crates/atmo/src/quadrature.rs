@@ -23,6 +23,16 @@ pub fn gauss_legendre(a: f64, b: f64, segments: usize, mut f: impl FnMut(f64, f6
     }
 }
 
+/// The Legendre polynomials `P_0(x)` to `P_last(x)`, by Bonnet's recurrence.
+pub fn legendre(x: f64, last: usize) -> Vec<f64> {
+    let mut p = vec![1.0, x];
+    for l in 2..=last {
+        p.push(((2 * l - 1) as f64 * x * p[l - 1] - (l - 1) as f64 * p[l - 2]) / l as f64);
+    }
+    p.truncate(last + 1);
+    p
+}
+
 /// `n` directions spread evenly over the unit sphere (a spherical Fibonacci lattice),
 /// each standing for the solid angle `4 pi / n` sr. The rule converges as `n` grows,
 /// which a fixed hand-picked set of directions does not.

@@ -537,7 +537,8 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_they_are_read() {
     };
     assert!(dims_the_sky(&light));
     let depths = CloudDepths::of(&particles).unwrap();
-    let given = render_with_depths(&particles, &depths, &buffer, &camera, &light, None).unwrap();
+    let given =
+        render_with_depths(&particles, &depths, &buffer, None, &camera, &light, None).unwrap();
     let own = render(&particles, &buffer, &camera, &light, None).unwrap();
     assert!(
         own.pixels.iter().any(|p| p.x > 0.0),
@@ -561,9 +562,10 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_they_are_read() {
             "59 thicknesses given for 60 particles",
         ),
     ] {
-        let message = render_with_depths(&particles, &shorter, &buffer, &camera, &light, None)
-            .unwrap_err()
-            .to_string();
+        let message =
+            render_with_depths(&particles, &shorter, &buffer, None, &camera, &light, None)
+                .unwrap_err()
+                .to_string();
         assert!(message.contains(counted), "{message}");
     }
     // A sky alike all round is not dimmed: the table alone reads the depths out.
@@ -572,7 +574,16 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_they_are_read() {
         ..light
     };
     assert!(!dims_the_sky(&flat) && needs_depths(&flat));
-    render_with_depths(&particles, &short(0, 60), &buffer, &camera, &flat, None).unwrap();
+    render_with_depths(
+        &particles,
+        &short(0, 60),
+        &buffer,
+        None,
+        &camera,
+        &flat,
+        None,
+    )
+    .unwrap();
     let octaves = CloudLight {
         scattering: Scattering::Octaves(Octaves::MULTIPLE),
         ..flat
@@ -582,9 +593,27 @@ fn depths_given_to_the_drawing_are_one_per_particle_where_they_are_read() {
         &particles,
         &CloudDepths::default(),
         &buffer,
+        None,
         &camera,
         &octaves,
         None,
     )
     .unwrap();
+    // A transfer solve is needed to draw with one, and named when missing.
+    let solved = CloudLight {
+        scattering: Scattering::SOLVE,
+        ..octaves
+    };
+    let message = render_with_depths(
+        &particles,
+        &CloudDepths::default(),
+        &buffer,
+        None,
+        &camera,
+        &solved,
+        None,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(message.contains("transfer solve"), "{message}");
 }

@@ -8,6 +8,12 @@
 //! and of the library's transfer table over the path tracer's (on the cloud's pixels)
 //! and their 8 x 8 blocks within 15 %, then their scores over all the views.
 //!
+//! Every view is also scored for the transfer solve (`atmo::clouds::DiffuseLight`,
+//! `Scattering::SOLVE`), and both the table and the solve by the thinnest and the
+//! thickest fifth of the cloud's pixels (`atmo::reference::clouds::fifths`); `--dump
+//! FOLDER` writes the table's and the solve's pictures and the covered pixels there as
+//! text.
+//!
 //! `--clouds c200,c2000,c9382` keeps the views of the clouds named: those three are the
 //! 36 views the octaves were fitted to; `c60134`, the bench's 60,134-particle cloud of
 //! the paper (twelve views more), is scored only when named, a cloud no fit has seen.
@@ -38,10 +44,10 @@ use std::path::Path;
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::transfer::{self, CloudDepths, TransferTable};
 use atmo::clouds::{
-    render_with_depths, AerialHaze, CloudLight, Cumulus, IntensityBuffer, Octaves, Scattering,
-    SkyLight, Splat,
+    render_with_depths, solve_for, AerialHaze, CloudLight, Cumulus, IntensityBuffer, Octaves,
+    Scattering, SkyLight, Splat,
 };
-use atmo::reference::clouds::{Agreement, PathSettings, ReferenceCloud, ReferenceLight};
+use atmo::reference::clouds::{fifths, Agreement, PathSettings, ReferenceCloud, ReferenceLight};
 use atmo::view::{Camera, Fov, Sun};
 use faer::linalg::solvers::Solve;
 use glam::Vec3;
@@ -64,6 +70,8 @@ struct View {
     depths: CloudDepths,
     traced: Vec<f64>,
     covered: Vec<bool>,
+    /// The cloud's optical depth along each pixel.
+    depths_on_pixels: Vec<f64>,
 }
 
 impl View {
@@ -116,10 +124,12 @@ impl View {
             haze: AerialHaze::CLEAR,
             scattering,
         };
+        let diffuse = solve_for(&self.particles, &self.buffer, &light, None)?;
         let frame = render_with_depths(
             &self.particles,
             &self.depths,
             &self.buffer,
+            diffuse.as_ref(),
             &self.camera,
             &light,
             None,
@@ -160,26 +170,102 @@ fn main() -> Result<()> {
         Some(c) => c.split(',').any(|c| c == cloud),
         None => !only_named,
     })?;
+    if args.iter().any(|a| a == "--orders") {
+        for v in &views {
+            let mean = |p: &[f64]| -> f64 {
+                p.iter()
+                    .zip(&v.covered)
+                    .filter(|(_, c)| **c)
+                    .map(|(x, _)| x)
+                    .sum::<f64>()
+            };
+            let all = mean(&v.traced);
+            let one = mean(&v.path_traced(paths, 1, 11)?);
+            let two = mean(&v.path_traced(paths, 2, 11)?);
+            let single = mean(&v.rendered(Scattering::SINGLE)?);
+            println!(
+                "{}: of the path tracer's light, order 1 {:.3}, order 2 {:.3}, the rest {:.3}; the billboards' single scattering {:.3}",
+                v.name,
+                one / all,
+                (two - one) / all,
+                (all - two) / all,
+                single / all
+            );
+        }
+        return Ok(());
+    }
     let octave_scores = scores(&views, &octaves)?;
-    let table = views
-        .iter()
-        .map(|v| Ok(v.agreement(&v.rendered(Scattering::MULTIPLE)?)))
-        .collect::<Result<Vec<_>>>()?;
-    for ((view, octaves), table) in views.iter().zip(&octave_scores).zip(&table) {
+    // The table's and the solve's pictures of every view, written to `--dump`'s folder
+    // (with the covered pixels) when it is given.
+    let dump = |name: &str, values: Vec<String>| -> Result<()> {
+        if let Some(folder) = value("--dump") {
+            std::fs::write(
+                Path::new(folder).join(format!("{name}.txt")),
+                values.join(" "),
+            )?;
+        }
+        Ok(())
+    };
+    let mut pictures = Vec::new();
+    for v in &views {
+        let of = |s: Scattering| v.rendered(s);
+        let (table, solve) = (of(Scattering::MULTIPLE)?, of(Scattering::SOLVE)?);
+        let text = |p: &[f64]| p.iter().map(|x| format!("{x:e}")).collect();
+        dump(&format!("{}-table", v.name), text(&table))?;
+        dump(&format!("{}-solve", v.name), text(&solve))?;
+        let covered = v.covered.iter().map(|c| u8::from(*c).to_string()).collect();
+        dump(&format!("{}-covered", v.name), covered)?;
+        pictures.push([table, solve]);
+    }
+    let agreements = |model: usize| -> Vec<Agreement> {
+        views
+            .iter()
+            .zip(&pictures)
+            .map(|(v, p)| v.agreement(&p[model]))
+            .collect()
+    };
+    let (table, solve) = (agreements(0), agreements(1));
+    for (model, name) in ["table", "solve"].into_iter().enumerate() {
+        let f: Vec<[f64; 2]> = views
+            .iter()
+            .zip(&pictures)
+            .map(|(v, p)| fifths(&p[model], &v.traced, &v.covered, &v.depths_on_pixels))
+            .collect();
+        for (view, [thin, thick]) in views.iter().zip(&f) {
+            println!(
+                "{:<22} {name}: thin fifth {thin:.3}, thick fifth {thick:.3}",
+                view.name
+            );
+        }
+        let within = |i: usize| f.iter().filter(|v| (v[i] - 1.0).abs() < 0.1).count();
         println!(
-            "{:<22} over the path tracer: octaves {:.3}, table {:.3}   blocks within 15 % by their means / medians: octaves {} / {}, table {} / {} of {}",
+            "{name}: thin fifth within 10 % in {} of {} views, thick fifth in {}",
+            within(0),
+            f.len(),
+            within(1)
+        );
+    }
+    for (((view, octaves), table), solve) in
+        views.iter().zip(&octave_scores).zip(&table).zip(&solve)
+    {
+        println!(
+            "{:<22} over the path tracer: octaves {:.3}, table {:.3}, solve {:.3}   blocks within 15 % by their means / medians: octaves {} / {}, table {} / {}, solve {} / {} of {}",
             view.name,
             octaves.mean_ratio,
             table.mean_ratio,
+            solve.mean_ratio,
             octaves.blocks_within_15,
             octaves.medians_within_15,
             table.blocks_within_15,
             table.medians_within_15,
+            solve.blocks_within_15,
+            solve.medians_within_15,
             table.blocks
         );
     }
     println!("{octaves:?}: {}", summary(&octave_scores));
     println!("the library's transfer table: {}", summary(&table));
+    println!("the transfer solve: {}", summary(&solve));
     if args.iter().any(|a| a == "--floor") {
         let scores = views
             .iter()
@@ -575,9 +661,11 @@ fn views(paths: usize, chosen: impl Fn(&str, bool) -> bool) -> Result<Vec<View>>
                     depths: depths.clone(),
                     traced: Vec::new(),
                     covered: Vec::new(),
+                    depths_on_pixels: Vec::new(),
                 });
                 let view = views.last_mut().expect("just pushed");
                 view.covered = view.reference().covered(&view.camera);
+                view.depths_on_pixels = view.reference().depths(&view.camera);
                 view.traced = view.path_traced(paths, usize::MAX, 3)?;
             }
         }

@@ -10,8 +10,10 @@ use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::generator::{Cumulus, SplitMix64};
 use atmo::clouds::harris::light_per_particle;
-use atmo::clouds::render::{render_with_depths, AerialHaze, CloudLight};
-use atmo::clouds::{CloudDepths, CloudShadow, Octaves, Scattering, SkyLight};
+use atmo::clouds::render::{render_with_depths, solve_for, AerialHaze, CloudLight};
+use atmo::clouds::{
+    CloudDepths, CloudShadow, DiffuseLight, Diffusion, Octaves, Scattering, SkyLight,
+};
 use atmo::image::{Display, Frame, ToneMap};
 use atmo::reference::clouds::{
     transmittance, Agreement, PathSettings, ReferenceCloud, ReferenceLight,
@@ -174,8 +176,66 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
             light_ms / shadow_ms
         ),
     );
+    // The transfer solve when the sun moves (by half a degree each round, back and
+    // forth, each sun's buffer lit beforehand: started from the last solve, as a moving
+    // sun's frames are) and from scratch, alternated with the light pass it follows.
+    let suns = [to_sun, toward_sun(20.5, 40.0)];
+    let lit_for = [
+        buffer.clone(),
+        IntensityBuffer::new(&particles, suns[1], 256, forward, Splat::Pieces)?,
+    ];
+    let solve = |buffer: &IntensityBuffer, sun: Vec3, previous: Option<&DiffuseLight>| {
+        DiffuseLight::solve(
+            &particles,
+            buffer,
+            sun,
+            PhaseFunction::CloudMie,
+            &Diffusion::DEFAULT,
+            previous,
+        )
+        .expect("validated")
+    };
+    let mut last = solve(&buffer, to_sun, None);
+    let cold_iterations = last.iterations;
+    let cold_ms = median(
+        (0..runs.min(5))
+            .map(|_| time_ms(|| drop(solve(&buffer, to_sun, None))))
+            .collect(),
+    );
+    let mut k = 0;
+    let timing = alternated(
+        runs.min(5),
+        || {
+            k += 1;
+            last = solve(&lit_for[k % 2], suns[k % 2], Some(&last));
+        },
+        || {
+            lit.update(&particles, to_sun, forward, Splat::Pieces)
+                .expect("validated")
+        },
+    );
+    let dims = last.dims();
+    emit(
+        json,
+        json!({"bench": "clouds.solve", "params": {"particles": particles.len(), "cells": Diffusion::DEFAULT.cells,
+                   "grid": dims, "sun_step_deg": 0.5},
+               "median_ms": timing.case_ms, "baseline": "clouds.light-pass-256", "baseline_median_ms": timing.baseline_ms,
+               "ratio": timing.ratio, "cold_ms": cold_ms, "cold_iterations": cold_iterations,
+               "warm_iterations": last.iterations}),
+        format!(
+            "clouds.solve      {:>6} particles {} x {} x {}: {:.1} ms when the sun moves ({} iterations; from scratch {cold_ms:.1} ms, {cold_iterations})   light pass 256^3 {:.1} ms   ratio {:.2}",
+            particles.len(),
+            dims[0],
+            dims[1],
+            dims[2],
+            timing.case_ms,
+            last.iterations,
+            timing.baseline_ms,
+            timing.ratio
+        ),
+    );
     // Every order against the path tracer, on a small picture of the same view: by the
-    // table and by the octaves, against the same path-traced picture.
+    // table, the octaves and the solve, against the same path-traced picture.
     let size = if quick { (32, 18) } else { (64, 36) };
     let paths = if quick { 8 } else { 16 };
     let small = bench_camera(&particles, size);
@@ -238,14 +298,17 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     Ok(())
 }
 
-/// The two models of every order the benches time and score, by their names in the
-/// JSON's params: the transfer table (the CPU's default) and the octaves (the GPU's).
-const EVERY_ORDER: [(&str, Scattering); 2] = [
+/// The models of every order the benches time and score, by their names in the JSON's
+/// params: the transfer table (the CPU's default), the octaves (the GPU's) and the
+/// transfer solve (made once per picture, not timed with the frame: `clouds.solve`).
+const EVERY_ORDER: [(&str, Scattering); 3] = [
     ("multiple", Scattering::MULTIPLE),
     ("octaves", Scattering::Octaves(Octaves::MULTIPLE)),
+    ("solve", Scattering::SOLVE),
 ];
 
-/// The median time of drawing `particles` (their `depths` given), and the last frame.
+/// The median time of drawing `particles` (their `depths` given, and the transfer
+/// solve where `light` draws with one, made before), and the last frame.
 fn timed_render(
     particles: &[atmo::clouds::particles::Particle],
     depths: &CloudDepths,
@@ -254,13 +317,22 @@ fn timed_render(
     light: &CloudLight,
     runs: usize,
 ) -> (f64, Frame) {
+    let diffuse = solve_for(particles, buffer, light, None).expect("validated");
     let mut frame = Frame::new(1, 1);
     let ms = median(
         (0..runs)
             .map(|_| {
                 time_ms(|| {
-                    frame = render_with_depths(particles, depths, buffer, camera, light, None)
-                        .expect("a pinhole")
+                    frame = render_with_depths(
+                        particles,
+                        depths,
+                        buffer,
+                        diffuse.as_ref(),
+                        camera,
+                        light,
+                        None,
+                    )
+                    .expect("a pinhole")
                 })
             })
             .collect(),

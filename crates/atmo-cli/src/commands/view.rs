@@ -187,10 +187,12 @@ pub fn run(args: ViewArgs) -> Result<()> {
         ViewMode::Clouds(args) => {
             let cloud = Cloud::new(&args.still)?;
             let size = (cloud.camera.width, cloud.camera.height);
+            let mut device = args.device;
+            device.backend = super::clouds::solve_on_cpu(&cloud.scene.scattering, device.backend)?;
             let pictures = WindowClouds::new(cloud);
             let params = pictures.params();
             let mode = CloudsMode::new(params, Box::new(pictures));
-            (Box::new(mode), size, args.window, args.device)
+            (Box::new(mode), size, args.window, device)
         }
     };
     atmo::error::check_range("preview", window.preview as f64, 1.0, 16.0)?;

@@ -523,6 +523,14 @@ impl GpuClouds {
         light: &CloudLight,
     ) -> Result<(), GpuError> {
         light.scattering.validate()?;
+        if light.scattering.diffusion().is_some() {
+            return Err(atmo::Error::Invalid(
+                "scattering: the transfer solve draws on the CPU alone (allowed on the GPU: \
+                 single, multiple, octaves)"
+                    .into(),
+            )
+            .into());
+        }
         let dimming = light.ambient.dimming(&light.scattering.octaves());
         let billboards = self.billboards(gpu, camera, light, &dimming)?;
         // The sky's light inside the cloud and the transfer table need each particle's

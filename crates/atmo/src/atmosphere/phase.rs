@@ -125,6 +125,32 @@ impl PhaseFunction {
         self.value(cos_theta)
     }
 
+    /// The phase function's Legendre moment of order `l`, `chi_l = 2 pi integral p(c)
+    /// P_l(c) dc` (1 for `l = 0`, the mean cosine `g` for `l = 1`; `g^l` for
+    /// Henyey-Greenstein): what the transfer solve's delta-Eddington scaling reads of the
+    /// phase ([`crate::clouds::diffusion`]).
+    pub fn legendre_moment(&self, l: u32) -> f64 {
+        self.legendre_moments(l)[l as usize]
+    }
+
+    /// The moments `chi_0` to `chi_last` ([`PhaseFunction::legendre_moment`]) in one
+    /// pass over the quadrature.
+    pub fn legendre_moments(&self, last: u32) -> Vec<f64> {
+        let mut sums = vec![0.0; last as usize + 1];
+        crate::quadrature::gauss_legendre(-1.0, 1.0, 2000, |c, w| {
+            let weight = w * self.eval(c);
+            for (sum, p) in sums
+                .iter_mut()
+                .zip(crate::quadrature::legendre(c, last as usize))
+            {
+                *sum += weight * p;
+            }
+        });
+        sums.iter()
+            .map(|s| 2.0 * std::f64::consts::PI * s)
+            .collect()
+    }
+
     /// [`PhaseFunction::eval`] in f32, for the per-sample paths of shafts and clouds.
     #[inline]
     pub fn eval_f32(&self, cos_theta: f32) -> f32 {
@@ -205,6 +231,21 @@ mod tests {
         let mut sum = 0.0;
         gauss_legendre(-1.0, 1.0, 2000, |c, w| sum += w * p.eval(c));
         2.0 * PI * sum
+    }
+
+    #[test]
+    fn legendre_moments_of_henyey_greenstein_are_powers_of_g() {
+        let hg = PhaseFunction::HenyeyGreenstein { g: 0.6 };
+        for l in 0..4 {
+            assert!(
+                (hg.legendre_moment(l) - 0.6f64.powi(l as i32)).abs() < 1e-6,
+                "{l}"
+            );
+        }
+        // The cloud's two lobes: 0.75 g1^l + 0.25 g2^l.
+        let cloud = PhaseFunction::CloudMie;
+        assert!((cloud.legendre_moment(1) - 0.525).abs() < 1e-6);
+        assert!((cloud.legendre_moment(2) - 0.5025).abs() < 1e-6);
     }
 
     #[test]

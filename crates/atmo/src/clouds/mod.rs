@@ -6,10 +6,12 @@
 //!
 //! [`harris`] is the baseline light pass the buffer is measured against; [`render`](mod@render)
 //! draws the billboards, lit by the sun through the buffer, by every order of it
-//! ([`octaves`]) and by the sky ([`sky_light`]); [`shadow`] is the cloud's shadow on the
+//! ([`transfer`]'s table, [`diffusion`]'s solve or [`octaves`]) and by the sky
+//! ([`sky_light`]); [`shadow`] is the cloud's shadow on the
 //! ground; [`files`] reads and writes particles.
 
 pub mod buffer;
+pub mod diffusion;
 pub mod files;
 pub mod generator;
 pub mod harris;
@@ -22,11 +24,13 @@ pub mod transfer;
 mod transfer_fitted;
 
 pub use buffer::{IntensityBuffer, Splat};
+pub use diffusion::{DiffuseLight, Diffusion};
 pub use generator::Cumulus;
 pub use octaves::Octaves;
 pub use particles::Particle;
 pub use render::{
-    dims_the_sky, needs_depths, render, render_with_depths, AerialHaze, CloudLight, Scattering,
+    dims_the_sky, needs_depths, render, render_with_depths, solve_for, AerialHaze, CloudLight,
+    Scattering,
 };
 pub use shadow::CloudShadow;
 pub use sky_light::{vertical_depths, SkyDimming, SkyLight};

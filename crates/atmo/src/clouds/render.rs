@@ -36,6 +36,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::buffer::IntensityBuffer;
+use super::diffusion::{DiffuseLight, Diffusion, Seen};
 use super::octaves::{Emission, OctaveTerms, Octaves};
 use super::particles::{tabulated_emission_nodes_lanes, weighted_lanes, Particle, EMISSION_NODES};
 use super::sky_light::SkyLight;
@@ -77,6 +78,9 @@ pub enum Scattering {
     /// Single scattering and a transfer table for the orders past the first
     /// ([`TransferTable`]).
     Transfer(&'static TransferTable),
+    /// Single scattering and the orders past the first by solving their transfer
+    /// through the cloud ([`DiffuseLight`]).
+    Solve(Diffusion),
 }
 
 impl Scattering {
@@ -84,13 +88,15 @@ impl Scattering {
     pub const SINGLE: Scattering = Scattering::Octaves(Octaves::SINGLE);
     /// Every order, by the table fitted to the path tracer: the default.
     pub const MULTIPLE: Scattering = Scattering::Transfer(&TransferTable::FITTED);
+    /// Every order, by the transfer solve on its default grid (the CPU's alone).
+    pub const SOLVE: Scattering = Scattering::Solve(Diffusion::DEFAULT);
 
     /// The octaves the sky's light follows (its tilt, [`SkyLight::scattered`], and its
     /// dimming inside the cloud): these octaves, or with a table [`Octaves::MULTIPLE`].
     pub fn octaves(&self) -> Octaves {
         match self {
             Scattering::Octaves(octaves) => *octaves,
-            Scattering::Transfer(_) => Octaves::MULTIPLE,
+            Scattering::Transfer(_) | Scattering::Solve(_) => Octaves::MULTIPLE,
         }
     }
 
@@ -99,21 +105,30 @@ impl Scattering {
     pub fn blob_octaves(&self) -> Octaves {
         match self {
             Scattering::Octaves(octaves) => *octaves,
-            Scattering::Transfer(_) => Octaves::SINGLE,
+            Scattering::Transfer(_) | Scattering::Solve(_) => Octaves::SINGLE,
         }
     }
 
     /// The table, if the orders past the first are drawn by one.
     pub fn table(&self) -> Option<&'static TransferTable> {
         match self {
-            Scattering::Octaves(_) => None,
             Scattering::Transfer(table) => Some(table),
+            _ => None,
         }
     }
 
-    /// Refuses octaves outside their ranges, naming the field.
+    /// The transfer solve's settings, if the orders past the first are solved.
+    pub fn diffusion(&self) -> Option<Diffusion> {
+        match self {
+            Scattering::Solve(diffusion) => Some(*diffusion),
+            _ => None,
+        }
+    }
+
+    /// Refuses octaves or a solve outside their ranges, naming the field.
     pub fn validate(&self) -> Result<()> {
-        self.octaves().validate()
+        self.octaves().validate()?;
+        self.diffusion().map_or(Ok(()), |d| d.validate())
     }
 }
 
@@ -155,7 +170,41 @@ pub fn render(
     } else {
         CloudDepths::default()
     };
-    render_with_depths(particles, &depths, buffer, camera, light, background)
+    let diffuse = solve_for(particles, buffer, light, None)?;
+    render_with_depths(
+        particles,
+        &depths,
+        buffer,
+        diffuse.as_ref(),
+        camera,
+        light,
+        background,
+    )
+}
+
+/// The transfer solve `light` draws with, if it draws with one ([`Scattering::Solve`]),
+/// for `particles` lit through `buffer`; `previous` starts it (the module doc of
+/// [`super::diffusion`]).
+pub fn solve_for(
+    particles: &[Particle],
+    buffer: &IntensityBuffer,
+    light: &CloudLight,
+    previous: Option<&DiffuseLight>,
+) -> Result<Option<DiffuseLight>> {
+    light
+        .scattering
+        .diffusion()
+        .map(|settings| {
+            DiffuseLight::solve(
+                particles,
+                buffer,
+                light.to_sun,
+                light.phase,
+                &settings,
+                previous,
+            )
+        })
+        .transpose()
 }
 
 /// Whether `light` dims the sky's light inside the cloud, and so needs the particles'
@@ -174,11 +223,14 @@ pub fn needs_depths(light: &CloudLight) -> bool {
 /// [`render`] with the particles' depths given ([`CloudDepths::of`]), for a caller that
 /// draws the same particles again under another sun or from another camera: they
 /// depend on the particles alone, and making them costs tens of milliseconds for
-/// 60,134 particles. Not read (and may be empty) unless [`needs_depths`].
+/// 60,134 particles. Not read (and may be empty) unless [`needs_depths`]. Likewise the
+/// transfer solve ([`solve_for`]), which depends on the particles and the sun: needed
+/// with [`Scattering::Solve`], not read otherwise.
 pub fn render_with_depths(
     particles: &[Particle],
     depths: &CloudDepths,
     buffer: &IntensityBuffer,
+    diffuse: Option<&DiffuseLight>,
     camera: &Camera,
     light: &CloudLight,
     background: Option<&Frame>,
@@ -259,6 +311,19 @@ pub fn render_with_depths(
         }
         None => None,
     };
+    let solved = match light.scattering {
+        Scattering::Solve(_) => Some(diffuse.ok_or_else(|| {
+            Error::Invalid("the clouds were drawn by a transfer solve without one".into())
+        })?),
+        _ => None,
+    };
+    let twice: Vec<f32> = match solved {
+        Some(solved) => cosines
+            .par_iter()
+            .map(|&c| solved.twice_scattered(c))
+            .collect(),
+        None => Vec::new(),
+    };
     let blobs = Blobs {
         particles,
         order: &order,
@@ -278,8 +343,11 @@ pub fn render_with_depths(
         phases: &phases,
         top_shares: &top_shares,
         table,
+        solved: solved.map(|s| (s, s.seen_from(camera.position))),
+        twice: &twice,
     };
     let table = blobs.table.is_some();
+    let every_order = table || blobs.solved.is_some();
     let mut frame = Frame::new(camera.width, camera.height);
     frame
         .pixels
@@ -294,7 +362,7 @@ pub fn render_with_depths(
             let haze = light.haze;
             for (j, e) in pixels.iter_mut().enumerate() {
                 let t = sums.through[j];
-                let share = if table {
+                let share = if every_order {
                     1.0
                 } else {
                     octaves_of_sky.higher_share(t)
@@ -344,6 +412,10 @@ struct Blobs<'a> {
     top_shares: &'a [f32],
     /// With a table, what its lookups read.
     table: Option<Tabled<'a>>,
+    /// With a transfer solve, its light and that seen from the eye, and per pixel (as
+    /// `phases`) the phase scattered twice ([`DiffuseLight::twice_scattered`]).
+    solved: Option<(&'a DiffuseLight, Seen)>,
+    twice: &'a [f32],
 }
 
 /// The transfer table laid out for drawing, and per particle its depth out of the
@@ -527,9 +599,24 @@ impl Blobs<'_> {
                     };
                     add(single, blob.single);
                     let absorbed = Lanes::ONE - blob.transmitted;
-                    match &self.table {
-                        None => add(higher, blob.higher),
-                        Some(Tabled { cells, out, slices }) => {
+                    match (&self.table, &self.solved) {
+                        (None, Some((solved, seen))) => {
+                            // The solve's light toward the eye at the emission nodes'
+                            // mean place (the grid's cells are wider than the blob's
+                            // depth between its nodes: reading it at each node cost
+                            // a third of the frame), and the forward-scattered
+                            // sunlight at each node.
+                            let twice = Lanes::from(&self.twice[band * BAND * w + i..][..LANES]);
+                            let at = t + weighted_lanes(|j| nodes[j][1]) * along_scale;
+                            let point =
+                                std::array::from_fn(|c| Lanes::splat(self.eye[c]) + r[c] * at);
+                            let forward = weighted_lanes(|j| {
+                                solved.forward(twice, emission.log_gamma[j], albedo)
+                            });
+                            add(higher, (seen.at_lanes(point) + forward) * absorbed);
+                        }
+                        (None, None) => add(higher, blob.higher),
+                        (Some(Tabled { cells, out, slices }), _) => {
                             // The table's light at the emission nodes' mean depths
                             // toward the sun and toward the eye (the cloud's in front
                             // and theirs into the blob), the least of those and the

@@ -532,6 +532,14 @@ impl<'a> ReferenceCloud<'a> {
             .collect()
     }
 
+    /// The cloud's optical depth along every pixel's ray of `camera`, row by row.
+    pub fn depths(&self, camera: &Camera) -> Vec<f64> {
+        pixels(camera)
+            .into_par_iter()
+            .map(|(origin, dir)| self.volume.ray(origin, dir).depth_to(f64::INFINITY))
+            .collect()
+    }
+
     /// [`ReferenceCloud::path_traced`] at every pixel centre of `camera`: mean and
     /// standard error, row by row (each pixel its own random sequence).
     pub fn path_traced_picture(&self, camera: &Camera, settings: &PathSettings) -> Vec<(f64, f64)> {
@@ -611,6 +619,22 @@ impl Agreement {
         }
         agreement
     }
+}
+
+/// How `picture` agrees with `reference` on the thinnest and the thickest fifth of the
+/// `covered` pixels by the cloud's optical depth along them (`depths`,
+/// [`ReferenceCloud::depths`]): the picture's mean over the reference's on each, the
+/// thin fringe first, then the thick core.
+pub fn fifths(picture: &[f64], reference: &[f64], covered: &[bool], depths: &[f64]) -> [f64; 2] {
+    let mut order: Vec<usize> = (0..picture.len()).filter(|&k| covered[k]).collect();
+    order.sort_by(|&a, &b| depths[a].total_cmp(&depths[b]));
+    let fifth = (order.len() / 5).max(1);
+    let ratio = |pixels: &[usize]| {
+        let p: f64 = pixels.iter().map(|&k| picture[k]).sum();
+        let r: f64 = pixels.iter().map(|&k| reference[k]).sum();
+        p / r
+    };
+    [ratio(&order[..fifth]), ratio(&order[order.len() - fifth..])]
 }
 
 /// The median of `values` (not empty): the middle one, or the mean of the two middle

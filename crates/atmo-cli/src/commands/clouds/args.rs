@@ -58,9 +58,11 @@ pub struct CloudStill {
     #[arg(long, default_value_t = 256)]
     pub resolution: usize,
     /// Light scattered once (`single`, the paper's model) or every order: `multiple`, a
-    /// transfer table fitted to a path tracer (docs/clouds.md), or `octaves`, the
-    /// octaves fitted to it (faster on the GPU, which reads the table's depth toward
-    /// the eye from a second light pass, lit from the eye, whenever the camera moves).
+    /// transfer table fitted to a path tracer (docs/clouds.md), `octaves`, the octaves
+    /// fitted to it (faster on the GPU, which reads the table's depth toward the eye
+    /// from a second light pass, lit from the eye, whenever the camera moves), or
+    /// `solve`, the orders past the first solved through the cloud by flux-limited
+    /// diffusion (the CPU's alone; redone when the sun or the particles move).
     #[arg(long, value_enum, default_value_t = ScatteringArg::Multiple)]
     pub scattering: ScatteringArg,
     /// With --scattering single: the part of scattered light taken to go on along the
@@ -231,6 +233,7 @@ pub enum ScatteringArg {
     Single,
     Multiple,
     Octaves,
+    Solve,
 }
 
 /// `--ambient` (or its default, `sky` with `--sky`), refused as exit 2 when it does
