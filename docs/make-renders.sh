@@ -21,6 +21,12 @@ montage "$tmp/c1.png" "$tmp/c2.png" -tile 2x1 -geometry +0+0 "$r/clouds-sky.png"
 "$atmo" clouds --generate cumulus --sky --ground-albedo 0.2 --camera -6000,3000,3000 \
     --look-at -1000,900,-500 --fov 50 --sun-elevation 30 --sun-azimuth 150 \
     --width 640 --height 360 -o "$r/clouds-shadow.png"
+# Every order by the transfer solve and by the table, on black, the sun from the side.
+for s in solve multiple; do
+    "$atmo" clouds --generate cumulus --sun-elevation 20 --sun-azimuth 130 --scattering $s \
+        --width 640 --height 360 -o "$tmp/o-$s.png"
+done
+montage "$tmp/o-solve.png" "$tmp/o-multiple.png" -tile 2x1 -geometry +0+0 "$r/clouds-solve.png"
 
 # On the GPU (lavapipe where there is no other adapter).
 "$atmo" sky --backend gpu --sun-elevation 3 --sun-azimuth 180 --altitude 3000 --yaw 180 \
