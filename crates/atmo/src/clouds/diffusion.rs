@@ -20,7 +20,7 @@
 //! scaled medium and the true one), and Levermore and Pomraning's flux limiter
 //! `lambda(R) = (coth R - 1/R) / R`, `R = |grad phi| / (sigma_tr phi)`: 1/3 deep in the
 //! cloud, where diffusion holds, and `|F| <= k phi` at its thin fringe, where light
-//! streams ([`STREAMING`]: a beam's `k` is 1, light leaving a surface has 1/2). Cells
+//! streams (`k` 0.6: a beam's is 1, light leaving a surface has 1/2). Cells
 //! of clear air are left out of the solve; on the cloud's faces to them and on the
 //! grid's outer faces Marshak's condition lets the light out (`F . n = phi / 2`),
 //! nothing coming in.
@@ -35,7 +35,7 @@
 //! ```
 //!
 //! the first part read from the grid ([`DiffuseLight::at`]), the second from the
-//! intensity buffer at the drawing's own emission nodes ([`DiffuseLight::forward`]), as
+//! intensity buffer at the drawing's own emission nodes, as
 //! single scattering is. The first order stays the billboards' exact one.
 //!
 //! The grid is cubic cells over the particles' reach with two cells of air around;
@@ -202,7 +202,7 @@ impl DiffuseLight {
     /// The light of the diffuse field a droplet at the world point `p` scatters along
     /// the unit `w`, per unit scattering coefficient and sun irradiance (1/sr): the
     /// fluence and flux trilinear between cell centres (0 outside the grid), the
-    /// radiance's angles by the closure ([`Closure`]), scattered by the phase.
+    /// radiance's angles by Minerbo's closure, scattered by the phase.
     pub fn at(&self, p: Vec3, w: Vec3) -> f32 {
         self.leaving(self.sample(p), w)
     }
