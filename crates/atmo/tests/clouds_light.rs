@@ -429,10 +429,10 @@ fn every_order_holds_on_a_cloud_no_fit_has_seen() {
 /// The transfer solve (atmo::clouds::DiffuseLight), which no fit has touched but its
 /// flux limiter's streaming limit (chosen over the 36 views of three clouds, this one's
 /// among them), against the path tracer on the 200-particle cloud from above: its
-/// mean, and the mean of the thickest fifth of the cloud's pixels (its core).
-/// Measured at 48 x 28, 24 paths a pixel: front 0.886, side 1.001, behind 0.883 in the
-/// mean; the core 0.880, 0.959, 0.908 (the fringe, the thinnest fifth, 1.05, 1.23 and
-/// 0.96: docs/clouds.md, "Every order: the transfer solve").
+/// mean within 5 % and the mean of the thickest fifth of the cloud's pixels (its core)
+/// within 10 %. Measured at 48 x 28, 24 paths a pixel: front 0.953, side 0.968, behind
+/// 0.965 in the mean; the core 0.942, 0.931, 0.941 (the fringe, the thinnest fifth,
+/// 1.11, 1.15 and 1.04: docs/clouds.md, "Every order: the transfer solve").
 #[test]
 fn the_transfer_solve_matches_the_path_tracer_on_a_small_cloud() {
     let particles = cloud();
@@ -442,8 +442,7 @@ fn the_transfer_solve_matches_the_path_tracer_on_a_small_cloud() {
         orders: usize::MAX,
         seed: 3,
     };
-    for ((name, to_sun, cloud), (mean_bound, core_bound)) in
-        lit(&particles).zip([(0.15, 0.15), (0.05, 0.08), (0.15, 0.15)])
+    for ((name, to_sun, cloud), (mean_bound, core_bound)) in lit(&particles).zip([(0.05, 0.10); 3])
     {
         let traced: Vec<f64> = cloud
             .path_traced_picture(&camera, &settings)

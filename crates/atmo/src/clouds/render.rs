@@ -317,13 +317,6 @@ pub fn render_with_depths(
         })?),
         _ => None,
     };
-    let twice: Vec<f32> = match solved {
-        Some(solved) => cosines
-            .par_iter()
-            .map(|&c| solved.twice_scattered(c))
-            .collect(),
-        None => Vec::new(),
-    };
     let blobs = Blobs {
         particles,
         order: &order,
@@ -343,8 +336,7 @@ pub fn render_with_depths(
         phases: &phases,
         top_shares: &top_shares,
         table,
-        solved: solved.map(|s| (s, s.seen_from(camera.position))),
-        twice: &twice,
+        solved: solved.map(|s| s.seen_from(camera.position)),
     };
     let table = blobs.table.is_some();
     let every_order = table || blobs.solved.is_some();
@@ -412,10 +404,8 @@ struct Blobs<'a> {
     top_shares: &'a [f32],
     /// With a table, what its lookups read.
     table: Option<Tabled<'a>>,
-    /// With a transfer solve, its light and that seen from the eye, and per pixel (as
-    /// `phases`) the phase scattered twice ([`DiffuseLight::twice_scattered`]).
-    solved: Option<(&'a DiffuseLight, Seen)>,
-    twice: &'a [f32],
+    /// With a transfer solve, its light seen from the eye.
+    solved: Option<Seen>,
 }
 
 /// The transfer table laid out for drawing, and per particle its depth out of the
@@ -600,20 +590,15 @@ impl Blobs<'_> {
                     add(single, blob.single);
                     let absorbed = Lanes::ONE - blob.transmitted;
                     match (&self.table, &self.solved) {
-                        (None, Some((solved, seen))) => {
+                        (None, Some(seen)) => {
                             // The solve's light toward the eye at the emission nodes'
                             // mean place (the grid's cells are wider than the blob's
                             // depth between its nodes: reading it at each node cost
-                            // a third of the frame), and the forward-scattered
-                            // sunlight at each node.
-                            let twice = Lanes::from(&self.twice[band * BAND * w + i..][..LANES]);
+                            // a third of the frame).
                             let at = t + weighted_lanes(|j| nodes[j][1]) * along_scale;
                             let point =
                                 std::array::from_fn(|c| Lanes::splat(self.eye[c]) + r[c] * at);
-                            let forward = weighted_lanes(|j| {
-                                solved.forward(twice, emission.log_gamma[j], albedo)
-                            });
-                            add(higher, (seen.at_lanes(point) + forward) * absorbed);
+                            add(higher, seen.at_lanes(point) * absorbed);
                         }
                         (None, None) => add(higher, blob.higher),
                         (Some(Tabled { cells, out, slices }), _) => {
