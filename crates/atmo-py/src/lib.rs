@@ -676,10 +676,11 @@ fn cumulus(
 /// `target` (m; by default from south-west of the cloud, a little below it), in front
 /// of the Earth's sky with every order, lit by it and hazed, when `sky` (else the
 /// sun's light alone, on black): a
-/// `height x width x 3` array of linear radiance, W m^-2 sr^-1. `multiple` adds every
-/// order of scattering in the cloud (the fitted transfer table) to the paper's first.
+/// `height x width x 3` array of linear radiance, W m^-2 sr^-1. `scattering` is
+/// `"single"` (the paper's first order), `"multiple"` (every order by the fitted
+/// transfer table) or `"solve"` (every order by the transfer solve).
 #[pyfunction]
-#[pyo3(signature = (particles, sun_elevation_deg, sun_azimuth_deg, eye, target, width, height, fov_deg, multiple, sky, resolution))]
+#[pyo3(signature = (particles, sun_elevation_deg, sun_azimuth_deg, eye, target, width, height, fov_deg, scattering, sky, resolution))]
 #[allow(clippy::too_many_arguments)]
 fn render_clouds<'py>(
     py: Python<'py>,
@@ -691,10 +692,20 @@ fn render_clouds<'py>(
     width: u32,
     height: u32,
     fov_deg: f32,
-    multiple: bool,
+    scattering: &str,
     sky: bool,
     resolution: usize,
 ) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let scattering = match scattering {
+        "single" => Scattering::SINGLE,
+        "multiple" => Scattering::MULTIPLE,
+        "solve" => Scattering::SOLVE,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "scattering: 'single', 'multiple' or 'solve', got {other:?}"
+            )))
+        }
+    };
     let array = particles.as_array();
     if array.ncols() != 6 {
         return Err(PyValueError::new_err(format!(
@@ -729,11 +740,7 @@ fn render_clouds<'py>(
                 forward: 0.0,
                 splat: Splat::Pieces,
                 phase: PhaseFunction::CloudMie,
-                scattering: if multiple {
-                    Scattering::MULTIPLE
-                } else {
-                    Scattering::SINGLE
-                },
+                scattering,
                 // Without the sky, nothing but the sun lights the cloud.
                 ambient: if sky {
                     Ambient::Sky

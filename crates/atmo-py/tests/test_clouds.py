@@ -27,6 +27,10 @@ def test_a_cloud_before_the_sky_and_its_higher_orders(cloud):
     # The higher orders only add light; the sky fills the corners either way.
     assert every.mean() > single.mean()
     assert np.all(every >= single - 1e-3 * single.max())
+    # The transfer solve's every order: within a fifth of the table's, above single.
+    solved = atmo.clouds.render(cloud, scattering="solve", **view)
+    assert np.all(np.isfinite(solved)) and solved.mean() > single.mean()
+    assert abs(solved.mean() / every.mean() - 1) < 0.2
     # Without the sky: black around the cloud, and the cloud lit by the sun alone.
     bare = atmo.clouds.render(cloud, sky=False, **view)
     assert np.all(bare[0, 0] == 0) and every[0, 0].sum() > 0

@@ -34,11 +34,12 @@ def render(particles=None, sun_elevation: float = 25.0, sun_azimuth: float = 40.
     the cloud's centre, at it) with a vertical field of view ``fov`` (deg):
     ``height x width x 3`` float32 linear radiance, W m^-2 sr^-1.
 
-    ``scattering`` is ``"multiple"`` (every order: atmo's transfer table) or
-    ``"single"`` (the paper's); ``sky`` draws the Earth's sky, every order, behind the
+    ``scattering`` is ``"multiple"`` (every order: atmo's transfer table),
+    ``"solve"`` (every order: the transfer solve through the cloud, nearer the path
+    tracer on clouds no fit has seen; docs/clouds.md) or ``"single"`` (the paper's); ``sky`` draws the Earth's sky, every order, behind the
     cloud, lighting it and hazing it (without: the sun alone, on black); ``resolution`` is the light buffer's side (16-512)."""
-    if scattering not in ("multiple", "single"):
-        raise ValueError(f"scattering: 'multiple' or 'single', got {scattering!r}")
+    if scattering not in ("multiple", "solve", "single"):
+        raise ValueError(f"scattering: 'multiple', 'solve' or 'single', got {scattering!r}")
     cloud = cumulus() if particles is None else particles
     cloud = np.ascontiguousarray(np.asarray(cloud, dtype=np.float32))
     if cloud.ndim != 2:
@@ -46,4 +47,4 @@ def render(particles=None, sun_elevation: float = 25.0, sun_azimuth: float = 40.
     point = (lambda p: None if p is None else [float(v) for v in p])
     return _atmo.render_clouds(cloud, float(sun_elevation), float(sun_azimuth), point(eye),
                                point(look_at), int(width), int(height), float(fov),
-                               scattering == "multiple", bool(sky), int(resolution))
+                               scattering, bool(sky), int(resolution))
