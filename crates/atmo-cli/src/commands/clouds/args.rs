@@ -61,8 +61,9 @@ pub struct CloudStill {
     /// transfer table fitted to a path tracer (docs/clouds.md), `octaves`, the octaves
     /// fitted to it (faster on the GPU, which reads the table's depth toward the eye
     /// from a second light pass, lit from the eye, whenever the camera moves), or
-    /// `solve`, the orders past the first solved through the cloud by flux-limited
-    /// diffusion (the CPU's alone; redone when the sun or the particles move).
+    /// `solve`, the orders past the first solved through the cloud: the second
+    /// explicitly, the rest by flux-limited diffusion (the CPU's alone; redone when the
+    /// sun or the particles move).
     #[arg(long, value_enum, default_value_t = ScatteringArg::Multiple)]
     pub scattering: ScatteringArg,
     /// With --scattering single: the part of scattered light taken to go on along the
