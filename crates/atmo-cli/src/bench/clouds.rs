@@ -180,10 +180,8 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
     // forth, each sun's buffer lit beforehand: started from the last solve, as a moving
     // sun's frames are) and from scratch, alternated with the light pass it follows.
     let suns = [to_sun, toward_sun(20.5, 40.0)];
-    let lit_for = [
-        buffer.clone(),
-        IntensityBuffer::new(&particles, suns[1], 256, forward, Splat::Pieces)?,
-    ];
+    let other = IntensityBuffer::new(&particles, suns[1], 256, forward, Splat::Pieces)?;
+    let lit_for = [&buffer, &other];
     let solve = |buffer: &IntensityBuffer, sun: Vec3, previous: Option<&DiffuseLight>| {
         DiffuseLight::solve(
             &particles,
@@ -207,7 +205,7 @@ pub fn cpu(quick: bool, json: bool) -> Result<()> {
         runs.min(5),
         || {
             k += 1;
-            last = solve(&lit_for[k % 2], suns[k % 2], Some(&last));
+            last = solve(lit_for[k % 2], suns[k % 2], Some(&last));
         },
         || {
             lit.update(&particles, to_sun, forward, Splat::Pieces)

@@ -32,7 +32,7 @@
 //! the cloud's faces to them and on the grid's outer faces Marshak's condition lets
 //! the light out (`F . n = phi / 2`), nothing coming in. A droplet scatters the field
 //! toward the eye as its radiance rebuilt from `phi` and `F` by Minerbo's closure and
-//! scattered by the phase ([`DiffuseLight::at`]).
+//! scattered by the phase ([`DiffuseLight::seen_from`]).
 //!
 //! Both are made toward the eye once a picture for each cell and read at the blobs'
 //! emission nodes. The grid is cubic cells over the particles' reach with two cells
@@ -102,7 +102,7 @@ pub struct DiffuseLight {
     /// Cells along x, y and z.
     dims: [usize; 3],
     /// Per cell, `[x][y][z]` (z fastest): the diffuse field's `phi / 4 pi` and
-    /// `F / 4 pi` per unit sun irradiance ([`DiffuseLight::at`]).
+    /// `F / 4 pi` per unit sun irradiance.
     values: Vec<Vec4>,
     /// The diffuse radiance's angles from its fluence and flux, scattered by the phase.
     closure: Closure,
@@ -199,18 +199,11 @@ impl DiffuseLight {
         self.dims
     }
 
-    /// The light of the diffuse field a droplet at the world point `p` scatters along
-    /// the unit `w`, per unit scattering coefficient and sun irradiance (1/sr): the
-    /// fluence and flux trilinear between cell centres (0 outside the grid), the
-    /// radiance's angles by Minerbo's closure, scattered by the phase.
-    pub fn at(&self, p: Vec3, w: Vec3) -> f32 {
-        self.leaving(self.sample(p), w)
-    }
-
-    /// The light each cell's centre sends toward `eye` ([`DiffuseLight::at`]), made once
-    /// for a picture: its lookups along the pixels' rays are then one value's trilinear
-    /// read (the rays pass the centres at angles a cell's width apart as seen from the
-    /// eye).
+    /// The light each cell's centre sends toward `eye`, per unit scattering coefficient
+    /// and sun irradiance (1/sr): the second order's, scattered by the whole phase, and
+    /// the diffuse field's ([`DiffuseLight::leaving`]). Made once for a picture: its
+    /// lookups along the pixels' rays are then one value's trilinear read (the rays
+    /// pass the centres at angles a cell's width apart as seen from the eye).
     pub(crate) fn seen_from(&self, eye: Vec3) -> Seen {
         let [_, ny, nz] = self.dims;
         let values = (0..self.values.len())
@@ -234,7 +227,8 @@ impl DiffuseLight {
         }
     }
 
-    /// The light scattered along `w` from a cell's `values` ([`DiffuseLight::at`]).
+    /// What a droplet scatters along the unit `w` of the diffuse field of a cell's
+    /// `values`: the radiance's angles by Minerbo's closure, scattered by the phase.
     #[inline]
     fn leaving(&self, v: Vec4, w: Vec3) -> f32 {
         let flux = Vec3::new(v.y, v.z, v.w);
@@ -244,20 +238,6 @@ impl DiffuseLight {
         }
         let cos = if size > 0.0 { flux.dot(w) / size } else { 0.0 };
         v.x * self.closure.at(size / v.x, cos)
-    }
-
-    /// The grid's four values at `p`, trilinear (0 outside).
-    #[inline]
-    fn sample(&self, p: Vec3) -> Vec4 {
-        trilinear(
-            &self.values,
-            self.min,
-            self.cell,
-            self.dims,
-            p,
-            Vec4::ZERO,
-            Vec4::lerp,
-        )
     }
 }
 
@@ -292,6 +272,15 @@ impl Closure {
         let chi = phase.legendre_moments(CLOSURE_TERMS as u32);
         let mut nodes = Vec::new();
         crate::quadrature::gauss_legendre(-1.0, 1.0, 64, |mu, w| nodes.push((mu, w)));
+        // The polynomials at the quadrature's nodes and at the table's cosines, the same
+        // for every row.
+        let at_nodes: Vec<Vec<f64>> = nodes
+            .iter()
+            .map(|&(mu, _)| legendre(mu, CLOSURE_TERMS))
+            .collect();
+        let at_cosines: Vec<Vec<f64>> = (0..=CLOSURE_STEPS)
+            .map(|j| legendre(-1.0 + 2.0 * j as f64 / CLOSURE_STEPS as f64, CLOSURE_TERMS))
+            .collect();
         let mut values = Vec::with_capacity((CLOSURE_STEPS + 1).pow(2));
         for i in 0..=CLOSURE_STEPS {
             let r = CLOSURE_MAX as f64 * i as f64 / CLOSURE_STEPS as f64;
@@ -303,16 +292,22 @@ impl Closure {
                 .collect();
             let total: f64 = weights.iter().sum();
             let mut moments = vec![0.0; CLOSURE_TERMS + 1];
-            for (&(mu, _), weight) in nodes.iter().zip(&weights) {
-                for (m, p) in moments.iter_mut().zip(legendre(mu, CLOSURE_TERMS)) {
+            for (polynomials, weight) in at_nodes.iter().zip(&weights) {
+                for (m, p) in moments.iter_mut().zip(polynomials) {
                     *m += weight * p / total;
                 }
             }
-            // Funk and Hecke: the phase scales each moment by its own.
+            // Funk and Hecke: the phase scales each moment by its own; then
+            // `sum (2l + 1) c_l P_l(cos)` at each cosine.
             let scattered: Vec<f64> = moments.iter().zip(&chi).map(|(m, c)| m * c).collect();
-            for j in 0..=CLOSURE_STEPS {
-                let c = -1.0 + 2.0 * j as f64 / CLOSURE_STEPS as f64;
-                values.push(legendre_series(&scattered, c).max(0.0) as f32);
+            for polynomials in &at_cosines {
+                let series: f64 = polynomials
+                    .iter()
+                    .zip(&scattered)
+                    .enumerate()
+                    .map(|(l, (p, c))| (2 * l + 1) as f64 * c * p)
+                    .sum();
+                values.push(series.max(0.0) as f32);
             }
         }
         Closure { values, chi }
@@ -335,16 +330,6 @@ impl Closure {
         let high = v(i + 1, j) + fy * (v(i + 1, j + 1) - v(i + 1, j));
         low + fx * (high - low)
     }
-}
-
-/// `sum (2l + 1) c_l P_l(x)` over the `coefficients` `c_l`.
-fn legendre_series(coefficients: &[f64], x: f64) -> f64 {
-    legendre(x, coefficients.len() - 1)
-        .iter()
-        .zip(coefficients)
-        .enumerate()
-        .map(|(l, (p, c))| (2 * l + 1) as f64 * c * p)
-        .sum()
 }
 
 /// `b` with `coth b - 1/b = r`, by bisection (0 for `r = 0`).
@@ -545,31 +530,15 @@ impl Seen {
         let [px, py, pz] = p.map(|c| c.to_array());
         Lanes::new(std::array::from_fn(|k| {
             let p = Vec3::new(px[k], py[k], pz[k]);
-            trilinear(
-                &self.values,
-                self.min,
-                self.cell,
-                self.dims,
-                p,
-                0.0,
-                |a, b, t| a + t * (b - a),
-            )
+            trilinear(&self.values, self.min, self.cell, self.dims, p)
         }))
     }
 }
 
 /// `values` on the grid of cells `cell` m wide whose first centre is `min`, trilinear
-/// at `p` by `lerp` (`outside` beyond the centres).
+/// at `p` (0 beyond the centres).
 #[inline(always)]
-fn trilinear<T: Copy>(
-    values: &[T],
-    min: Vec3,
-    cell: f32,
-    dims: [usize; 3],
-    p: Vec3,
-    outside: T,
-    lerp: impl Fn(T, T, f32) -> T,
-) -> T {
+fn trilinear(values: &[f32], min: Vec3, cell: f32, dims: [usize; 3], p: Vec3) -> f32 {
     let g = (p - min) / cell;
     let [nx, ny, nz] = dims;
     if !(g.x >= 0.0
@@ -579,12 +548,13 @@ fn trilinear<T: Copy>(
         && g.y < (ny - 1) as f32
         && g.z < (nz - 1) as f32)
     {
-        return outside;
+        return 0.0;
     }
     let (ix, iy, iz) = (g.x as usize, g.y as usize, g.z as usize);
     let (fx, fy, fz) = (g.x - ix as f32, g.y - iy as f32, g.z - iz as f32);
     let base = (ix * ny + iy) * nz + iz;
     let (sx, sy) = (ny * nz, nz);
+    let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
     let lerp_z = |b: usize| lerp(values[b], values[b + 1], fz);
     let lerp_y = |b: usize| lerp(lerp_z(b), lerp_z(b + sy), fy);
     lerp(lerp_y(base), lerp_y(base + sx), fx)

@@ -515,6 +515,16 @@ pub fn to_smooth_edge(beam_deg: f32, field_deg: f32) -> (f32, f32) {
     }
 }
 
+/// The bytes of the example fixture, scenes/fixtures/atmo-spot.gdtf, for tests.
+#[cfg(test)]
+pub(crate) fn example_fixture() -> Vec<u8> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/fixtures/atmo-spot.gdtf"
+    );
+    std::fs::read(path).expect("the example fixture is in the repository")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -563,11 +573,7 @@ mod reading {
 
     /// The example fixture's description with `from` replaced by `to`.
     fn description(from: &str, to: &str) -> Vec<u8> {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/fixtures/atmo-spot.gdtf"
-        );
-        let bytes = std::fs::read(path).unwrap();
+        let bytes = example_fixture();
         let mut zip = zip::ZipArchive::new(std::io::Cursor::new(&bytes[..])).unwrap();
         let text = zip_entry(&mut zip, "description.xml", DESCRIPTION_LIMIT)
             .unwrap()
@@ -586,11 +592,7 @@ mod reading {
 
     #[test]
     fn the_example_fixture_reads_in_both_modes() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/fixtures/atmo-spot.gdtf"
-        );
-        let bytes = std::fs::read(path).unwrap();
+        let bytes = example_fixture();
         let f = read(&bytes, "atmo-spot.gdtf", "Standard", Sampling::Bilinear).unwrap();
         assert_eq!(f.name, "atmo Spot 300");
         assert_eq!(

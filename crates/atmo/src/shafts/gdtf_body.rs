@@ -232,11 +232,7 @@ mod tests {
     /// where nothing of the yoke reaches further along the beam).
     #[test]
     fn a_fixtures_models_turn_with_its_beam() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/fixtures/atmo-spot.gdtf"
-        );
-        let bytes = std::fs::read(path).unwrap();
+        let bytes = crate::shafts::gdtf::example_fixture();
         let file =
             crate::shafts::gdtf::read(&bytes, "spot", "Standard", Sampling::Bilinear).unwrap();
         let body = &file.body;

@@ -177,11 +177,7 @@ fn gdtf_dmx_values_mirror_or_shift_into_the_channel() {
 #[cfg(feature = "gdtf")]
 #[test]
 fn a_gdtf_mode_drives_its_fixture_as_the_file_says() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/fixtures/atmo-spot.gdtf"
-    );
-    let bytes = std::fs::read(path).unwrap();
+    let bytes = crate::shafts::gdtf::example_fixture();
     let sampling = crate::shafts::spotlight::Sampling::Bilinear;
     let file = crate::shafts::gdtf::read(&bytes, "atmo-spot.gdtf", "Standard", sampling).unwrap();
     let patch = Patch::new(3, 20, file.dmx, "f").unwrap();
