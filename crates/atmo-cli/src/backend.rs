@@ -27,14 +27,11 @@ impl BackendArgs {
     /// The GPU to run on, or `None` for the CPU; prints which device runs, in one line
     /// (not for the CPU asked for by name).
     pub fn open(&self) -> Result<Option<Gpu>> {
-        self.open_for(self.backend)
-    }
-
-    /// [`BackendArgs::open`] with `backend` in place of the one asked for (a method
-    /// that runs on one device alone narrows it).
-    pub fn open_for(&self, backend: Backend) -> Result<Option<Gpu>> {
-        let opened = backend.open(self.adapter.as_deref()).map_err(gpu_error)?;
-        if backend != Backend::Cpu {
+        let opened = self
+            .backend
+            .open(self.adapter.as_deref())
+            .map_err(gpu_error)?;
+        if self.backend != Backend::Cpu {
             note!("{}", opened.notice);
         }
         Ok(opened.gpu)

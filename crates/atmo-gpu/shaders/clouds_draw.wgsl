@@ -6,7 +6,9 @@
 // the octaves go to a second target, scaled afterwards by the cloud's depth on the ray;
 // by the transfer table, with the single-scattered light, the depth toward the eye read
 // from a second buffer lit from the eye (the depth in front of a blob on its pixel, the
-// CPU's, is not known to billboards blended in hardware).
+// CPU's, is not known to billboards blended in hardware); by the transfer solve, with
+// the single-scattered light, its light toward the eye read at the emission nodes' mean
+// place (clouds_solve.wgsl made it).
 
 // Mirrors atmo_gpu::clouds::DrawParams.
 struct DrawParams {
@@ -45,6 +47,10 @@ struct DrawParams {
     pad1: u32,
     pad2: u32,
     pad3: u32,
+    // The transfer solve's grid: cell (0, 0, 0)'s centre (m), w the cells' side (m);
+    // the cells along x, y and z.
+    solve_centre: vec4<f32>,
+    solve_dims: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> params: DrawParams;
@@ -62,6 +68,14 @@ struct DrawParams {
 // The transfer table's values, [thickness][sun][out][cosine][eye]
 // (atmo::clouds::TransferTable).
 @group(0) @binding(6) var<storage, read> table: array<f32>;
+// The transfer solve's light toward the eye per cell, [x][y][z] (1/sr per unit sun
+// irradiance and scattering coefficient).
+@group(0) @binding(7) var<storage, read> solved: array<f32>;
+
+// How the orders past the first are drawn: `shade`'s modes.
+const BY_OCTAVES: u32 = 0u;
+const BY_TABLE: u32 = 1u;
+const BY_SOLVE: u32 = 2u;
 
 struct Billboard {
     @builtin(position) clip: vec4<f32>,
@@ -255,22 +269,54 @@ fn absorbed_of(tau: f32) -> f32 {
     return 1.0 - exp(-tau);
 }
 
+// The transfer solve's light toward the eye at the world point p, trilinear between
+// the cells' centres, 0 beyond them (atmo::clouds::diffusion's trilinear).
+fn solved_at(p: vec3<f32>) -> f32 {
+    let g = (p - params.solve_centre.xyz) / params.solve_centre.w;
+    let n = params.solve_dims.xyz;
+    if !(all(g >= vec3<f32>(0.0)) && all(g < vec3<f32>(n - vec3<u32>(1u)))) {
+        return 0.0;
+    }
+    let i = vec3<u32>(g);
+    let f = g - vec3<f32>(i);
+    let base = (i.x * n.y + i.y) * n.z + i.z;
+    let sx = n.y * n.z;
+    let sy = n.z;
+    let x0 = mix(
+        mix(solved[base], solved[base + 1u], f.z),
+        mix(solved[base + sy], solved[base + sy + 1u], f.z),
+        f.y,
+    );
+    let x1 = mix(
+        mix(solved[base + sx], solved[base + sx + 1u], f.z),
+        mix(solved[base + sx + sy], solved[base + sx + sy + 1u], f.z),
+        f.y,
+    );
+    return mix(x0, x1, f.x);
+}
+
 // The orders past the first by the octaves.
 @fragment
 fn fragment(b: Billboard) -> Colours {
-    return shade(b, false);
+    return shade(b, BY_OCTAVES);
 }
 
 // The orders past the first by the transfer table.
 @fragment
 fn fragment_table(b: Billboard) -> Colours {
-    return shade(b, true);
+    return shade(b, BY_TABLE);
 }
 
-// A fragment of the billboard `b`, the orders past the first by the transfer table
-// (`table`, a constant of each entry point, so that each compiles to its own branch
-// alone) or by the octaves.
-fn shade(b: Billboard, table: bool) -> Colours {
+// The orders past the first by the transfer solve.
+@fragment
+fn fragment_solve(b: Billboard) -> Colours {
+    return shade(b, BY_SOLVE);
+}
+
+// A fragment of the billboard `b`, the orders past the first by the octaves, the
+// transfer table or the solve (`mode`, a constant of each entry point, so that each
+// compiles to its own branch alone).
+fn shade(b: Billboard, mode: u32) -> Colours {
     // The pixel's centre, in pixels, and its ray (component 1 along the view axis).
     let pixel = b.clip.xy;
     let w = f32(params.width);
@@ -328,7 +374,7 @@ fn shade(b: Billboard, table: bool) -> Colours {
     // depths toward the sun and toward the eye, the least of those and the particle's
     // depth out, and the ray's angle.
     var tabled = 0.0;
-    if table {
+    if mode == BY_TABLE {
         let across = params.eye_scale * vec2<f32>(dot(r, params.right.xyz), dot(r, params.up.xyz));
         let depths = vec3<f32>(t) + (s * inv_length) * ls;
         let eye_at = vec3<f32>(
@@ -339,6 +385,11 @@ fn shade(b: Billboard, table: bool) -> Colours {
         let to_eye = -dot(EMISSION_WEIGHTS, eye_at);
         let to_sun = -dot(EMISSION_WEIGHTS, l);
         tabled = alpha * transfer(b.slices, to_sun, min(min(to_eye, to_sun), b.out_depth), cosine, to_eye);
+    }
+    // The solve's light toward the eye at the emission nodes' mean place.
+    if mode == BY_SOLVE {
+        let at = t + dot(EMISSION_WEIGHTS, ls) * s * inv_length;
+        tabled = alpha * solved_at(params.position.xyz + at * r);
     }
     // OctaveTerms::light: the slab's diffuse light, the cloud's whole depth along the
     // sun's ray through the nearest node (IntensityBuffer::column_depth_grid).

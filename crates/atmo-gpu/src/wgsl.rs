@@ -8,6 +8,7 @@
 
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::buffer::FOOTPRINT;
+use atmo::clouds::diffusion;
 use atmo::clouds::particles::{EMISSION_WEIGHTS, FADE_SCALE, GAUSS_LEGENDRE};
 use atmo::clouds::render::OPAQUE;
 use atmo::clouds::transfer;
@@ -95,6 +96,10 @@ const FILES: &[(&str, &str)] = &[
         include_str!("../shaders/clouds_draw.wgsl"),
     ),
     (
+        "clouds_solve.wgsl",
+        include_str!("../shaders/clouds_solve.wgsl"),
+    ),
+    (
         "shafts_common.wgsl",
         include_str!("../shaders/shafts_common.wgsl"),
     ),
@@ -173,7 +178,9 @@ const _: () = assert!(
 /// The constants WGSL shares with the Rust, generated: `const PHASE_RAYLEIGH: u32 = 0u;`
 /// and the rest of [`PhaseFunction::CODES`], this module's codes, the sky model's
 /// `MOMENTS`, `TABLE_MU`, `TABLE_PHI` and `MAX_LANES`, the clouds' `FOOTPRINT`,
-/// `FADE_SCALE`, `EMISSION_FRACTIONS`, `EMISSION_WEIGHTS` and `OPAQUE` and their
+/// `FADE_SCALE`, `EMISSION_FRACTIONS`, `EMISSION_WEIGHTS` and `OPAQUE`, their transfer
+/// solve's `DIRECTIONS`, `CLOSURE_STEPS`, `CLOSURE_MAX`, `LOBE_STEPS`, `STREAMING`,
+/// `THIN` and `TOLERANCE`, and their
 /// transfer table's nodes (`TRANSFER_THICKNESS` and its `TRANSFER_THICKNESS_COUNT`, ..., padded to
 /// `TRANSFER_NODES`), the shadow maps' `RECEIVER_BIAS`, and the shafts' near-lamp
 /// slabs' `NEAR_LAMP`, `ANGLE_STEP` and `MAX_ANGLE_SAMPLES`.
@@ -186,6 +193,9 @@ pub fn prelude() -> String {
         ("TABLE_MU", export::TABLE_MU as u32),
         ("TABLE_PHI", export::TABLE_PHI as u32),
         ("MAX_LANES", export::MAX_LANES as u32),
+        ("DIRECTIONS", diffusion::DIRECTIONS as u32),
+        ("CLOSURE_STEPS", diffusion::CLOSURE_STEPS as u32),
+        ("LOBE_STEPS", diffusion::LOBE_STEPS as u32),
     ];
     let shared = SHARED.iter().chain(&sizes);
     let shared = shared.map(|(name, code)| (name.to_string(), *code));
@@ -204,6 +214,16 @@ pub fn prelude() -> String {
     ] {
         let [a, b, c] = values;
         out.push_str(&format!("const {name} = vec3<f32>({a:?}, {b:?}, {c:?});\n"));
+    }
+    // The clouds' transfer solve: its closure's range, streaming limit, least optical
+    // depth of a cloud cell and conjugate gradients' tolerance.
+    for (name, value) in [
+        ("CLOSURE_MAX", diffusion::CLOSURE_MAX),
+        ("STREAMING", diffusion::STREAMING),
+        ("THIN", diffusion::THIN),
+        ("TOLERANCE", diffusion::TOLERANCE as f32),
+    ] {
+        out.push_str(&format!("const {name}: f32 = {value:?};\n"));
     }
     // The transmittance below which a cloud's pixel counts as opaque.
     out.push_str(&format!("const OPAQUE: f32 = {:?};\n", OPAQUE));

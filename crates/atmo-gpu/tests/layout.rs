@@ -57,6 +57,7 @@ fn cloud_structs_match_their_wgsl() {
     check::<atmo_gpu::clouds::BufferFrame>();
     check::<atmo_gpu::clouds::DrawParams>();
     check::<atmo_gpu::clouds::CompositeParams>();
+    check::<atmo_gpu::clouds::SolveParams>();
 }
 
 #[test]

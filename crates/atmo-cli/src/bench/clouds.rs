@@ -25,7 +25,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::{alternated, emit, median, report, time_gpu, time_ms, Case};
+use super::{alternated, emit, levels, median, report, time_gpu, time_ms, Case};
 use crate::backend::gpu_error;
 
 /// Unit vector toward a sun at `elevation_deg` and `azimuth_deg` (valid values).
@@ -424,6 +424,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
             },
         );
     }
+    solve_gpu(gpu, &particles, runs, json)?;
     let buffer = IntensityBuffer::new(&particles, to_sun, 256, forward, Splat::Pieces)?;
     let mut clouds = GpuClouds::new(gpu, &particles, 256).map_err(gpu_error)?;
     clouds
@@ -451,9 +452,87 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool) -> Result<()> {
                 wall_ms: wall,
                 gpu_ms,
                 cpu_ms,
-                error: Some(frame.level_errors(&cpu, display)?),
+                error: Some(levels(frame.level_errors(&cpu, display)?)),
             },
         );
     }
+    Ok(())
+}
+
+/// The transfer solve when the sun moves on the GPU against the CPU's: the same two
+/// suns half a degree apart alternated, each solve from the last and its light pass
+/// made beforehand (untimed), as the CPU bench's; the GPU's light toward the eye
+/// against the CPU's for the last sun.
+fn solve_gpu(
+    gpu: &Gpu,
+    particles: &[atmo::clouds::Particle],
+    runs: usize,
+    json: bool,
+) -> Result<()> {
+    let suns = [toward_sun(20.0, 40.0), toward_sun(20.5, 40.0)];
+    let buffers = suns.map(|sun| IntensityBuffer::new(particles, sun, 256, 0.0, Splat::Pieces));
+    let [a, b] = buffers;
+    let buffers = [a?, b?];
+    let camera = bench_camera(particles, (1280, 720));
+    let solve = |k: usize, previous: Option<&DiffuseLight>| {
+        DiffuseLight::solve(
+            particles,
+            &buffers[k % 2],
+            suns[k % 2],
+            PhaseFunction::CloudMie,
+            &Diffusion::DEFAULT,
+            previous,
+        )
+        .expect("validated")
+    };
+    let mut last = solve(0, None);
+    let mut cpu_times = Vec::new();
+    for k in 1..=runs {
+        cpu_times.push(time_ms(|| last = solve(k, Some(&last))));
+    }
+    let mut clouds = GpuClouds::new(gpu, particles, 256).map_err(gpu_error)?;
+    let (mut walls, mut gpu_times) = (Vec::new(), Vec::new());
+    for k in 0..=runs {
+        let sun = suns[k % 2];
+        clouds
+            .light(gpu, sun, 0.0, Splat::Pieces)
+            .map_err(gpu_error)?;
+        let light = lighting(sun, Scattering::SOLVE);
+        let mut ms = Ok(None);
+        let wall = time_ms(|| ms = clouds.solve(gpu, &light, camera.position));
+        // The first from scratch, untimed.
+        if k > 0 {
+            walls.push(wall);
+            gpu_times.extend(ms.map_err(gpu_error)?);
+        }
+    }
+    let (got, want) = (
+        clouds.solved_toward(gpu).map_err(gpu_error)?,
+        last.toward(camera.position),
+    );
+    let mean = |v: &[f32]| v.iter().map(|x| *x as f64).sum::<f64>() / v.len() as f64;
+    let rms = (got
+        .iter()
+        .zip(&want)
+        .map(|(g, w)| ((g - w) as f64).powi(2))
+        .sum::<f64>()
+        / want.len() as f64)
+        .sqrt()
+        / mean(&want);
+    report(
+        json,
+        gpu,
+        Case {
+            name: "clouds.solve.gpu",
+            params: json!({"particles": particles.len(), "cells": Diffusion::DEFAULT.cells,
+                           "iterations": clouds.solve_iterations(gpu).map_err(gpu_error)?}),
+            wall_ms: median(walls),
+            gpu_ms: (!gpu_times.is_empty()).then(|| median(gpu_times)),
+            cpu_ms: median(cpu_times),
+            // The light toward the eye, every cell: the means' ratio and the RMS
+            // difference over the mean.
+            error: Some(json!({"mean_ratio": mean(&got) / mean(&want), "rms_of_mean": rms})),
+        },
+    );
     Ok(())
 }

@@ -242,14 +242,25 @@ pub(crate) struct Case<'a> {
     wall_ms: f64,
     gpu_ms: Option<f64>,
     cpu_ms: f64,
-    error: Option<atmo::image::LevelErrors>,
+    /// How far the case's result is from the baseline's: [`levels`] for pictures.
+    error: Option<Value>,
+}
+
+/// Two pictures' difference in display levels, as a case's error.
+pub(crate) fn levels(e: atmo::image::LevelErrors) -> Value {
+    json!({"rms_levels": e.rms, "max_levels": e.max})
 }
 
 pub(crate) fn report(json: bool, gpu: &Gpu, case: Case) {
     let device = json!({"adapter": gpu.describe(), "software": gpu.is_software()});
-    let error = case
-        .error
-        .map(|e| json!({"rms_levels": e.rms, "max_levels": e.max}));
+    let error = case.error;
+    let said = error
+        .as_ref()
+        .and_then(Value::as_object)
+        .map_or(String::new(), |e| {
+            let pairs: Vec<String> = e.iter().map(|(k, v)| format!("{k} {v:.4}")).collect();
+            format!("   error {}", pairs.join(" "))
+        });
     emit(
         json,
         json!({
@@ -266,10 +277,7 @@ pub(crate) fn report(json: bool, gpu: &Gpu, case: Case) {
                 .map_or("not measured".into(), |ms| format!("{ms:.2} ms")),
             case.cpu_ms,
             case.cpu_ms / case.wall_ms,
-            case.error.map_or(String::new(), |e| format!(
-                "   error rms {:.3} max {:.2} levels",
-                e.rms, e.max
-            ))
+            said
         ),
     );
 }

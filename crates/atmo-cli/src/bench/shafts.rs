@@ -15,7 +15,7 @@ use atmo_gpu::shafts::{GpuShafts, ShaftsMethod};
 use atmo_gpu::{Gpu, Rendered};
 use serde_json::json;
 
-use super::{alternated, emit, median, report, time_gpu, time_ms, Alternated, Case};
+use super::{alternated, emit, levels, median, report, time_gpu, time_ms, Alternated, Case};
 use crate::backend::gpu_error;
 
 /// Median time of `runs` renders by the plane method after one warm-up, and the last
@@ -551,7 +551,7 @@ pub fn gpu(gpu: &Gpu, quick: bool, json: bool, scenes: &Path) -> Result<()> {
                     wall_ms: wall,
                     gpu_ms,
                     cpu_ms,
-                    error: Some(frame.level_errors(&cpu, scene.display)?),
+                    error: Some(levels(frame.level_errors(&cpu, scene.display)?)),
                 },
             );
         }

@@ -17,7 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::{json, Value};
 
-use super::{emit, median, report, time_gpu, time_ms, Case};
+use super::{emit, levels, median, report, time_gpu, time_ms, Case};
 use crate::backend::gpu_error;
 
 /// The frame the sky benches draw: 1920 x 1080, looking north 15 deg up, 70 deg high.
@@ -424,7 +424,7 @@ pub(super) fn sky_frame(
             wall_ms: wall,
             gpu_ms,
             cpu_ms,
-            error: Some(frame.level_errors(&cpu, display)?),
+            error: Some(levels(frame.level_errors(&cpu, display)?)),
         },
     );
     Ok(())

@@ -187,8 +187,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
         ViewMode::Clouds(args) => {
             let cloud = Cloud::new(&args.still)?;
             let size = (cloud.camera.width, cloud.camera.height);
-            let mut device = args.device;
-            device.backend = super::clouds::solve_on_cpu(&cloud.scene.scattering, device.backend)?;
+            let device = args.device;
             let pictures = WindowClouds::new(cloud);
             let params = pictures.params();
             let mode = CloudsMode::new(params, Box::new(pictures));

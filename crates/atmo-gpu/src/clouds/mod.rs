@@ -13,7 +13,7 @@
 //! records the draw into the caller's encoder and a
 //! [`CloudsPass`] puts the cloud over the caller's own target, with no read-back.
 
-use std::cell::{Cell, RefCell};
+use std::cell::{Cell, OnceCell, RefCell};
 
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
@@ -30,9 +30,12 @@ use crate::{gpu_struct, Gpu, GpuError, Rendered};
 
 mod frames;
 mod pass;
+mod solve;
 
 use frames::*;
 pub use pass::CloudsPass;
+pub use solve::SolveParams;
+use solve::{GpuSolve, SolvePipelines};
 
 gpu_struct! {
     /// A particle as the shaders read it (32 bytes).
@@ -110,6 +113,10 @@ gpu_struct! {
         pad1: u32,
         pad2: u32,
         pad3: u32,
+        /// The transfer solve's grid: cell `(0, 0, 0)`'s centre (m) and the cells' side
+        /// (w, m), and the cells along x, y and z.
+        solve_centre: [f32; 4],
+        solve_dims: [u32; 4],
     }
 }
 
@@ -153,8 +160,14 @@ pub struct GpuClouds {
     splat: wgpu::ComputePipeline,
     prefix: wgpu::ComputePipeline,
     depths_pass: wgpu::ComputePipeline,
-    /// The billboards, the orders past the first by the octaves and by the table.
-    draw: [wgpu::RenderPipeline; 2],
+    /// The billboards, the orders past the first by the octaves, by the table and by
+    /// the transfer solve.
+    draw: [wgpu::RenderPipeline; 3],
+    /// The transfer solve's passes (made when a draw first needs them), its buffers
+    /// for the particles where they are, and what the draws bind without one.
+    solve_pipelines: OnceCell<SolvePipelines>,
+    solve: RefCell<Option<GpuSolve>>,
+    no_solve: wgpu::Buffer,
     /// [`GpuClouds::render`]'s composite, into an RGBA f32 picture (a cell: `render`
     /// reads the cloud while it prepares the pass).
     composite: RefCell<CloudsPass>,
@@ -245,8 +258,15 @@ impl GpuClouds {
             prefix: gpu.compute_pipeline(&prefix, "main", None)?,
             depths_pass: gpu.compute_pipeline(&depths_pass, "main", None)?,
             // Premultiplied "over": E_k = S_k + T_k E_{k-1}; into the picture and into
-            // the higher octaves' target. By the octaves, and by the transfer table.
-            draw: [over("fragment")?, over("fragment_table")?],
+            // the higher octaves' target. By the octaves, the transfer table, the solve.
+            draw: [
+                over("fragment")?,
+                over("fragment_table")?,
+                over("fragment_solve")?,
+            ],
+            solve_pipelines: OnceCell::new(),
+            solve: RefCell::new(None),
+            no_solve: gpu.storage("no transfer solve", &[0; 4], "the particle count")?,
         })
     }
 
@@ -276,6 +296,7 @@ impl GpuClouds {
         self.eye.set(None);
         self.sky_depths.set(false);
         self.out_depths.set(false);
+        *self.solve.borrow_mut() = None;
         Ok(())
     }
 
@@ -523,13 +544,8 @@ impl GpuClouds {
         light: &CloudLight,
     ) -> Result<(), GpuError> {
         light.scattering.validate()?;
-        if light.scattering.diffusion().is_some() {
-            return Err(atmo::Error::Invalid(
-                "scattering: the transfer solve draws on the CPU alone (allowed on the GPU: \
-                 single, multiple, octaves)"
-                    .into(),
-            )
-            .into());
+        if let Some(settings) = light.scattering.diffusion() {
+            self.record_solve(gpu, encoder, settings, light, camera.position)?;
         }
         let dimming = light.ambient.dimming(&light.scattering.octaves());
         let billboards = self.billboards(gpu, camera, light, &dimming)?;
@@ -602,6 +618,95 @@ impl GpuClouds {
         Ok(())
     }
 
+    /// Records the transfer solve a draw from `eye` reads: the solve again where the sun
+    /// or its light pass has changed since the last (from the last solution where the
+    /// grid is the same), and the light toward the eye again where either has moved.
+    /// An error before the first light pass.
+    fn record_solve(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        settings: atmo::clouds::Diffusion,
+        light: &CloudLight,
+        eye: Vec3,
+    ) -> Result<(), GpuError> {
+        let frame = self.frame.ok_or_else(|| {
+            atmo::Error::Invalid("the clouds need a light pass before they are drawn".into())
+        })?;
+        if self.solve_pipelines.get().is_none() {
+            let made = SolvePipelines::new(gpu)?;
+            let _ = self.solve_pipelines.set(made);
+        }
+        let pipelines = self.solve_pipelines.get().expect("made above");
+        let mut kept = self.solve.borrow_mut();
+        if !kept
+            .as_ref()
+            .is_some_and(|s| s.settings == settings && s.phase() == light.phase)
+        {
+            *kept = Some(GpuSolve::new(
+                gpu,
+                pipelines,
+                &self.particles,
+                settings,
+                light.phase,
+                &self.cells,
+            )?);
+        }
+        let solve = kept.as_mut().expect("made above");
+        if solve.sun != Some((light.to_sun, frame)) {
+            solve.record_solve(gpu, pipelines, encoder, &frame, light.to_sun);
+        }
+        if solve.eye != Some(eye) {
+            solve.record_toward(gpu, pipelines, encoder, eye);
+        }
+        Ok(())
+    }
+
+    /// The transfer solve of `light` (its scattering must be one) and its light toward
+    /// `eye`, now, in a submission of its own: what a draw would otherwise make first
+    /// (again where the sun, its light pass or the eye has moved since the last; nothing
+    /// where none has). Returns the GPU time where timestamps exist, ms. An error before
+    /// the first light pass.
+    pub fn solve(&self, gpu: &Gpu, light: &CloudLight, eye: Vec3) -> Result<Option<f64>, GpuError> {
+        let settings = light.scattering.diffusion().ok_or_else(|| {
+            atmo::Error::Invalid("scattering: a solve needs Scattering::Solve".into())
+        })?;
+        light.scattering.validate()?;
+        let mut made = Ok(());
+        let ms = gpu.run("the transfer solve", |encoder| {
+            made = self.record_solve(gpu, encoder, settings, light, eye);
+        })?;
+        made?;
+        Ok(ms)
+    }
+
+    /// The conjugate-gradient iterations of the last transfer solve (read back; 0
+    /// before one), as `atmo::clouds::DiffuseLight::iterations`.
+    pub fn solve_iterations(&self, gpu: &Gpu) -> Result<u32, GpuError> {
+        match self.solve.borrow().as_ref() {
+            Some(solve) => solve.iterations(gpu),
+            None => Ok(0),
+        }
+    }
+
+    /// The light each cell of the transfer solve's grid sends toward the eye of the
+    /// last draw with it, as `atmo::clouds::DiffuseLight::toward` (read back; empty
+    /// before one).
+    pub fn solved_toward(&self, gpu: &Gpu) -> Result<Vec<f32>, GpuError> {
+        match self.solve.borrow().as_ref() {
+            Some(solve) => {
+                let bytes = gpu.read(
+                    "the light toward the eye",
+                    &solve.seen,
+                    0,
+                    solve.seen.size(),
+                )?;
+                Ok(bytemuck::cast_slice(&bytes).to_vec())
+            }
+            None => Ok(Vec::new()),
+        }
+    }
+
     /// What drawing the cloud seen by `camera` needs: the particles sorted by depth on
     /// the CPU (farthest first), the draw's parameters and bindings, checked.
     fn billboards(
@@ -649,6 +754,17 @@ impl GpuClouds {
             Some(_) => Some(self.eye_for(camera)?),
             None => None,
         };
+        // With the solve, its grid and the light toward the eye it made.
+        let solve = self.solve.borrow();
+        let solved = solve
+            .as_ref()
+            .filter(|_| light.scattering.diffusion().is_some());
+        let solve_grid = solved.map_or(([0.0; 4], [0; 4]), |s| s.draw_grid());
+        let mode = match (table, solved) {
+            (Some(_), _) => 1,
+            (None, Some(_)) => 2,
+            (None, None) => 0,
+        };
         // The phase function's code and parameter (functions.wgsl's phase_function).
         let (kind, g) = light.phase.code();
         let params = DrawParams {
@@ -678,6 +794,8 @@ impl GpuClouds {
             pad1: 0,
             pad2: 0,
             pad3: 0,
+            solve_centre: solve_grid.0,
+            solve_dims: solve_grid.1,
         };
         let params = gpu.uniform("the cloud draw", &params);
         let frame_buffer = gpu.uniform("the buffer frame", &frame);
@@ -692,7 +810,7 @@ impl GpuClouds {
             "the transfer table",
         )?;
         let group = gpu.bind_group(
-            &self.draw[eye.is_some() as usize].get_bind_group_layout(0),
+            &self.draw[mode].get_bind_group_layout(0),
             &[
                 params.as_entire_binding(),
                 frame_buffer.as_entire_binding(),
@@ -701,12 +819,16 @@ impl GpuClouds {
                 self.cells.as_entire_binding(),
                 eye_buffer.as_entire_binding(),
                 table_buffer.as_entire_binding(),
+                solved
+                    .map_or(&self.no_solve, |s| &s.seen)
+                    .as_entire_binding(),
             ],
         );
         Ok(Billboards {
             group,
             count: order.len() as u32,
             eye,
+            mode,
         })
     }
 
@@ -733,18 +855,19 @@ impl GpuClouds {
             color_attachments: &attachments,
             ..Default::default()
         });
-        pass.set_pipeline(&self.draw[billboards.eye.is_some() as usize]);
+        pass.set_pipeline(&self.draw[billboards.mode]);
         pass.set_bind_group(0, &billboards.group, &[]);
         pass.draw(0..6, 0..billboards.count);
     }
 }
 
-/// A draw of the billboards: its bindings, how many particles are in front, and the
-/// grid lit from the eye it reads (with the table, which it is drawn by).
+/// A draw of the billboards: its bindings, how many particles are in front, the grid
+/// lit from the eye it reads (with the table), and its pipeline's index in `draw`.
 struct Billboards {
     group: wgpu::BindGroup,
     count: u32,
     eye: Option<Eye>,
+    mode: usize,
 }
 
 /// The grid lit from the eye along each pixel's ray: its light pass's frame, the scale

@@ -32,7 +32,7 @@
 //! the cloud's faces to them and on the grid's outer faces Marshak's condition lets
 //! the light out (`F . n = phi / 2`), nothing coming in. A droplet scatters the field
 //! toward the eye as its radiance rebuilt from `phi` and `F` by Minerbo's closure and
-//! scattered by the phase ([`DiffuseLight::seen_from`]).
+//! scattered by the phase ([`DiffuseLight::toward`]).
 //!
 //! Both are made toward the eye once a picture for each cell and read at the blobs'
 //! emission nodes. The grid is cubic cells over the particles' reach with two cells
@@ -72,10 +72,11 @@ impl Diffusion {
 }
 
 /// Cells of air around the cloud on each side.
-const MARGIN: usize = 2;
+pub const MARGIN: usize = 2;
 
-/// The least optical depth across a cell that counts it as cloud ([`Medium`]).
-const THIN: f32 = 1e-3;
+/// The least optical depth across a cell that counts it as cloud (clear air is left
+/// out of the solve).
+pub const THIN: f32 = 1e-3;
 
 /// The flux limiter's streaming limit, `|F| <= STREAMING phi` where light streams
 /// (docs/clouds.md, "Every order: the transfer solve"). Levermore and Pomraning's is 1,
@@ -83,14 +84,14 @@ const THIN: f32 = 1e-3;
 /// (Marshak's condition). Between the two, chosen on the three tuning clouds' 36 views
 /// (0.5, 0.6, 0.75 and 1 tried): at 1 the fringe lets too much light out and every
 /// view is 15-25 % dark; at 0.5 the thin fringes hold too much.
-const STREAMING: f32 = 0.6;
+pub const STREAMING: f32 = 0.6;
 
 /// Lagged updates of the flux limiter's `D`, from scratch and from a previous solution.
-const LAGS_COLD: usize = 6;
-const LAGS_WARM: usize = 1;
+pub const LAGS_COLD: usize = 6;
+pub const LAGS_WARM: usize = 1;
 
 /// The conjugate gradients stop when the residual is this share of the right side's.
-const TOLERANCE: f64 = 1e-4;
+pub const TOLERANCE: f64 = 1e-4;
 
 /// The solved light of the orders past the first.
 #[derive(Debug, Clone)]
@@ -104,10 +105,9 @@ pub struct DiffuseLight {
     /// Per cell, `[x][y][z]` (z fastest): the diffuse field's `phi / 4 pi` and
     /// `F / 4 pi` per unit sun irradiance.
     values: Vec<Vec4>,
-    /// The diffuse radiance's angles from its fluence and flux, scattered by the phase.
-    closure: Closure,
-    /// The phase the tables are of.
-    phase: PhaseFunction,
+    /// The phase's tables: the diffuse radiance's angles from its fluence and flux,
+    /// scattered by the phase, and the phase itself.
+    tables: PhaseTables,
     /// The sunlight scattered once, whose scattering toward the eye is the second order.
     once: OnceScattered,
     /// The fluence `phi` per cell, kept to start the next solve from.
@@ -155,19 +155,18 @@ impl DiffuseLight {
             return Err(Error::Invalid("the transfer solve needs particles".into()));
         }
         // The phase's tables, kept from the last solve of the same phase.
-        let (closure, lobe) = match previous.filter(|p| p.phase == phase) {
-            Some(p) => (p.closure.clone(), p.once.lobe.clone()),
-            None => (Closure::new(phase), Lobe::new(phase)),
+        let tables = match previous.filter(|p| p.tables.phase == phase) {
+            Some(p) => p.tables.clone(),
+            None => PhaseTables::new(phase),
         };
-        let g = closure.chi[1] as f32;
-        let f = (closure.chi[2] as f32).clamp(0.0, 0.99);
-        let (min, h, dims) = grid(particles, settings.cells);
+        let (g, f) = (tables.g(), tables.f());
+        let grid = SolveGrid::of(particles, settings)?;
         let travel = -to_sun.normalize();
-        let mut medium = Medium::of(particles, buffer, min, h, dims, g);
-        let once = OnceScattered::of(&medium, travel, lobe, f);
+        let mut medium = Medium::of(&grid, buffer, g);
+        let once = OnceScattered::of(&medium, &tables, travel);
         medium.scatter(&once, g, f);
-        let n = dims[0] * dims[1] * dims[2];
-        let first_centre = min + Vec3::splat(0.5 * h);
+        let n = grid.cells();
+        let (first_centre, h, dims) = (grid.first_centre, grid.cell, grid.dims);
         let warm = previous.filter(|p| p.dims == dims && p.min == first_centre && p.cell == h);
         let mut phi = warm.map_or_else(|| vec![0.0f32; n], |p| p.fluence.clone());
         let mut iterations = 0;
@@ -188,8 +187,7 @@ impl DiffuseLight {
             values,
             fluence: phi,
             once,
-            closure,
-            phase,
+            tables,
             iterations,
         })
     }
@@ -200,13 +198,11 @@ impl DiffuseLight {
     }
 
     /// The light each cell's centre sends toward `eye`, per unit scattering coefficient
-    /// and sun irradiance (1/sr): the second order's, scattered by the whole phase, and
-    /// the diffuse field's ([`DiffuseLight::leaving`]). Made once for a picture: its
-    /// lookups along the pixels' rays are then one value's trilinear read (the rays
-    /// pass the centres at angles a cell's width apart as seen from the eye).
-    pub(crate) fn seen_from(&self, eye: Vec3) -> Seen {
+    /// and sun irradiance (1/sr), `[x][y][z]`: the second order's, scattered by the
+    /// whole phase, and the diffuse field's (its radiance rebuilt by the closure).
+    pub fn toward(&self, eye: Vec3) -> Vec<f32> {
         let [_, ny, nz] = self.dims;
-        let values = (0..self.values.len())
+        (0..self.values.len())
             .into_par_iter()
             .map(|cell| {
                 let index = Vec3::new(
@@ -216,14 +212,20 @@ impl DiffuseLight {
                 );
                 let centre = self.min + index * self.cell;
                 let w = (eye - centre).normalize_or_zero();
-                self.leaving(self.values[cell], w) + self.once.toward(cell, w)
+                self.leaving(self.values[cell], w) + self.once.toward(&self.tables.lobe, cell, w)
             })
-            .collect();
+            .collect()
+    }
+
+    /// [`DiffuseLight::toward`] made once for a picture: its lookups along the pixels'
+    /// rays are then one value's trilinear read (the rays pass the centres at angles a
+    /// cell's width apart as seen from the eye).
+    pub(crate) fn seen_from(&self, eye: Vec3) -> Seen {
         Seen {
             min: self.min,
             cell: self.cell,
             dims: self.dims,
-            values,
+            values: self.toward(eye),
         }
     }
 
@@ -237,8 +239,80 @@ impl DiffuseLight {
             return 0.0;
         }
         let cos = if size > 0.0 { flux.dot(w) / size } else { 0.0 };
-        v.x * self.closure.at(size / v.x, cos)
+        v.x * self.tables.closure.at(size / v.x, cos)
     }
+}
+
+/// The solve's tables of a phase function, made once for a phase: Minerbo's closure
+/// scattered by it (the module doc), the phase over the cosine, its mean cosine `g` and
+/// delta-Eddington's share `f` (the module doc). Public for a solve on another device
+/// (atmo-gpu's), which reads the same tables.
+#[derive(Debug, Clone)]
+pub struct PhaseTables {
+    phase: PhaseFunction,
+    closure: Closure,
+    lobe: Lobe,
+}
+
+impl PhaseTables {
+    /// The tables of `phase`.
+    pub fn new(phase: PhaseFunction) -> PhaseTables {
+        PhaseTables {
+            phase,
+            closure: Closure::new(phase),
+            lobe: Lobe::new(phase),
+        }
+    }
+
+    /// The phase the tables are of.
+    pub fn phase(&self) -> PhaseFunction {
+        self.phase
+    }
+
+    /// The phase's mean cosine, its first Legendre moment.
+    pub fn g(&self) -> f32 {
+        self.closure.chi[1] as f32
+    }
+
+    /// Delta-Eddington's share of each scattering that goes on straight ahead: the
+    /// phase's second Legendre moment (at most 0.99).
+    pub fn f(&self) -> f32 {
+        (self.closure.chi[2] as f32).clamp(0.0, 0.99)
+    }
+
+    /// The closure scattered by the phase, `[r][cos]`, ([`CLOSURE_STEPS`] + 1)^2 values:
+    /// `r = |F| / phi` from 0 to [`CLOSURE_MAX`], the cosine from -1 to 1, per unit
+    /// `phi / 4 pi`.
+    pub fn closure(&self) -> &[f32] {
+        &self.closure.values
+    }
+
+    /// The phase over the cosine, [`LOBE_STEPS`] + 1 values from -1 to 1 (1/sr).
+    pub fn lobe(&self) -> &[f32] {
+        &self.lobe.0
+    }
+
+    /// Each of `directions`' share of the sunlight scattered once when the sun's light
+    /// travels along the unit `travel` (1/sr): the phase, normalised so that the shares
+    /// times the directions' solid angle (4 pi over their number) sum to 1.
+    pub fn shares(&self, directions: &[Vec3], travel: Vec3) -> Vec<f32> {
+        let weight = 4.0 * std::f32::consts::PI / directions.len() as f32;
+        let phases: Vec<f32> = directions
+            .iter()
+            .map(|w| self.lobe.at(w.dot(travel)))
+            .collect();
+        let total = phases.iter().sum::<f32>() * weight;
+        phases.into_iter().map(|p| p / total).collect()
+    }
+}
+
+/// The [`DIRECTIONS`] directions the light scattered once travels along (a spherical
+/// Fibonacci lattice).
+pub fn directions() -> Vec<Vec3> {
+    crate::quadrature::fibonacci_sphere(DIRECTIONS)
+        .iter()
+        .map(|d| d.as_vec3())
+        .collect()
 }
 
 /// The diffuse field's radiance at a point from its fluence `phi` and flux `F` alone,
@@ -259,10 +333,10 @@ struct Closure {
 }
 
 /// Steps of the closure's table along each of its axes.
-const CLOSURE_STEPS: usize = 64;
+pub const CLOSURE_STEPS: usize = 64;
 
 /// The largest flux over fluence the closure's table holds (`b` about 20).
-const CLOSURE_MAX: f32 = 0.95;
+pub const CLOSURE_MAX: f32 = 0.95;
 
 /// Legendre terms of the closure.
 const CLOSURE_TERMS: usize = 48;
@@ -368,29 +442,24 @@ struct OnceScattered {
     radiance: Vec<Vec<f32>>,
     /// Per cell its fluence and flux (per unit sun irradiance).
     moments: Vec<Vec4>,
-    lobe: Lobe,
 }
 
 /// Directions of the light scattered once: enough to resolve the cloud's forward lobe,
 /// about 15 degrees apart (with 48, 30 degrees apart, the tuning views scored 32 of 36
 /// within 10 % and 79 % of blocks, against 35 and 84 %).
-const DIRECTIONS: usize = 192;
+pub const DIRECTIONS: usize = 192;
 
 impl OnceScattered {
-    fn of(medium: &Medium, travel: Vec3, lobe: Lobe, f: f32) -> OnceScattered {
-        let directions: Vec<Vec3> = crate::quadrature::fibonacci_sphere(DIRECTIONS)
-            .iter()
-            .map(|d| d.as_vec3())
-            .collect();
-        // The phase over the directions, normalised so that the sum keeps the light.
+    fn of(medium: &Medium, tables: &PhaseTables, travel: Vec3) -> OnceScattered {
+        let directions = directions();
         let weight = 4.0 * std::f32::consts::PI / DIRECTIONS as f32;
-        let phases: Vec<f32> = directions.iter().map(|w| lobe.at(w.dot(travel))).collect();
-        let total = phases.iter().sum::<f32>() * weight;
+        let shares = tables.shares(&directions, travel);
+        let f = tables.f();
         let [nx, ny, nz] = medium.dims;
         let radiance: Vec<Vec<f32>> = directions
             .par_iter()
-            .zip(&phases)
-            .map(|(&w, &p)| sweep(medium, w, p / total, f))
+            .zip(&shares)
+            .map(|(&w, &share)| sweep(medium, w, share, f))
             .collect();
         let moments = (0..nx * ny * nz)
             .into_par_iter()
@@ -407,17 +476,16 @@ impl OnceScattered {
             directions,
             radiance,
             moments,
-            lobe,
         }
     }
 
     /// What a droplet in `cell` scatters of it along `w` per unit scattering
     /// coefficient: `integral p(w . w') L(w') dw'`, the phase normalised over the
     /// directions.
-    fn toward(&self, cell: usize, w: Vec3) -> f32 {
+    fn toward(&self, lobe: &Lobe, cell: usize, w: Vec3) -> f32 {
         let (mut sum, mut norm) = (0.0, 0.0);
         for (d, l) in self.directions.iter().zip(&self.radiance) {
-            let p = self.lobe.at(d.dot(w));
+            let p = lobe.at(d.dot(w));
             sum += p * l[cell];
             norm += p;
         }
@@ -496,7 +564,7 @@ fn sweep(medium: &Medium, w: Vec3, source: f32, f: f32) -> Vec<f32> {
 struct Lobe(Vec<f32>);
 
 /// Steps of the phase's table.
-const LOBE_STEPS: usize = 2048;
+pub const LOBE_STEPS: usize = 2048;
 
 impl Lobe {
     fn new(phase: PhaseFunction) -> Lobe {
@@ -560,37 +628,47 @@ fn trilinear(values: &[f32], min: Vec3, cell: f32, dims: [usize; 3], p: Vec3) ->
     lerp(lerp_y(base), lerp_y(base + sx), fx)
 }
 
-/// The grid over `particles`' reach, `cells` along the longest side and [`MARGIN`]
-/// around: its smallest corner, the cells' side and the cells along each axis.
-fn grid(particles: &[Particle], cells: usize) -> (Vec3, f32, [usize; 3]) {
-    let (lo, hi) = particles.iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), p| {
-            let r = Vec3::splat(p.reach());
-            (lo.min(p.position - r), hi.max(p.position + r))
-        },
-    );
-    let extent = hi - lo;
-    let h = extent.max_element() / cells as f32;
-    let dims = extent
-        .to_array()
-        .map(|e| ((e / h).ceil() as usize).max(1) + 2 * MARGIN);
-    let centre = 0.5 * (lo + hi);
-    let size = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) * h;
-    (centre - 0.5 * size, h, dims)
+/// The solve's grid over a cloud and the particles' medium on it: what stays while only
+/// the sun moves. Public for a solve on another device (atmo-gpu's), which starts from
+/// it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveGrid {
+    /// World position of cell `(0, 0, 0)`'s centre, m.
+    pub first_centre: Vec3,
+    /// The cells' side, m.
+    pub cell: f32,
+    /// Cells along x, y and z; the per-cell values are `[x][y][z]`, z fastest.
+    pub dims: [usize; 3],
+    /// Per cell the particles' mean extinction and scattering coefficients, 1/m.
+    pub sigma_t: Vec<f32>,
+    pub sigma_s: Vec<f32>,
 }
 
-impl Medium {
-    /// The particles' extinction and scattering averaged over each cell, and the
-    /// sources of the sun lit through `buffer` (the module doc).
-    fn of(
-        particles: &[Particle],
-        buffer: &IntensityBuffer,
-        min: Vec3,
-        h: f32,
-        dims: [usize; 3],
-        g: f32,
-    ) -> Medium {
+impl SolveGrid {
+    /// The grid over `particles`' reach, `settings.cells` along the longest side and
+    /// [`MARGIN`] around, and each cell's mean of the particles' extinction (differences
+    /// of `erf`, the Gaussian being separable). Refuses a grid out of range and no
+    /// particles.
+    pub fn of(particles: &[Particle], settings: &Diffusion) -> Result<SolveGrid> {
+        settings.validate()?;
+        if particles.is_empty() {
+            return Err(Error::Invalid("the transfer solve needs particles".into()));
+        }
+        let (lo, hi) = particles.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| {
+                let r = Vec3::splat(p.reach());
+                (lo.min(p.position - r), hi.max(p.position + r))
+            },
+        );
+        let extent = hi - lo;
+        let h = extent.max_element() / settings.cells as f32;
+        let dims = extent
+            .to_array()
+            .map(|e| ((e / h).ceil() as usize).max(1) + 2 * MARGIN);
+        let centre = 0.5 * (lo + hi);
+        let size = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) * h;
+        let min = centre - 0.5 * size;
         let [nx, ny, nz] = dims;
         let n = nx * ny * nz;
         // Each particle's mean over the cells it reaches, separable: per axis the
@@ -648,17 +726,49 @@ impl Medium {
                     a
                 },
             );
-        let mut medium = Medium {
+        Ok(SolveGrid {
+            first_centre: min + Vec3::splat(0.5 * h),
+            cell: h,
             dims,
+            sigma_t: sums.iter().map(|v| v[0]).collect(),
+            sigma_s: sums.iter().map(|v| v[1]).collect(),
+        })
+    }
+
+    /// How many cells.
+    pub fn cells(&self) -> usize {
+        self.dims.iter().product()
+    }
+
+    /// The world position of `cell`'s centre, m.
+    pub fn centre(&self, cell: usize) -> Vec3 {
+        let [_, ny, nz] = self.dims;
+        let index = Vec3::new(
+            (cell / (ny * nz)) as f32,
+            (cell / nz % ny) as f32,
+            (cell % nz) as f32,
+        );
+        self.first_centre + index * self.cell
+    }
+}
+
+impl Medium {
+    /// The medium of `grid` and the sources of the sun lit through `buffer` (the module
+    /// doc).
+    fn of(grid: &SolveGrid, buffer: &IntensityBuffer, g: f32) -> Medium {
+        let n = grid.cells();
+        let h = grid.cell;
+        let mut medium = Medium {
+            dims: grid.dims,
             h,
             sigma_tr: vec![0.0; n],
             sigma_a: vec![0.0; n],
             q0: vec![0.0; n],
             q1: vec![Vec3::ZERO; n],
-            sigma_t: sums.iter().map(|v| v[0]).collect(),
-            sigma_s: sums.iter().map(|v| v[1]).collect(),
+            sigma_t: grid.sigma_t.clone(),
+            sigma_s: grid.sigma_s.clone(),
             sun: vec![0.0; n],
-            inside: sums.iter().map(|[t, _]| t * h >= THIN).collect(),
+            inside: grid.sigma_t.iter().map(|t| t * h >= THIN).collect(),
         };
         medium
             .sigma_tr
@@ -667,12 +777,10 @@ impl Medium {
             .zip(&mut medium.sun)
             .enumerate()
             .for_each(|(cell, ((tr, a), sun))| {
-                let [t, s] = sums[cell];
+                let (t, s) = (grid.sigma_t[cell], grid.sigma_s[cell]);
                 *tr = (t - g * s).max(0.0);
                 *a = (t - s).max(0.0);
-                let (ix, iy, iz) = (cell / (ny * nz), cell / nz % ny, cell % nz);
-                let centre = min + (Vec3::new(ix as f32, iy as f32, iz as f32) + 0.5) * h;
-                *sun = buffer.sample(centre);
+                *sun = buffer.sample(grid.centre(cell));
             });
         medium
     }
@@ -1054,13 +1162,11 @@ mod tests {
         let settings = Diffusion { cells: 32 };
         let light =
             DiffuseLight::solve(&particles, &buffer, to_sun, phase, &settings, None).unwrap();
-        let (g, f) = (
-            phase.legendre_moment(1) as f32,
-            phase.legendre_moment(2) as f32,
-        );
-        let (min, h, dims) = grid(&particles, settings.cells);
-        let mut medium = Medium::of(&particles, &buffer, min, h, dims, g);
-        let once = OnceScattered::of(&medium, -to_sun, Lobe::new(phase), f);
+        let tables = PhaseTables::new(phase);
+        let (g, f) = (tables.g(), tables.f());
+        let grid = SolveGrid::of(&particles, &settings).unwrap();
+        let mut medium = Medium::of(&grid, &buffer, g);
+        let once = OnceScattered::of(&medium, &tables, -to_sun);
         medium.scatter(&once, g, f);
         let faces = Faces::limited(&medium, &light.fluence);
         let phi = light.fluence.clone();

@@ -32,7 +32,6 @@ pub use window::WindowClouds;
 
 use crate::backend::{gpu_error, BackendArgs};
 use crate::output::write_animation;
-use atmo_gpu::Backend;
 
 /// The library's fields that this command's flags set, for error messages.
 pub const FLAGS: &[(&str, &str)] = &[
@@ -295,9 +294,7 @@ pub fn run(args: CloudsArgs) -> Result<()> {
     }
     let camera = &cloud.camera;
     let sun = cloud.sun_at(cloud.sun_azimuth)?;
-    let gpu = args
-        .device
-        .open_for(solve_on_cpu(&cloud.scene.scattering, args.device.backend)?)?;
+    let gpu = args.device.open()?;
     let gpu = gpu.as_ref();
     let mut frames = CloudFrames::new(cloud.scene.clone(), cloud.wind_s);
     frames.sky(camera).map_err(gpu_error)?;
@@ -364,18 +361,4 @@ pub fn run(args: CloudsArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// The backend to open for `scattering`: the transfer solve draws on the CPU alone, so
-/// `auto` takes the CPU for it and `gpu` is refused naming the choices the GPU has.
-pub fn solve_on_cpu(scattering: &Scattering, backend: Backend) -> atmo::Result<Backend> {
-    match (scattering.diffusion(), backend) {
-        (None, backend) => Ok(backend),
-        (Some(_), Backend::Gpu) => Err(atmo::Error::Invalid(
-            "--scattering solve: the transfer solve draws on the CPU alone (with --backend \
-             gpu: single, multiple or octaves)"
-                .into(),
-        )),
-        (Some(_), _) => Ok(Backend::Cpu),
-    }
 }
