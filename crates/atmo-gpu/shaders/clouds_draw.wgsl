@@ -68,9 +68,9 @@ struct DrawParams {
 // The transfer table's values, [thickness][sun][out][cosine][eye]
 // (atmo::clouds::TransferTable).
 @group(0) @binding(6) var<storage, read> table: array<f32>;
-// The transfer solve's light toward the eye per cell, [x][y][z] (1/sr per unit sun
-// irradiance and scattering coefficient).
-@group(0) @binding(7) var<storage, read> solved: array<f32>;
+// The transfer solve's light toward the eye per cell, [x][y][z], per unit scattering
+// coefficient: the sun's (1/sr per unit sun irradiance) and the sky's (RGB).
+@group(0) @binding(7) var<storage, read> solved: array<vec4<f32>>;
 
 // How the orders past the first are drawn: `shade`'s modes.
 const BY_OCTAVES: u32 = 0u;
@@ -271,11 +271,11 @@ fn absorbed_of(tau: f32) -> f32 {
 
 // The transfer solve's light toward the eye at the world point p, trilinear between
 // the cells' centres, 0 beyond them (atmo::clouds::diffusion's trilinear).
-fn solved_at(p: vec3<f32>) -> f32 {
+fn solved_at(p: vec3<f32>) -> vec4<f32> {
     let g = (p - params.solve_centre.xyz) / params.solve_centre.w;
     let n = params.solve_dims.xyz;
     if !(all(g >= vec3<f32>(0.0)) && all(g < vec3<f32>(n - vec3<u32>(1u)))) {
-        return 0.0;
+        return vec4<f32>(0.0);
     }
     let i = vec3<u32>(g);
     let f = g - vec3<f32>(i);
@@ -386,10 +386,14 @@ fn shade(b: Billboard, mode: u32) -> Colours {
         let to_sun = -dot(EMISSION_WEIGHTS, l);
         tabled = alpha * transfer(b.slices, to_sun, min(min(to_eye, to_sun), b.out_depth), cosine, to_eye);
     }
-    // The solve's light toward the eye at the emission nodes' mean place.
+    // The solve's light toward the eye at the emission nodes' mean place, the sun's
+    // and the sky's (every order of it, in place of the sky's light dimmed below).
+    var sky = b.sky_inside * sky_along(r * inv_length);
     if mode == BY_SOLVE {
         let at = t + dot(EMISSION_WEIGHTS, ls) * s * inv_length;
-        tabled = alpha * solved_at(params.position.xyz + at * r);
+        let light = solved_at(params.position.xyz + at * r);
+        tabled = alpha * light.x;
+        sky = light.yzw;
     }
     // OctaveTerms::light: the slab's diffuse light, the cloud's whole depth along the
     // sun's ray through the nearest node (IntensityBuffer::column_depth_grid).
@@ -405,7 +409,7 @@ fn shade(b: Billboard, mode: u32) -> Colours {
     // behind (summed over the particles, the CPU's haze exactly).
     let haze = params.haze_transmittance.xyz;
     var out: Colours;
-    let sky = b.albedo * b.sky_inside * sky_along(r * inv_length);
+    sky *= b.albedo;
     out.picture = vec4<f32>(haze * ((single + tabled) * b.sun + alpha * sky)
         + alpha * params.haze_inscatter.xyz, alpha);
     out.higher = vec4<f32>(haze * higher * b.sun, alpha);

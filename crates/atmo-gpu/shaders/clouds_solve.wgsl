@@ -3,8 +3,12 @@
 // solve"): the sun's transmittance at each cell, the light scattered once swept along
 // DIRECTIONS directions, the diffusion's sources, the flux-limited faces, the
 // conjugate gradients, the fluence and flux per cell, and the light each cell sends
-// toward the eye. Follows clouds_common.wgsl and clouds_lookup.wgsl. Every array is per
-// cell, [x][y][z] (z fastest), as the CPU's.
+// toward the eye; and the sky's light through the same solve (its transmittance from the
+// grid's faces swept along the same directions, its diffusion per channel). Follows
+// clouds_common.wgsl and clouds_lookup.wgsl. Every array is per cell, [x][y][z] (z
+// fastest), as the CPU's; `sources`, `phi` and `fields` hold four segments of `stride`
+// cells each, the sun's field's and the sky's per channel, and the passes of one field
+// are bound to its segment.
 
 // Mirrors atmo_gpu::clouds::SolveParams.
 struct SolveParams {
@@ -20,6 +24,12 @@ struct SolveParams {
     d_max: f32,
     // The most conjugate-gradient iterations of one solve.
     limit: u32,
+    // Cells a segment of `sources`, `phi` and `fields`; 1 where the sky's light is
+    // solved.
+    stride: u32,
+    sky: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> solve: SolveParams;
@@ -27,9 +37,11 @@ struct SolveParams {
 // at the centre, unused.
 @group(0) @binding(1) var<storage, read_write> medium: array<vec4<f32>>;
 // The closure (CLOSURE_AT), the phase over the cosine (LOBE_AT), each direction's share
-// of the sunlight scattered once (SHARES_AT) and the directions (DIRECTIONS_AT, xyz).
+// of the sunlight scattered once (SHARES_AT), the directions (DIRECTIONS_AT, xyz) and
+// the sky's radiance arriving along each (RADIANCE_AT, RGB).
 @group(0) @binding(2) var<storage, read> tables: array<f32>;
-// The light scattered once, [direction][cell], per unit sun irradiance (1/sr).
+// [direction][cell]: the light scattered once per unit sun irradiance (1/sr); then,
+// from DIRECTIONS n on, the transmittance from the grid's faces along each direction.
 @group(0) @binding(3) var<storage, read_write> once: array<f32>;
 // The diffusion's sources: Q1 (xyz) and Q0 (w).
 @group(0) @binding(4) var<storage, read_write> sources: array<vec4<f32>>;
@@ -43,9 +55,9 @@ struct SolveParams {
 @group(0) @binding(7) var<storage, read_write> work: array<vec4<f32>>;
 // Per cell phi / 4 pi and F / 4 pi, per unit sun irradiance.
 @group(0) @binding(8) var<storage, read_write> fields: array<vec4<f32>>;
-// The light each cell sends toward the eye (1/sr per unit sun irradiance and
-// scattering coefficient).
-@group(0) @binding(9) var<storage, read_write> seen: array<f32>;
+// The light each cell sends toward the eye per unit scattering coefficient: the sun's
+// (1/sr per unit sun irradiance) and the sky's (RGB, its radiance's units).
+@group(0) @binding(9) var<storage, read_write> seen: array<vec4<f32>>;
 // The sun's light pass: its frame and its grid (clouds_lookup.wgsl reads them).
 @group(0) @binding(10) var<uniform> frame: BufferFrame;
 @group(0) @binding(11) var<storage, read> log_gamma: array<f32>;
@@ -56,6 +68,7 @@ const CLOSURE_AT: u32 = 0u;
 const LOBE_AT: u32 = (CLOSURE_STEPS + 1u) * (CLOSURE_STEPS + 1u);
 const SHARES_AT: u32 = LOBE_AT + LOBE_STEPS + 1u;
 const DIRECTIONS_AT: u32 = SHARES_AT + DIRECTIONS;
+const RADIANCE_AT: u32 = DIRECTIONS_AT + 3u * DIRECTIONS;
 
 // The single workgroup's size of the passes that loop over the whole grid.
 const SOLVE_GROUP: u32 = 256u;
@@ -125,6 +138,17 @@ fn direction(d: u32) -> vec3<f32> {
     return vec3<f32>(tables[at], tables[at + 1u], tables[at + 2u]);
 }
 
+// The sky's radiance arriving along direction d (from the opposite way), RGB.
+fn sky_radiance(d: u32) -> vec3<f32> {
+    let at = RADIANCE_AT + 3u * d;
+    return vec3<f32>(tables[at], tables[at + 1u], tables[at + 2u]);
+}
+
+// The transmittance from the grid's faces along direction d at `cell`.
+fn through(d: u32, cell: u32) -> f32 {
+    return once[(DIRECTIONS + d) * cell_count() + cell];
+}
+
 // Lobe::at: the phase at the cosine, linear between the table's steps.
 fn lobe(cosine: f32) -> f32 {
     let x = (clamp(cosine, -1.0, 1.0) + 1.0) * 0.5 * f32(LOBE_STEPS);
@@ -175,15 +199,19 @@ fn sunlight(at: Wide) {
 // The light scattered once along each direction (diffusion::sweep): a workgroup a
 // direction, sweeping the grid in wavefronts from its upwind corner (each cell's upwind
 // neighbours are on the wavefront before), each cell's light its upwind neighbours'
-// attenuated across it and its own source added, exact for a homogeneous cell.
+// attenuated across it and its own source added, exact for a homogeneous cell. The
+// workgroups past the first DIRECTIONS sweep radiance 1 from outside the grid, with no
+// source: the transmittance the sky's light is carried by.
 @compute @workgroup_size(256)
 fn sweep(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    let d = group.x;
+    let from_outside = group.x >= DIRECTIONS;
+    let d = group.x % DIRECTIONS;
     let w = direction(d);
-    let share = tables[SHARES_AT + d];
+    let share = select(tables[SHARES_AT + d], 0.0, from_outside);
+    let outside = select(0.0, 1.0, from_outside);
     let n = solve.dims.xyz;
     let s = strides();
-    let base = d * cell_count();
+    let base = group.x * cell_count();
     let rate = abs(w) / side();
     let across = rate.x + rate.y + rate.z;
     let ahead = w >= vec3<f32>(0.0);
@@ -201,10 +229,16 @@ fn sweep(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_inde
             let cell = dot(index, s);
             var inflow = 0.0;
             for (var axis = 0u; axis < 3u; axis++) {
+                var upstream = outside;
                 if upwind[axis] > 0u {
                     let neighbour = select(cell + s[axis], cell - s[axis], ahead[axis]);
-                    inflow += rate[axis] * once[base + neighbour];
+                    upstream = once[base + neighbour];
+                    if from_outside {
+                        let m = medium[neighbour];
+                        upstream *= exit_over_mean((m.x - solve.f * m.y) / across);
+                    }
                 }
+                inflow += rate[axis] * upstream;
             }
             let m = medium[cell];
             let emitted = m.y * m.z * share;
@@ -215,10 +249,23 @@ fn sweep(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_inde
             if tau > 1e-4 {
                 own = emitted / extinction * (1.0 - kept);
             }
-            once[base + cell] = inflow / across * kept + own;
+            // From outside, the cell's mean along its path (diffusion::Sweep).
+            once[base + cell] = select(
+                inflow / across * kept + own,
+                inflow / across * kept / exit_over_mean(tau),
+                from_outside,
+            );
         }
         storageBarrier();
     }
+}
+
+// A cell's exit over its mean along the path across it (diffusion::exit_over_mean).
+fn exit_over_mean(tau: f32) -> f32 {
+    if tau > 1e-4 {
+        return tau / (exp(tau) - 1.0);
+    }
+    return 1.0 - 0.5 * tau;
 }
 
 // The diffusion's sources from the light scattered once (Medium::scatter): its second
@@ -235,10 +282,38 @@ fn scatter(at: Wide) {
         m += vec4<f32>(1.0, direction(d)) * once[d * n + cell];
     }
     m *= 4.0 * PI / f32(DIRECTIONS);
+    sources[cell] = diffusion_source(cell, m);
+}
+
+// The diffusion's source from a field's fluence and flux m (xyzw) at `cell`.
+fn diffusion_source(cell: u32, m: vec4<f32>) -> vec4<f32> {
     let f = solve.f;
     let second = (1.0 - f) * medium[cell].y;
     let g_scaled = (solve.g - f) / (1.0 - f);
-    sources[cell] = vec4<f32>(g_scaled * second * m.yzw, second * m.x);
+    return vec4<f32>(g_scaled * second * m.yzw, second * m.x);
+}
+
+// The sky's diffusion sources per channel (diffusion::SkyField): the scattering of its
+// light carried in from the grid's faces, into the sources' segments 1 to 3.
+@compute @workgroup_size(64)
+fn scatter_sky(at: Wide) {
+    let cell = cell_of(at);
+    let n = cell_count();
+    if cell >= n {
+        return;
+    }
+    var m = array<vec4<f32>, 3>(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    for (var d = 0u; d < DIRECTIONS; d++) {
+        let basis = vec4<f32>(1.0, direction(d)) * through(d, cell);
+        let l = sky_radiance(d);
+        for (var c = 0u; c < 3u; c++) {
+            m[c] += basis * l[c];
+        }
+    }
+    for (var c = 0u; c < 3u; c++) {
+        sources[(1u + c) * solve.stride + cell] =
+            diffusion_source(cell, m[c] * (4.0 * PI / f32(DIRECTIONS)));
+    }
 }
 
 // The fluence's gradient at `cell` by central differences (0 beyond the grid).
@@ -535,17 +610,7 @@ fn toward(at: Wide) {
     if dot(to_eye, to_eye) > 0.0 {
         w = normalize(to_eye);
     }
-    // DiffuseLight::leaving.
     let v = fields[cell];
-    var diffuse = 0.0;
-    if v.x > 0.0 {
-        let size = length(v.yzw);
-        var cosine = 0.0;
-        if size > 0.0 {
-            cosine = dot(v.yzw, w) / size;
-        }
-        diffuse = v.x * closure(size / v.x, cosine);
-    }
     // OnceScattered::toward.
     var sum = 0.0;
     var norm = 0.0;
@@ -558,5 +623,33 @@ fn toward(at: Wide) {
     if norm > 0.0 {
         second = sum / norm;
     }
-    seen[cell] = diffuse + second;
+    // The sky's: its light carried in scattered by the phase, and its diffuse fields'.
+    var sky = vec3<f32>(0.0);
+    if solve.sky != 0u {
+        var first = vec3<f32>(0.0);
+        for (var d = 0u; d < DIRECTIONS; d++) {
+            first += lobe(dot(direction(d), w)) * through(d, cell) * sky_radiance(d);
+        }
+        if norm > 0.0 {
+            sky = first / norm;
+        }
+        for (var c = 0u; c < 3u; c++) {
+            sky[c] += leaving(fields[(1u + c) * solve.stride + cell], w);
+        }
+    }
+    seen[cell] = vec4<f32>(leaving(v, w) + second, sky);
+}
+
+// DiffuseLight::leaving: what a droplet scatters along w of the diffuse field of
+// fluence and flux v.
+fn leaving(v: vec4<f32>, w: vec3<f32>) -> f32 {
+    if !(v.x > 0.0) {
+        return 0.0;
+    }
+    let size = length(v.yzw);
+    var cosine = 0.0;
+    if size > 0.0 {
+        cosine = dot(v.yzw, w) / size;
+    }
+    return v.x * closure(size / v.x, cosine);
 }

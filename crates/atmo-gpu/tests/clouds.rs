@@ -209,7 +209,8 @@ fn the_transfer_table_draws_the_cpu_picture() {
 }
 
 /// Every order by the transfer solve: the GPU's solve, cell for cell (the light each
-/// cell sends toward the eye), within 1 % of the CPU's in the mean and 2 % RMS, and its
+/// cell sends toward the eye, the sun's and the sky's in each channel), within 1 % of
+/// the CPU's in the mean and 2 % RMS, and its
 /// picture within 1 level RMS of the CPU's; when the sun moves, both solve from their
 /// last solution, again alike, and the light toward a moved eye is made again.
 #[test]
@@ -242,6 +243,20 @@ fn the_transfer_solve_on_the_gpu_is_the_cpus() {
             "{what}: {ratio} {rms}"
         );
     };
+    // The sun's light toward `eye` and the sky's, each channel.
+    let compare_all = |got: &[[f32; 4]], cpu: &DiffuseLight, eye: Vec3, what: &str| {
+        let part = |c: usize| got.iter().map(|v| v[c]).collect::<Vec<f32>>();
+        compare(&part(0), &cpu.toward(eye), what);
+        let sky = cpu.sky_toward(eye).expect("the lighting has a sky");
+        for c in 0..3 {
+            let want: Vec<f32> = sky.iter().map(|v| v[c]).collect();
+            compare(
+                &part(1 + c),
+                &want,
+                &format!("{what}, the sky's channel {c}"),
+            );
+        }
+    };
     let to_suns = [to_sun(), Vec3::new(-0.5, 0.6, 0.3).normalize()];
     let mut previous: Option<DiffuseLight> = None;
     for (k, &sun) in to_suns.iter().enumerate() {
@@ -258,14 +273,16 @@ fn the_transfer_solve_on_the_gpu_is_the_cpus() {
             &buffer,
             sun,
             phase,
+            &light(sun).ambient,
             &settings,
             previous.as_ref(),
         )
         .unwrap();
         let what = format!("sun {k}");
-        compare(
+        compare_all(
             &clouds.solved_toward(&gpu).unwrap(),
-            &cpu.toward(camera.position),
+            &cpu,
+            camera.position,
             &what,
         );
         let iterations = clouds.solve_iterations(&gpu).unwrap();
@@ -298,9 +315,10 @@ fn the_transfer_solve_on_the_gpu_is_the_cpus() {
             )
             .unwrap();
             clouds.render(&gpu, &moved, &light(sun), None).unwrap();
-            compare(
+            compare_all(
                 &clouds.solved_toward(&gpu).unwrap(),
-                &cpu.toward(eye),
+                &cpu,
+                eye,
                 "another eye",
             );
         }

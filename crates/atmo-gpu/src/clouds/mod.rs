@@ -17,7 +17,7 @@ use std::cell::{Cell, OnceCell, RefCell};
 
 use atmo::clouds::buffer::{IntensityBuffer, LightFrame, Splat};
 use atmo::clouds::particles::Particle;
-use atmo::clouds::render::CloudLight;
+use atmo::clouds::render::{dims_the_sky, CloudLight};
 use atmo::clouds::shadow::CloudShadow;
 use atmo::clouds::sky_light::{SkyDimming, VERTICAL_RESOLUTION};
 use atmo::clouds::transfer::{CloudDepths, TransferTable};
@@ -266,7 +266,7 @@ impl GpuClouds {
             ],
             solve_pipelines: OnceCell::new(),
             solve: RefCell::new(None),
-            no_solve: gpu.storage("no transfer solve", &[0; 4], "the particle count")?,
+            no_solve: gpu.storage("no transfer solve", &[0; 16], "the particle count")?,
         })
     }
 
@@ -552,7 +552,7 @@ impl GpuClouds {
         // The sky's light inside the cloud and the transfer table need each particle's
         // depths: made once for particles where they are.
         let table = light.scattering.table().is_some();
-        self.record_missing_depths(gpu, encoder, !dimming.is_flat(), table)?;
+        self.record_missing_depths(gpu, encoder, dims_the_sky(light), table)?;
         // The grid lit from the eye, again where the eye has moved.
         if let Some(Eye {
             grid: eye,
@@ -653,8 +653,15 @@ impl GpuClouds {
             )?);
         }
         let solve = kept.as_mut().expect("made above");
-        if solve.sun != Some((light.to_sun, frame)) {
-            solve.record_solve(gpu, pipelines, encoder, &frame, light.to_sun);
+        if solve.sun != Some((light.to_sun, frame, light.ambient.harmonics)) {
+            solve.record_solve(
+                gpu,
+                pipelines,
+                encoder,
+                &frame,
+                light.to_sun,
+                &light.ambient,
+            );
         }
         if solve.eye != Some(eye) {
             solve.record_toward(gpu, pipelines, encoder, eye);
@@ -690,9 +697,9 @@ impl GpuClouds {
     }
 
     /// The light each cell of the transfer solve's grid sends toward the eye of the
-    /// last draw with it, as `atmo::clouds::DiffuseLight::toward` (read back; empty
-    /// before one).
-    pub fn solved_toward(&self, gpu: &Gpu) -> Result<Vec<f32>, GpuError> {
+    /// last draw with it: the sun's, as `atmo::clouds::DiffuseLight::toward`, and the
+    /// sky's (RGB), as `DiffuseLight::sky_toward` (read back; empty before one).
+    pub fn solved_toward(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>, GpuError> {
         match self.solve.borrow().as_ref() {
             Some(solve) => {
                 let bytes = gpu.read(

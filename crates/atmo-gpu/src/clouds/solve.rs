@@ -7,12 +7,15 @@
 //! the sweeps of the light scattered once (a workgroup a direction, in wavefronts), the
 //! diffusion's faces and sources, the conjugate gradients (one workgroup over the grid,
 //! whose sums then need no pass of their own: 31,500 cells on the bench's cloud), and
-//! the light toward the eye, made again when the eye moves.
+//! the light toward the eye, made again when the eye moves. The sky's light goes
+//! through the same passes (its transmittance from the grid's faces swept with the
+//! sun's, then a diffusion per channel, each bound to its own segment of the buffers).
 
 use atmo::atmosphere::phase::PhaseFunction;
 use atmo::clouds::diffusion::{
     directions, Diffusion, PhaseTables, SolveGrid, DIRECTIONS, LAGS_COLD, LAGS_WARM,
 };
+use atmo::clouds::SkyLight;
 
 use super::*;
 
@@ -29,6 +32,11 @@ gpu_struct! {
         f: f32,
         d_max: f32,
         limit: u32,
+        /// Cells a segment of the fields' buffers; 1 where the sky's light is solved.
+        stride: u32,
+        sky: u32,
+        pad0: u32,
+        pad1: u32,
     }
 }
 
@@ -37,6 +45,7 @@ pub(super) struct SolvePipelines {
     sunlight: wgpu::ComputePipeline,
     sweep: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
+    scatter_sky: wgpu::ComputePipeline,
     faces: [wgpu::ComputePipeline; 2],
     right_side: wgpu::ComputePipeline,
     conjugate_gradients: wgpu::ComputePipeline,
@@ -56,6 +65,7 @@ impl SolvePipelines {
             sunlight: make("sunlight")?,
             sweep: make("sweep")?,
             scatter: make("scatter")?,
+            scatter_sky: make("scatter_sky")?,
             faces: [make("faces_plain")?, make("faces_limited")?],
             right_side: make("right_side")?,
             conjugate_gradients: make("conjugate_gradients")?,
@@ -78,28 +88,38 @@ pub(super) struct GpuSolve {
     /// The light toward the eye, per cell (the draw reads it).
     pub(super) seen: wgpu::Buffer,
     counts: wgpu::Buffer,
-    /// Per pass (as [`SolvePipelines`]' order) its bind group.
-    groups: Vec<wgpu::BindGroup>,
-    /// The sun the solution is of and the light pass it read (none before the first),
-    /// and the eye `seen` is for.
-    pub(super) sun: Option<(Vec3, BufferFrame)>,
+    /// Per pass (as [`BINDINGS`]) its bind groups, one a field's segment for the passes
+    /// of one field.
+    groups: Vec<Vec<wgpu::BindGroup>>,
+    /// Whether the transmittance from the grid's faces has been swept (the particles'
+    /// alone: a solve is made again when they move).
+    through: bool,
+    /// The sun and the sky the solution is of and the light pass it read (none before
+    /// the first), and the eye `seen` is for.
+    pub(super) sun: Option<(Vec3, BufferFrame, [Vec3; 9])>,
     pub(super) eye: Option<Vec3>,
     cells: u32,
 }
 
-/// Which bindings of clouds_solve.wgsl each pass reads, in [`SolvePipelines`]' order.
-const BINDINGS: [&[u32]; 10] = [
-    &[0, 1, 10, 11],
-    &[0, 1, 2, 3],
-    &[0, 1, 2, 3, 4],
-    &[0, 1, 5, 6],
-    &[0, 1, 5, 6],
-    &[0, 1, 4, 5, 7],
-    &[0, 5, 6, 7, 12],
-    &[0, 1, 4, 5, 6, 7],
-    &[0, 1, 7, 8],
-    &[0, 2, 3, 8, 9],
+/// Which bindings of clouds_solve.wgsl each pass reads, in [`SolvePipelines`]' order
+/// (`scatter_sky` last), and whether it runs on one field bound to its segment of
+/// `sources`, `phi` and `fields` (bindings 4, 6 and 8), or sees them whole.
+const BINDINGS: [(&[u32], bool); 11] = [
+    (&[0, 1, 10, 11], false),
+    (&[0, 1, 2, 3], false),
+    (&[0, 1, 2, 3, 4], false),
+    (&[0, 1, 5, 6], false),
+    (&[0, 1, 5, 6], false),
+    (&[0, 1, 4, 5, 7], true),
+    (&[0, 5, 6, 7, 12], true),
+    (&[0, 1, 4, 5, 6, 7], true),
+    (&[0, 1, 7, 8], true),
+    (&[0, 2, 3, 8, 9], false),
+    (&[0, 1, 2, 3, 4], false),
 ];
+
+/// The fields a solve holds: the sun's and the sky's three channels.
+const FIELDS: usize = 4;
 
 impl GpuSolve {
     /// The solve of `particles` on the grid `settings` says, for `phase`, reading the
@@ -116,10 +136,12 @@ impl GpuSolve {
         let grid = SolveGrid::of(particles, &settings)?;
         let tables = PhaseTables::new(phase);
         let n = grid.cells();
+        // Segments a multiple of 64 cells: their offsets the devices' alignment (256).
+        let stride = n.next_multiple_of(64);
         let limit = gpu.limits().max_storage_buffer_binding_size;
         gpu.check_limit(
             "the light scattered once along each direction",
-            (n * DIRECTIONS * 4) as u64,
+            (2 * n * DIRECTIONS * 4) as u64,
             limit,
             "max_storage_buffer_binding_size",
             "diffusion.cells",
@@ -138,6 +160,10 @@ impl GpuSolve {
             f: tables.f(),
             d_max: nx.max(ny).max(nz) as f32 * grid.cell,
             limit: 4 * n.min(5000) as u32,
+            stride: stride as u32,
+            sky: 0,
+            pad0: 0,
+            pad1: 0,
         };
         let medium: Vec<[f32; 4]> = grid
             .sigma_t
@@ -154,6 +180,7 @@ impl GpuSolve {
         table_values.extend_from_slice(tables.lobe());
         table_values.extend(std::iter::repeat_n(0.0, DIRECTIONS));
         table_values.extend(directions().iter().flat_map(|d| d.to_array()));
+        table_values.extend(std::iter::repeat_n(0.0, 3 * DIRECTIONS));
         let tables_buffer = gpu.storage(
             "the solve's tables",
             bytemuck::cast_slice(&table_values),
@@ -166,13 +193,13 @@ impl GpuSolve {
                 "diffusion.cells",
             )
         };
-        let once = zeros("the light scattered once", n * DIRECTIONS)?;
-        let sources = zeros("the diffusion's sources", 4 * n)?;
+        let once = zeros("the light scattered once", 2 * n * DIRECTIONS)?;
+        let sources = zeros("the diffusion's sources", 4 * FIELDS * stride)?;
         let faces = zeros("the diffusion's faces", 4 * n)?;
-        let phi = zeros("the fluence", n)?;
+        let phi = zeros("the fluence", FIELDS * stride)?;
         let work = zeros("the conjugate gradients' vectors", 4 * n)?;
-        let fields = zeros("the fluence and flux", 4 * n)?;
-        let seen = zeros("the light toward the eye", n)?;
+        let fields = zeros("the fluence and flux", 4 * FIELDS * stride)?;
+        let seen = zeros("the light toward the eye", 4 * n)?;
         let counts = zeros("the iterations", 1)?;
         let params_buffer = gpu.uniform("the solve's grid", &params);
         let frame = gpu.uniform(
@@ -205,23 +232,49 @@ impl GpuSolve {
             &pipelines.moments,
             &pipelines.dilate,
             &pipelines.toward,
+            &pipelines.scatter_sky,
         ];
+        // A field's segment of a per-field buffer of `bytes` a cell.
+        let segment = |binding: u32, field: usize| -> Option<(u64, u64)> {
+            let bytes = match binding {
+                4 | 8 => 16,
+                6 => 4,
+                _ => return None,
+            };
+            let size = (stride * bytes) as u64;
+            Some((field as u64 * size, size))
+        };
         let groups = passes
             .iter()
             .zip(BINDINGS)
-            .map(|(pipeline, used)| {
-                let entries: Vec<wgpu::BindGroupEntry> = used
-                    .iter()
-                    .map(|&binding| wgpu::BindGroupEntry {
-                        binding,
-                        resource: bindings[binding as usize].as_entire_binding(),
+            .map(|(pipeline, (used, per_field))| {
+                let fields = if per_field { FIELDS } else { 1 };
+                (0..fields)
+                    .map(|field| {
+                        let entries: Vec<wgpu::BindGroupEntry> = used
+                            .iter()
+                            .map(|&binding| {
+                                let buffer = bindings[binding as usize];
+                                let resource = match segment(binding, field) {
+                                    Some((offset, size)) if per_field => {
+                                        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                            buffer,
+                                            offset,
+                                            size: std::num::NonZeroU64::new(size),
+                                        })
+                                    }
+                                    _ => buffer.as_entire_binding(),
+                                };
+                                wgpu::BindGroupEntry { binding, resource }
+                            })
+                            .collect();
+                        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: Some("the transfer solve"),
+                            layout: &pipeline.get_bind_group_layout(0),
+                            entries: &entries,
+                        })
                     })
-                    .collect();
-                gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("the transfer solve"),
-                    layout: &pipeline.get_bind_group_layout(0),
-                    entries: &entries,
-                })
+                    .collect()
             })
             .collect();
         Ok(GpuSolve {
@@ -234,6 +287,7 @@ impl GpuSolve {
             seen,
             counts,
             groups,
+            through: false,
             sun: None,
             eye: None,
             cells: n as u32,
@@ -245,8 +299,9 @@ impl GpuSolve {
         self.tables.phase()
     }
 
-    /// Records the solve for the sun toward `to_sun` through the light pass of `frame`:
-    /// from scratch the first time, else from the last solution (as the CPU's).
+    /// Records the solve for the sun toward `to_sun` through the light pass of `frame`
+    /// and for the sky `sky`: from scratch the first time, else from the last solution
+    /// (as the CPU's).
     pub(super) fn record_solve(
         &mut self,
         gpu: &Gpu,
@@ -254,46 +309,86 @@ impl GpuSolve {
         encoder: &mut wgpu::CommandEncoder,
         frame: &BufferFrame,
         to_sun: Vec3,
+        sky: &SkyLight,
     ) {
-        let shares = self.tables.shares(&directions(), -to_sun.normalize());
+        let directions = directions();
+        let shares = self.tables.shares(&directions, -to_sun.normalize());
         let at = (self.tables.closure().len() + self.tables.lobe().len()) * 4;
         gpu.queue.write_buffer(
             &self.tables_buffer,
             at as u64,
             bytemuck::cast_slice(&shares),
         );
+        // The sky's radiance arriving along each direction, as the CPU's SkyField.
+        let radiance: Vec<f32> = directions
+            .iter()
+            .flat_map(|&w| sky.along(-w).max(Vec3::ZERO).to_array())
+            .collect();
+        let at = at + DIRECTIONS * 4 * 4;
+        gpu.queue.write_buffer(
+            &self.tables_buffer,
+            at as u64,
+            bytemuck::cast_slice(&radiance),
+        );
+        let with_sky = sky.mean().max_element() > 0.0;
+        self.params.sky = with_sky as u32;
+        gpu.queue
+            .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         gpu.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(frame));
         encoder.clear_buffer(&self.counts, 0, None);
         let warm = self.sun.is_some();
         let mut pass = encoder.begin_compute_pass(&Default::default());
         let cells = groups(gpu, self.cells.div_ceil(GROUP));
-        let wide = |pass: &mut wgpu::ComputePass, pipeline, group: usize| {
+        let one = |pass: &mut wgpu::ComputePass, pipeline, group: &wgpu::BindGroup, wide| {
             pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &self.groups[group], &[]);
-            pass.dispatch_workgroups(cells.0, cells.1, 1);
+            pass.set_bind_group(0, group, &[]);
+            let (x, y) = if wide { cells } else { (1, 1) };
+            pass.dispatch_workgroups(x, y, 1);
         };
-        wide(&mut pass, &pipelines.sunlight, 0);
+        // A field's diffusion once its faces are made: right side, conjugate gradients.
+        let diffuse = |pass: &mut wgpu::ComputePass, field: usize| {
+            one(pass, &pipelines.right_side, &self.groups[5][field], true);
+            one(
+                pass,
+                &pipelines.conjugate_gradients,
+                &self.groups[6][field],
+                false,
+            );
+        };
+        one(&mut pass, &pipelines.sunlight, &self.groups[0][0], true);
         pass.set_pipeline(&pipelines.sweep);
-        pass.set_bind_group(0, &self.groups[1], &[]);
-        pass.dispatch_workgroups(DIRECTIONS as u32, 1, 1);
-        wide(&mut pass, &pipelines.scatter, 2);
+        pass.set_bind_group(0, &self.groups[1][0], &[]);
+        let sweeps = if with_sky && !self.through { 2 } else { 1 } * DIRECTIONS as u32;
+        pass.dispatch_workgroups(sweeps, 1, 1);
+        self.through |= with_sky;
+        one(&mut pass, &pipelines.scatter, &self.groups[2][0], true);
         let lags = if warm { LAGS_WARM } else { LAGS_COLD };
         for lag in 0..lags {
             let limited = lag > 0 || warm;
-            wide(
+            let faces = &pipelines.faces[limited as usize];
+            one(
                 &mut pass,
-                &pipelines.faces[limited as usize],
-                3 + limited as usize,
+                faces,
+                &self.groups[3 + limited as usize][0],
+                true,
             );
-            wide(&mut pass, &pipelines.right_side, 5);
-            pass.set_pipeline(&pipelines.conjugate_gradients);
-            pass.set_bind_group(0, &self.groups[6], &[]);
-            pass.dispatch_workgroups(1, 1, 1);
+            diffuse(&mut pass, 0);
         }
-        wide(&mut pass, &pipelines.moments, 7);
-        wide(&mut pass, &pipelines.dilate, 8);
-        self.sun = Some((to_sun, *frame));
+        let fields = if with_sky {
+            one(&mut pass, &pipelines.scatter_sky, &self.groups[10][0], true);
+            for field in 1..FIELDS {
+                diffuse(&mut pass, field);
+            }
+            FIELDS
+        } else {
+            1
+        };
+        for field in 0..fields {
+            one(&mut pass, &pipelines.moments, &self.groups[7][field], true);
+            one(&mut pass, &pipelines.dilate, &self.groups[8][field], true);
+        }
+        self.sun = Some((to_sun, *frame, sky.harmonics));
         self.eye = None;
     }
 
@@ -311,7 +406,7 @@ impl GpuSolve {
         let cells = groups(gpu, self.cells.div_ceil(GROUP));
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&pipelines.toward);
-        pass.set_bind_group(0, &self.groups[9], &[]);
+        pass.set_bind_group(0, &self.groups[9][0], &[]);
         pass.dispatch_workgroups(cells.0, cells.1, 1);
         self.eye = Some(eye);
     }

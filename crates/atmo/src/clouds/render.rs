@@ -86,9 +86,10 @@ pub enum Scattering {
 impl Scattering {
     /// Single scattering: the paper's model.
     pub const SINGLE: Scattering = Scattering::Octaves(Octaves::SINGLE);
-    /// Every order, by the table fitted to the path tracer: the default.
+    /// Every order, by the table fitted to the path tracer.
     pub const MULTIPLE: Scattering = Scattering::Transfer(&TransferTable::FITTED);
-    /// Every order, by the transfer solve on its default grid (the CPU's alone).
+    /// Every order, by the transfer solve on its default grid: the nearest the path
+    /// tracer, and what `atmo clouds` draws by default.
     pub const SOLVE: Scattering = Scattering::Solve(Diffusion::DEFAULT);
 
     /// The octaves the sky's light follows (its tilt, [`SkyLight::scattered`], and its
@@ -200,6 +201,7 @@ pub fn solve_for(
                 buffer,
                 light.to_sun,
                 light.phase,
+                &light.ambient,
                 &settings,
                 previous,
             )
@@ -210,7 +212,8 @@ pub fn solve_for(
 /// Whether `light` dims the sky's light inside the cloud, and so needs the particles'
 /// depths down the vertical ([`CloudDepths::vertical`]).
 pub fn dims_the_sky(light: &CloudLight) -> bool {
-    !light.ambient.dimming(&light.scattering.octaves()).is_flat()
+    light.scattering.diffusion().is_none()
+        && !light.ambient.dimming(&light.scattering.octaves()).is_flat()
 }
 
 /// Whether drawing with `light` reads the particles' [`CloudDepths`]: where the sky's
@@ -289,7 +292,7 @@ pub fn render_with_depths(
             )))
         }
     };
-    let top_shares: Vec<f32> = if dimming.is_flat() {
+    let top_shares: Vec<f32> = if !dims_the_sky(light) {
         vec![0.0; particles.len()]
     } else {
         given("vertical depths", depths.vertical.len())?;
@@ -340,13 +343,14 @@ pub fn render_with_depths(
     };
     let table = blobs.table.is_some();
     let every_order = table || blobs.solved.is_some();
+    let solved_sky = blobs.solved.as_ref().is_some_and(Seen::has_sky);
     let mut frame = Frame::new(camera.width, camera.height);
     frame
         .pixels
         .par_chunks_mut(BAND * w)
         .enumerate()
         .for_each(|(band, pixels)| {
-            let mut sums = Sums::new(pixels.len() / w, w, table);
+            let mut sums = Sums::new(pixels.len() / w, w, table, solved_sky);
             blobs.draw(band, &mut sums);
             // The sunlight by every order (the higher octaves by the cloud's depth on
             // the ray), the sky's light dimmed inside the cloud, the haze in front of the
@@ -360,7 +364,9 @@ pub fn render_with_depths(
                     octaves_of_sky.higher_share(t)
                 };
                 *e = light.sun * (sums.single[j] + share * sums.higher[j]);
-                if sums.skylit[j] > 0.0 {
+                if solved_sky {
+                    *e += Vec3::new(sums.sky[0][j], sums.sky[1][j], sums.sky[2][j]);
+                } else if sums.skylit[j] > 0.0 {
                     // The blobs' mean share of the light from above, weighted as
                     // their sky light is.
                     let inside = sums.skylit[j] * dimming.at(sums.skytop[j] / sums.skylit[j]);
@@ -431,11 +437,14 @@ struct Sums {
     skylit: Vec<f32>,
     skytop: Vec<f32>,
     in_front: Vec<f32>,
+    /// With a transfer solve that carries the sky's light, that light (RGB).
+    sky: [Vec<f32>; 3],
 }
 
 impl Sums {
-    /// Nothing drawn yet over `rows` rows of `width` pixels, `in_front` kept if `table`.
-    fn new(rows: usize, width: usize, table: bool) -> Sums {
+    /// Nothing drawn yet over `rows` rows of `width` pixels, `in_front` kept if `table`,
+    /// `sky` if `solved_sky`.
+    fn new(rows: usize, width: usize, table: bool, solved_sky: bool) -> Sums {
         let padded = rows * width + LANES;
         let zeros = || vec![0.0f32; padded];
         Sums {
@@ -446,6 +455,7 @@ impl Sums {
             skylit: zeros(),
             skytop: zeros(),
             in_front: if table { zeros() } else { Vec::new() },
+            sky: std::array::from_fn(|_| if solved_sky { zeros() } else { Vec::new() }),
         }
     }
 }
@@ -465,6 +475,7 @@ impl Blobs<'_> {
             skylit,
             skytop,
             in_front,
+            sky,
         } = sums;
         let (y0, y1) = (band * BAND, (band * BAND + *rows_in_band) as f32);
         // The buffer's slope of `ln Gamma` per voxel along the light to the extinction
@@ -599,6 +610,16 @@ impl Blobs<'_> {
                             let point =
                                 std::array::from_fn(|c| Lanes::splat(self.eye[c]) + r[c] * at);
                             add(higher, seen.at_lanes(point) * absorbed);
+                            if seen.has_sky() {
+                                // The sky's light through the same solve, every order.
+                                let [px, py, pz] = point.map(|c| c.to_array());
+                                let at: [Vec3; LANES] = std::array::from_fn(|k| {
+                                    seen.sky_at(Vec3::new(px[k], py[k], pz[k]))
+                                });
+                                for (c, sums) in sky.iter_mut().enumerate() {
+                                    add(sums, Lanes::new(at.map(|v| v[c])) * absorbed);
+                                }
+                            }
                         }
                         (None, None) => add(higher, blob.higher),
                         (Some(Tabled { cells, out, slices }), _) => {
