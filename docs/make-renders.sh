@@ -21,6 +21,12 @@ montage "$tmp/c1.png" "$tmp/c2.png" -tile 2x1 -geometry +0+0 "$r/clouds-sky.png"
 "$atmo" clouds --generate cumulus --sky --ground-albedo 0.2 --camera -6000,3000,3000 \
     --look-at -1000,900,-500 --fov 50 --sun-elevation 30 --sun-azimuth 150 \
     --width 640 --height 360 -o "$r/clouds-shadow.png"
+# On black, lit from behind the camera: single scattering and every order.
+for s in single solve; do
+    "$atmo" clouds --generate cumulus --sun-azimuth 200 --sun-elevation 30 --distance 1.2 \
+        --view-height 1200 --width 640 --height 360 --scattering $s -o "$tmp/f-$s.png"
+done
+montage "$tmp/f-single.png" "$tmp/f-solve.png" -tile 2x1 -geometry +0+0 "$r/clouds-first.png"
 # Every order by the transfer solve and by the table, on black, the sun from the side.
 for s in solve multiple; do
     "$atmo" clouds --generate cumulus --sun-elevation 20 --sun-azimuth 130 --scattering $s \

@@ -19,7 +19,7 @@ fn main() -> atmo::Result<()> {
         forward: 0.0,
         splat: Splat::Pieces,
         phase: atmo::atmosphere::PhaseFunction::CloudMie,
-        scattering: Scattering::MULTIPLE, // every order; Scattering::SINGLE is the paper's
+        scattering: Scattering::SOLVE, // every order; Scattering::SINGLE is the paper's
         ambient: Ambient::Sky,
         sky: true,
         ground_albedo: None,

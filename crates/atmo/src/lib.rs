@@ -58,7 +58,7 @@
 //! let light = CloudLight { to_sun: sun.toward(), sun: Vec3::ONE,
 //!                        ambient: SkyLight::uniform(Vec3::splat(0.05)),
 //!                        phase: PhaseFunction::CloudMie, haze: AerialHaze::CLEAR,
-//!                        scattering: Scattering::MULTIPLE };
+//!                        scattering: Scattering::SOLVE };
 //! let centre = particles.iter().map(|p| p.position).sum::<Vec3>() / particles.len() as f32;
 //! let camera = Camera::look_at(centre + Vec3::new(0.0, 0.0, 4000.0), centre, Vec3::Y,
 //!                              Fov::Vertical(40.0), (48, 32))?;

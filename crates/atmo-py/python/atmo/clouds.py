@@ -26,7 +26,7 @@ def cumulus(particles: int = 20_000, seed: int = 1, width: float = 1200.0,
 def render(particles=None, sun_elevation: float = 25.0, sun_azimuth: float = 40.0,
            eye: Optional[Sequence[float]] = None,
            look_at: Optional[Sequence[float]] = None, width: int = 960,
-           height: int = 540, fov: float = 40.0, scattering: str = "multiple",
+           height: int = 540, fov: float = 40.0, scattering: str = "solve",
            sky: bool = True, resolution: int = 128) -> np.ndarray:
     """The cloud ``particles`` (an ``(n, 6)`` array; a ``cumulus()`` unless given) lit
     by the sun at ``sun_elevation`` and ``sun_azimuth`` (deg) and seen from ``eye``
@@ -34,9 +34,9 @@ def render(particles=None, sun_elevation: float = 25.0, sun_azimuth: float = 40.
     the cloud's centre, at it) with a vertical field of view ``fov`` (deg):
     ``height x width x 3`` float32 linear radiance, W m^-2 sr^-1.
 
-    ``scattering`` is ``"multiple"`` (every order: atmo's transfer table),
-    ``"solve"`` (every order: the transfer solve through the cloud, nearer the path
-    tracer on clouds no fit has seen; docs/clouds.md) or ``"single"`` (the paper's); ``sky`` draws the Earth's sky, every order, behind the
+    ``scattering`` is ``"solve"`` (every order: the transfer solve through the cloud,
+    the nearest the path tracer; docs/clouds.md), ``"multiple"`` (every order: atmo's
+    transfer table fitted to the path tracer) or ``"single"`` (the paper's); ``sky`` draws the Earth's sky, every order, behind the
     cloud, lighting it and hazing it (without: the sun alone, on black); ``resolution`` is the light buffer's side (16-512)."""
     if scattering not in ("multiple", "solve", "single"):
         raise ValueError(f"scattering: 'multiple', 'solve' or 'single', got {scattering!r}")

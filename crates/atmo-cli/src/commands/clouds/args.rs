@@ -57,14 +57,14 @@ pub struct CloudStill {
     /// Intensity buffer voxels along each axis (the paper: 128, 256, 384).
     #[arg(long, default_value_t = 256)]
     pub resolution: usize,
-    /// Light scattered once (`single`, the paper's model) or every order: `multiple`, a
-    /// transfer table fitted to a path tracer (docs/clouds.md), `octaves`, the octaves
-    /// fitted to it (faster on the GPU, which reads the table's depth toward the eye
-    /// from a second light pass, lit from the eye, whenever the camera moves), or
-    /// `solve`, the orders past the first solved through the cloud: the second
-    /// explicitly, the rest by flux-limited diffusion (the CPU's alone; redone when the
-    /// sun or the particles move).
-    #[arg(long, value_enum, default_value_t = ScatteringArg::Multiple)]
+    /// Light scattered once (`single`, the paper's model) or every order: `solve`, the
+    /// orders past the first solved through the cloud (the second explicitly, the rest
+    /// by flux-limited diffusion; redone when the sun or the particles move; the
+    /// nearest the path tracer, docs/clouds.md), `multiple`, a transfer table fitted to
+    /// the path tracer, or `octaves`, the octaves fitted to it (faster on the GPU,
+    /// which reads the table's depth toward the eye from a second light pass, lit from
+    /// the eye, whenever the camera moves).
+    #[arg(long, value_enum, default_value_t = ScatteringArg::Solve)]
     pub scattering: ScatteringArg,
     /// With --scattering single: the part of scattered light taken to go on along the
     /// light, the paper's p(l,l)/4pi, in [0, 1] (the paper's forward scattering; 0, the
