@@ -34,7 +34,13 @@
 //! toward the eye as its radiance rebuilt from `phi` and `F` by Minerbo's closure and
 //! scattered by the phase ([`DiffuseLight::toward`]).
 //!
-//! Both are made toward the eye once a picture for each cell and read at the blobs'
+//! *The sky's light*, the same way ([`DiffuseLight::sky_toward`]): its radiance from
+//! every direction carried in from the grid's faces along the same directions without
+//! scattering (the transmittance, each cell's mean along its path), scattered toward
+//! the eye by the whole phase (its first order), and the rest of its scattering the
+//! source of a diffusion per channel with the sun's field's `D` (its higher orders).
+//!
+//! All are made toward the eye once a picture for each cell and read at the blobs'
 //! emission nodes. The grid is cubic cells over the particles' reach with two cells
 //! of air around; the extinction of each cell is the particles' mean over it
 //! (differences of `erf`, the Gaussian being separable), the sun's transmittance the
