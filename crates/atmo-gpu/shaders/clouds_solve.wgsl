@@ -610,34 +610,31 @@ fn toward(at: Wide) {
     if dot(to_eye, to_eye) > 0.0 {
         w = normalize(to_eye);
     }
-    let v = fields[cell];
-    // OnceScattered::toward.
-    var sum = 0.0;
+    // DiffuseLight::both_toward: the lights carried along the directions scattered by
+    // the phase (normalised over them), read once for the sun's and the sky's, then the
+    // diffuse fields' by the closure.
+    let with_sky = solve.sky != 0u;
+    var second = 0.0;
+    var sky = vec3<f32>(0.0);
     var norm = 0.0;
     for (var d = 0u; d < DIRECTIONS; d++) {
         let p = lobe(dot(direction(d), w));
-        sum += p * once[d * n + cell];
+        second += p * once[d * n + cell];
+        if with_sky {
+            sky += p * through(d, cell) * sky_radiance(d);
+        }
         norm += p;
     }
-    var second = 0.0;
     if norm > 0.0 {
-        second = sum / norm;
+        second /= norm;
+        sky /= norm;
     }
-    // The sky's: its light carried in scattered by the phase, and its diffuse fields'.
-    var sky = vec3<f32>(0.0);
-    if solve.sky != 0u {
-        var first = vec3<f32>(0.0);
-        for (var d = 0u; d < DIRECTIONS; d++) {
-            first += lobe(dot(direction(d), w)) * through(d, cell) * sky_radiance(d);
-        }
-        if norm > 0.0 {
-            sky = first / norm;
-        }
+    if with_sky {
         for (var c = 0u; c < 3u; c++) {
             sky[c] += leaving(fields[(1u + c) * solve.stride + cell], w);
         }
     }
-    seen[cell] = vec4<f32>(leaving(v, w) + second, sky);
+    seen[cell] = vec4<f32>(leaving(fields[cell], w) + second, sky);
 }
 
 // DiffuseLight::leaving: what a droplet scatters along w of the diffuse field of

@@ -226,12 +226,9 @@ impl DiffuseLight {
     /// and sun irradiance (1/sr), `[x][y][z]`: the second order's, scattered by the
     /// whole phase, and the diffuse field's (its radiance rebuilt by the closure).
     pub fn toward(&self, eye: Vec3) -> Vec<f32> {
-        (0..self.values.len())
-            .into_par_iter()
-            .map(|cell| {
-                let w = (eye - self.centre(cell)).normalize_or_zero();
-                self.leaving(self.values[cell], w) + self.once.toward(&self.tables.lobe, cell, w)
-            })
+        self.both_toward(eye)
+            .into_iter()
+            .map(|(sun, _)| sun)
             .collect()
     }
 
@@ -239,18 +236,43 @@ impl DiffuseLight {
     /// scattering coefficient (the sky's radiance units, RGB), `[x][y][z]`; `None`
     /// without a sky.
     pub fn sky_toward(&self, eye: Vec3) -> Option<Vec<Vec3>> {
-        let field = self.sky.as_ref()?;
+        self.sky.as_ref()?;
         Some(
-            (0..field.values.len())
-                .into_par_iter()
-                .map(|cell| {
-                    let w = (eye - self.centre(cell)).normalize_or_zero();
-                    let first =
-                        field.first_toward(&self.tables.lobe, &self.once.directions, cell, w);
-                    first + Vec3::from_array(field.values[cell].map(|v| self.leaving(v, w)))
-                })
+            self.both_toward(eye)
+                .into_iter()
+                .map(|(_, sky)| sky)
                 .collect(),
         )
+    }
+
+    /// Per cell [`DiffuseLight::toward`]'s and [`DiffuseLight::sky_toward`]'s (0
+    /// without a sky): the lights carried along the directions scattered toward `eye`
+    /// by the phase, read once for both, and the diffuse fields' by the closure.
+    fn both_toward(&self, eye: Vec3) -> Vec<(f32, Vec3)> {
+        (0..self.values.len())
+            .into_par_iter()
+            .map(|cell| {
+                let w = (eye - self.centre(cell)).normalize_or_zero();
+                let (mut sun, mut sky, mut norm) = (0.0, Vec3::ZERO, 0.0);
+                for (k, d) in self.once.directions.iter().enumerate() {
+                    // The phase normalised over the directions: `integral p L dw'`.
+                    let p = self.tables.lobe.at(d.dot(w));
+                    sun += p * self.once.radiance[k][cell];
+                    if let Some(field) = &self.sky {
+                        sky += p * field.through[k][cell] * field.radiance[k];
+                    }
+                    norm += p;
+                }
+                if norm > 0.0 {
+                    (sun, sky) = (sun / norm, sky / norm);
+                }
+                sun += self.leaving(self.values[cell], w);
+                if let Some(field) = &self.sky {
+                    sky += Vec3::from_array(field.values[cell].map(|v| self.leaving(v, w)));
+                }
+                (sun, sky)
+            })
+            .collect()
     }
 
     /// The world position of `cell`'s centre, m.
@@ -262,12 +284,13 @@ impl DiffuseLight {
     /// rays are then one value's trilinear read (the rays pass the centres at angles a
     /// cell's width apart as seen from the eye).
     pub(crate) fn seen_from(&self, eye: Vec3) -> Seen {
+        let (values, sky): (Vec<f32>, Vec<Vec3>) = self.both_toward(eye).into_iter().unzip();
         Seen {
             min: self.min,
             cell: self.cell,
             dims: self.dims,
-            values: self.toward(eye),
-            sky: self.sky_toward(eye),
+            values,
+            sky: self.sky.is_some().then_some(sky),
         }
     }
 
@@ -518,23 +541,6 @@ impl OnceScattered {
             directions,
             radiance,
             moments,
-        }
-    }
-
-    /// What a droplet in `cell` scatters of it along `w` per unit scattering
-    /// coefficient: `integral p(w . w') L(w') dw'`, the phase normalised over the
-    /// directions.
-    fn toward(&self, lobe: &Lobe, cell: usize, w: Vec3) -> f32 {
-        let (mut sum, mut norm) = (0.0, 0.0);
-        for (d, l) in self.directions.iter().zip(&self.radiance) {
-            let p = lobe.at(d.dot(w));
-            sum += p * l[cell];
-            norm += p;
-        }
-        if norm > 0.0 {
-            sum / norm
-        } else {
-            0.0
         }
     }
 }
@@ -1286,23 +1292,6 @@ impl SkyField {
             fluence: [f0, f1, f2],
             iterations,
         })
-    }
-
-    /// What a droplet in `cell` scatters along `w` of the sky's light not scattered
-    /// before, per unit scattering coefficient (RGB): the phase normalised over the
-    /// directions, as [`OnceScattered::toward`].
-    fn first_toward(&self, lobe: &Lobe, directions: &[Vec3], cell: usize, w: Vec3) -> Vec3 {
-        let (mut sum, mut norm) = (Vec3::ZERO, 0.0);
-        for ((d, t), l) in directions.iter().zip(&self.through).zip(&self.radiance) {
-            let p = lobe.at(d.dot(w));
-            sum += p * t[cell] * *l;
-            norm += p;
-        }
-        if norm > 0.0 {
-            sum / norm
-        } else {
-            Vec3::ZERO
-        }
     }
 }
 
