@@ -27,6 +27,15 @@ for s in single solve; do
         --view-height 1200 --width 640 --height 360 --scattering $s -o "$tmp/f-$s.png"
 done
 montage "$tmp/f-single.png" "$tmp/f-solve.png" -tile 2x1 -geometry +0+0 "$r/clouds-first.png"
+# The solve's default with the sky: side-lit, back-lit (the sun behind the cloud), from below.
+"$atmo" clouds --generate cumulus --sky --view-height 1200 --sun-elevation 20 --sun-azimuth 130 \
+    --width 480 --height 270 -o "$tmp/v-side.png"
+"$atmo" clouds --generate cumulus --sky --view-height 1200 --sun-elevation 15 --sun-azimuth 20 \
+    --width 480 --height 270 -o "$tmp/v-back.png"
+"$atmo" clouds --generate cumulus --sky --camera -1500,300,1500 --look-at 0,1500,0 --fov 60 \
+    --width 480 --height 270 -o "$tmp/v-below.png"
+montage "$tmp"/v-{side,back,below}.png -tile 3x1 -geometry +2+2 -background '#202020' \
+    "$r/clouds-views.png"
 # Every order by the transfer solve and by the table, on black, the sun from the side.
 for s in solve multiple; do
     "$atmo" clouds --generate cumulus --sun-elevation 20 --sun-azimuth 130 --scattering $s \

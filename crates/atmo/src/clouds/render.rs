@@ -320,6 +320,29 @@ pub fn render_with_depths(
         })?),
         _ => None,
     };
+    // Where each pixel is finished: at [`OPAQUE`], or, behind a pixel of the background
+    // brighter than its median (the sun's disc), as much lower as it is brighter, so
+    // that what still shows through stays under 0.1 % of the background's median (a
+    // cloud finished at `OPAQUE` in front of the sun let a thousandth of the disc
+    // through, a white dot in a thick cloud the GPU, drawing every blob, hides).
+    let mut finished = vec![OPAQUE; w * h + LANES];
+    if let Some(b) = background {
+        // The median of every seventh pixel's: the background's, to a pixel or so.
+        let mut brightness: Vec<f32> = b
+            .pixels
+            .iter()
+            .step_by(7)
+            .map(|p| p.max_element())
+            .collect();
+        let middle = brightness.len() / 2;
+        let median = *brightness.select_nth_unstable_by(middle, f32::total_cmp).1;
+        for (f, p) in finished.iter_mut().zip(&b.pixels) {
+            let bright = p.max_element();
+            if bright > median {
+                *f = OPAQUE * (median / bright);
+            }
+        }
+    }
     let blobs = Blobs {
         particles,
         order: &order,
@@ -338,6 +361,7 @@ pub fn render_with_depths(
         cosines: &cosines,
         phases: &phases,
         top_shares: &top_shares,
+        finished: &finished,
         table,
         solved: solved.map(|s| s.seen_from(camera.position)),
     };
@@ -408,6 +432,9 @@ struct Blobs<'a> {
     phases: &'a [f32],
     /// Per particle: its share of the sky's light from above.
     top_shares: &'a [f32],
+    /// Per pixel (and a lane-load past the last) the transmittance below which it is
+    /// finished.
+    finished: &'a [f32],
     /// With a table, what its lookups read.
     table: Option<Tabled<'a>>,
     /// With a transfer solve, its light seen from the eye.
@@ -497,9 +524,12 @@ impl Blobs<'_> {
                 if dirty[b] {
                     let cols = b * BLOCK..((b + 1) * BLOCK).min(w);
                     open[b] = (0..*rows_in_band).any(|r| {
-                        through[r * w + cols.start..r * w + cols.end]
+                        let row = r * w + cols.start..r * w + cols.end;
+                        let band_row = band * BAND * w + row.start..band * BAND * w + row.end;
+                        through[row]
                             .iter()
-                            .any(|t| *t >= OPAQUE)
+                            .zip(&self.finished[band_row])
+                            .any(|(t, f)| t >= f)
                     });
                     dirty[b] = false;
                 }
@@ -540,8 +570,9 @@ impl Blobs<'_> {
                     let i = (y - band * BAND) * w + x;
                     let xf = Lanes::splat(x as f32) + LANE_OFFSETS;
                     let t_through = Lanes::from(&through[i..i + LANES]);
-                    let mut live = xf.simd_lt(Lanes::splat(cols.end as f32))
-                        & t_through.simd_ge(Lanes::splat(OPAQUE));
+                    let finished = Lanes::from(&self.finished[band * BAND * w + i..][..LANES]);
+                    let mut live =
+                        xf.simd_lt(Lanes::splat(cols.end as f32)) & t_through.simd_ge(finished);
                     if live.none() {
                         continue;
                     }
