@@ -50,6 +50,8 @@
 //! solution ([`DiffuseLight::solve`]'s `previous`, as when only the sun has moved a
 //! little).
 
+use std::ops::{Add, Mul, Sub};
+
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -79,7 +81,7 @@ impl Diffusion {
 }
 
 /// Cells of air around the cloud on each side.
-pub const MARGIN: usize = 2;
+const MARGIN: usize = 2;
 
 /// The least optical depth across a cell that counts it as cloud (clear air is left
 /// out of the solve).
@@ -103,12 +105,8 @@ pub const TOLERANCE: f64 = 1e-4;
 /// The solved light of the orders past the first.
 #[derive(Debug, Clone)]
 pub struct DiffuseLight {
-    /// World position of cell `(0, 0, 0)`'s centre, m.
-    min: Vec3,
-    /// The cells' side, m.
-    cell: f32,
-    /// Cells along x, y and z.
-    dims: [usize; 3],
+    /// The grid and the particles' medium it was solved on.
+    grid: SolveGrid,
     /// Per cell, `[x][y][z]` (z fastest): the diffuse field's `phi / 4 pi` and
     /// `F / 4 pi` per unit sun irradiance.
     values: Vec<Vec4>,
@@ -162,10 +160,6 @@ impl DiffuseLight {
         settings: &Diffusion,
         previous: Option<&DiffuseLight>,
     ) -> Result<DiffuseLight> {
-        settings.validate()?;
-        if particles.is_empty() {
-            return Err(Error::Invalid("the transfer solve needs particles".into()));
-        }
         // The phase's tables, kept from the last solve of the same phase.
         let tables = match previous.filter(|p| p.tables.phase == phase) {
             Some(p) => p.tables.clone(),
@@ -178,8 +172,10 @@ impl DiffuseLight {
         let once = OnceScattered::of(&medium, &tables, travel);
         medium.scatter(&once, g, f);
         let n = grid.cells();
-        let (first_centre, h, dims) = (grid.first_centre, grid.cell, grid.dims);
-        let warm = previous.filter(|p| p.dims == dims && p.min == first_centre && p.cell == h);
+        let warm = previous.filter(|p| {
+            (p.grid.dims, p.grid.first_centre, p.grid.cell)
+                == (grid.dims, grid.first_centre, grid.cell)
+        });
         let mut phi = warm.map_or_else(|| vec![0.0f32; n], |p| p.fluence.clone());
         let mut iterations = 0;
         let lags = if warm.is_some() { LAGS_WARM } else { LAGS_COLD };
@@ -192,7 +188,12 @@ impl DiffuseLight {
             iterations += conjugate_gradients(&medium, &faces, &rhs, &mut phi);
         }
         let values = medium.dilated(faces.values(&medium, &phi, &medium.q1));
+        // The sky's transmittance is the particles' alone: kept where they are the same.
         let previous_sky = warm.and_then(|p| p.sky.as_ref());
+        let through = warm
+            .filter(|p| p.grid == grid)
+            .and_then(|p| p.sky.as_ref())
+            .map(|s| &s.through[..]);
         let sky = SkyField::solve(
             &medium,
             &faces,
@@ -200,14 +201,13 @@ impl DiffuseLight {
             &once.directions,
             sky,
             previous_sky,
+            through,
         );
         if let Some(field) = &sky {
             iterations += field.iterations;
         }
         Ok(DiffuseLight {
-            min: first_centre,
-            cell: h,
-            dims,
+            grid,
             values,
             fluence: phi,
             sky,
@@ -219,7 +219,7 @@ impl DiffuseLight {
 
     /// Cells along x, y and z.
     pub fn dims(&self) -> [usize; 3] {
-        self.dims
+        self.grid.dims
     }
 
     /// The light each cell's centre sends toward `eye`, per unit scattering coefficient
@@ -252,7 +252,7 @@ impl DiffuseLight {
         (0..self.values.len())
             .into_par_iter()
             .map(|cell| {
-                let w = (eye - self.centre(cell)).normalize_or_zero();
+                let w = (eye - self.grid.centre(cell)).normalize_or_zero();
                 let (mut sun, mut sky, mut norm) = (0.0, Vec3::ZERO, 0.0);
                 for (k, d) in self.once.directions.iter().enumerate() {
                     // The phase normalised over the directions: `integral p L dw'`.
@@ -275,20 +275,15 @@ impl DiffuseLight {
             .collect()
     }
 
-    /// The world position of `cell`'s centre, m.
-    fn centre(&self, cell: usize) -> Vec3 {
-        centre_of(self.min, self.cell, self.dims, cell)
-    }
-
     /// [`DiffuseLight::toward`] made once for a picture: its lookups along the pixels'
     /// rays are then one value's trilinear read (the rays pass the centres at angles a
     /// cell's width apart as seen from the eye).
     pub(crate) fn seen_from(&self, eye: Vec3) -> Seen {
         let (values, sky): (Vec<f32>, Vec<Vec3>) = self.both_toward(eye).into_iter().unzip();
         Seen {
-            min: self.min,
-            cell: self.cell,
-            dims: self.dims,
+            min: self.grid.first_centre,
+            cell: self.grid.cell,
+            dims: self.grid.dims,
             values,
             sky: self.sky.is_some().then_some(sky),
         }
@@ -377,6 +372,16 @@ pub fn directions() -> Vec<Vec3> {
     crate::quadrature::fibonacci_sphere(DIRECTIONS)
         .iter()
         .map(|d| d.as_vec3())
+        .collect()
+}
+
+/// The sky's radiance arriving along each of `directions` (from the opposite way), RGB,
+/// the harmonics' ringing kept from going below 0: what the solve carries in from the
+/// grid's faces.
+pub fn sky_radiance(sky: &SkyLight, directions: &[Vec3]) -> Vec<Vec3> {
+    directions
+        .iter()
+        .map(|&w| sky.along(-w).max(Vec3::ZERO))
         .collect()
 }
 
@@ -692,25 +697,9 @@ impl Seen {
     /// grid or without a sky).
     #[inline]
     pub(crate) fn sky_at(&self, p: Vec3) -> Vec3 {
-        let Some(sky) = &self.sky else {
-            return Vec3::ZERO;
-        };
-        let g = (p - self.min) / self.cell;
-        let [nx, ny, nz] = self.dims;
-        if !(g.cmpge(Vec3::ZERO).all()
-            && g.x < (nx - 1) as f32
-            && g.y < (ny - 1) as f32
-            && g.z < (nz - 1) as f32)
-        {
-            return Vec3::ZERO;
-        }
-        let i = g.as_uvec3();
-        let f = g - i.as_vec3();
-        let base = (i.x as usize * ny + i.y as usize) * nz + i.z as usize;
-        let (sx, sy) = (ny * nz, nz);
-        let lerp_z = |b: usize| sky[b].lerp(sky[b + 1], f.z);
-        let lerp_y = |b: usize| lerp_z(b).lerp(lerp_z(b + sy), f.y);
-        lerp_y(base).lerp(lerp_y(base + sx), f.x)
+        self.sky.as_ref().map_or(Vec3::ZERO, |sky| {
+            trilinear(sky, self.min, self.cell, self.dims, p)
+        })
     }
 
     /// The light toward the eye at eight world points, trilinear (0 outside the grid).
@@ -727,7 +716,10 @@ impl Seen {
 /// `values` on the grid of cells `cell` m wide whose first centre is `min`, trilinear
 /// at `p` (0 beyond the centres).
 #[inline(always)]
-fn trilinear(values: &[f32], min: Vec3, cell: f32, dims: [usize; 3], p: Vec3) -> f32 {
+fn trilinear<T>(values: &[T], min: Vec3, cell: f32, dims: [usize; 3], p: Vec3) -> T
+where
+    T: Copy + Default + Add<Output = T> + Sub<Output = T> + Mul<f32, Output = T>,
+{
     let g = (p - min) / cell;
     let [nx, ny, nz] = dims;
     if !(g.x >= 0.0
@@ -737,13 +729,13 @@ fn trilinear(values: &[f32], min: Vec3, cell: f32, dims: [usize; 3], p: Vec3) ->
         && g.y < (ny - 1) as f32
         && g.z < (nz - 1) as f32)
     {
-        return 0.0;
+        return T::default();
     }
     let (ix, iy, iz) = (g.x as usize, g.y as usize, g.z as usize);
     let (fx, fy, fz) = (g.x - ix as f32, g.y - iy as f32, g.z - iz as f32);
     let base = (ix * ny + iy) * nz + iz;
     let (sx, sy) = (ny * nz, nz);
-    let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+    let lerp = |a: T, b: T, t: f32| a + (b - a) * t;
     let lerp_z = |b: usize| lerp(values[b], values[b + 1], fz);
     let lerp_y = |b: usize| lerp(lerp_z(b), lerp_z(b + sy), fy);
     lerp(lerp_y(base), lerp_y(base + sx), fx)
@@ -767,9 +759,9 @@ pub struct SolveGrid {
 
 impl SolveGrid {
     /// The grid over `particles`' reach, `settings.cells` along the longest side and
-    /// [`MARGIN`] around, and each cell's mean of the particles' extinction (differences
-    /// of `erf`, the Gaussian being separable). Refuses a grid out of range and no
-    /// particles.
+    /// two cells of air around, and each cell's mean of the particles' extinction
+    /// (differences of `erf`, the Gaussian being separable). Refuses a grid out of range
+    /// and no particles.
     pub fn of(particles: &[Particle], settings: &Diffusion) -> Result<SolveGrid> {
         settings.validate()?;
         if particles.is_empty() {
@@ -863,20 +855,14 @@ impl SolveGrid {
 
     /// The world position of `cell`'s centre, m.
     pub fn centre(&self, cell: usize) -> Vec3 {
-        centre_of(self.first_centre, self.cell, self.dims, cell)
+        let [_, ny, nz] = self.dims;
+        let index = Vec3::new(
+            (cell / (ny * nz)) as f32,
+            (cell / nz % ny) as f32,
+            (cell % nz) as f32,
+        );
+        self.first_centre + index * self.cell
     }
-}
-
-/// The centre of `cell` (m) on the grid of `dims` cells `side` m wide whose first
-/// centre is `first`.
-fn centre_of(first: Vec3, side: f32, dims: [usize; 3], cell: usize) -> Vec3 {
-    let [_, ny, nz] = dims;
-    let index = Vec3::new(
-        (cell / (ny * nz)) as f32,
-        (cell / nz % ny) as f32,
-        (cell % nz) as f32,
-    );
-    first + index * side
 }
 
 impl Medium {
@@ -1205,8 +1191,6 @@ struct SkyField {
     /// `[direction][cell]`: the transmittance from the grid's faces along the
     /// direction ([`directions`]); the particles' alone, so kept while they stay.
     through: Vec<Vec<f32>>,
-    /// The medium it was swept through, extinction and scattering per cell.
-    swept: (Vec<f32>, Vec<f32>),
     /// Per direction the sky's radiance arriving along it (from the opposite way), RGB.
     radiance: Vec<Vec3>,
     /// Per cell and channel `phi / 4 pi` and `F / 4 pi` of the diffuse field.
@@ -1217,7 +1201,9 @@ struct SkyField {
 }
 
 impl SkyField {
-    /// The field of `sky` in `medium` with the sun's last `faces`; `None` for no sky.
+    /// The field of `sky` in `medium` with the sun's last `faces`, started from
+    /// `previous`'s fluence and reading `through` where the medium is the one it was
+    /// swept through; `None` for no sky.
     fn solve(
         medium: &Medium,
         faces: &Faces,
@@ -1225,23 +1211,20 @@ impl SkyField {
         directions: &[Vec3],
         sky: &SkyLight,
         previous: Option<&SkyField>,
+        through: Option<&[Vec<f32>]>,
     ) -> Option<SkyField> {
         if sky.mean().max_element() <= 0.0 {
             return None;
         }
         let (g, f) = (tables.g(), tables.f());
-        let kept = previous.filter(|p| p.swept.0 == medium.sigma_t && p.swept.1 == medium.sigma_s);
-        let through: Vec<Vec<f32>> = match kept {
-            Some(p) => p.through.clone(),
+        let through: Vec<Vec<f32>> = match through {
+            Some(kept) => kept.to_vec(),
             None => directions
                 .par_iter()
                 .map(|&w| sweep(medium, w, Sweep::FromOutside, f))
                 .collect(),
         };
-        let radiance: Vec<Vec3> = directions
-            .iter()
-            .map(|&w| sky.along(-w).max(Vec3::ZERO))
-            .collect();
+        let radiance = sky_radiance(sky, directions);
         let weight = 4.0 * std::f32::consts::PI / directions.len() as f32;
         let n = medium.sigma_t.len();
         // Per cell the uncollided light's fluence and flux, per channel.
@@ -1286,7 +1269,6 @@ impl SkyField {
             .collect();
         Some(SkyField {
             through,
-            swept: (medium.sigma_t.clone(), medium.sigma_s.clone()),
             radiance,
             values,
             fluence: [f0, f1, f2],
