@@ -62,8 +62,13 @@ fn the_light_pass_matches_the_cpu_buffer_for_both_splats() {
 
 /// The drawn cloud's camera: beside the cloud, a little above its middle.
 fn camera() -> Camera {
+    camera_at(Vec3::new(0.0, 1700.0, -600.0))
+}
+
+/// The same camera moved to `eye`, still looking at the cloud's middle.
+fn camera_at(eye: Vec3) -> Camera {
     Camera::look_at(
-        Vec3::new(0.0, 1700.0, -600.0),
+        eye,
         Vec3::new(0.0, 1650.0, 0.0),
         Vec3::Y,
         Fov::Vertical(2.0 * 0.45f32.atan().to_degrees()),
@@ -361,15 +366,9 @@ fn the_transfer_solve_on_the_gpu_is_the_cpus() {
         if k == 1 {
             // The light toward another eye, from the same solve.
             let eye = Vec3::new(500.0, 1500.0, -300.0);
-            let moved = Camera::look_at(
-                eye,
-                Vec3::new(0.0, 1650.0, 0.0),
-                Vec3::Y,
-                Fov::Vertical(2.0 * 0.45f32.atan().to_degrees()),
-                (120, 80),
-            )
-            .unwrap();
-            clouds.render(&gpu, &moved, &light(sun), None).unwrap();
+            clouds
+                .render(&gpu, &camera_at(eye), &light(sun), None)
+                .unwrap();
             compare_all(
                 &clouds.solved_toward(&gpu).unwrap(),
                 &cpu,

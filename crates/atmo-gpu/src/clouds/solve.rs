@@ -13,7 +13,7 @@
 
 use atmo::atmosphere::phase::PhaseFunction;
 use atmo::clouds::diffusion::{
-    directions, Diffusion, PhaseTables, SolveGrid, DIRECTIONS, LAGS_COLD, LAGS_WARM,
+    directions, sky_radiance, Diffusion, PhaseTables, SolveGrid, DIRECTIONS, LAGS_COLD, LAGS_WARM,
 };
 use atmo::clouds::SkyLight;
 
@@ -40,19 +40,8 @@ gpu_struct! {
     }
 }
 
-/// The solve's passes, made once for a cloud.
-pub(super) struct SolvePipelines {
-    sunlight: wgpu::ComputePipeline,
-    sweep: wgpu::ComputePipeline,
-    scatter: wgpu::ComputePipeline,
-    scatter_sky: wgpu::ComputePipeline,
-    faces: [wgpu::ComputePipeline; 2],
-    right_side: wgpu::ComputePipeline,
-    conjugate_gradients: wgpu::ComputePipeline,
-    moments: wgpu::ComputePipeline,
-    dilate: wgpu::ComputePipeline,
-    toward: wgpu::ComputePipeline,
-}
+/// The solve's passes, made once for a cloud, in [`PASSES`]' order.
+pub(super) struct SolvePipelines(Vec<wgpu::ComputePipeline>);
 
 impl SolvePipelines {
     pub(super) fn new(gpu: &Gpu) -> Result<Self, GpuError> {
@@ -60,19 +49,11 @@ impl SolvePipelines {
             gpu,
             "clouds_common.wgsl clouds_lookup.wgsl clouds_solve.wgsl",
         )?;
-        let make = |entry: &str| gpu.compute_pipeline(&module, entry, None);
-        Ok(SolvePipelines {
-            sunlight: make("sunlight")?,
-            sweep: make("sweep")?,
-            scatter: make("scatter")?,
-            scatter_sky: make("scatter_sky")?,
-            faces: [make("faces_plain")?, make("faces_limited")?],
-            right_side: make("right_side")?,
-            conjugate_gradients: make("conjugate_gradients")?,
-            moments: make("moments")?,
-            dilate: make("dilate")?,
-            toward: make("toward")?,
-        })
+        let pipelines = PASSES
+            .iter()
+            .map(|(entry, _, _)| gpu.compute_pipeline(&module, entry, None))
+            .collect::<Result<_, _>>()?;
+        Ok(SolvePipelines(pipelines))
     }
 }
 
@@ -88,7 +69,7 @@ pub(super) struct GpuSolve {
     /// The light toward the eye, per cell (the draw reads it).
     pub(super) seen: wgpu::Buffer,
     counts: wgpu::Buffer,
-    /// Per pass (as [`BINDINGS`]) its bind groups, one a field's segment for the passes
+    /// Per pass (as [`PASSES`]) its bind groups, one a field's segment for the passes
     /// of one field.
     groups: Vec<Vec<wgpu::BindGroup>>,
     /// Whether the transmittance from the grid's faces has been swept (the particles'
@@ -101,22 +82,34 @@ pub(super) struct GpuSolve {
     cells: u32,
 }
 
-/// Which bindings of clouds_solve.wgsl each pass reads, in [`SolvePipelines`]' order
-/// (`scatter_sky` last), and whether it runs on one field bound to its segment of
-/// `sources`, `phi` and `fields` (bindings 4, 6 and 8), or sees them whole.
-const BINDINGS: [(&[u32], bool); 11] = [
-    (&[0, 1, 10, 11], false),
-    (&[0, 1, 2, 3], false),
-    (&[0, 1, 2, 3, 4], false),
-    (&[0, 1, 5, 6], false),
-    (&[0, 1, 5, 6], false),
-    (&[0, 1, 4, 5, 7], true),
-    (&[0, 5, 6, 7, 12], true),
-    (&[0, 1, 4, 5, 6, 7], true),
-    (&[0, 1, 7, 8], true),
-    (&[0, 2, 3, 8, 9], false),
-    (&[0, 1, 2, 3, 4], false),
+/// The solve's passes: each one's entry point in clouds_solve.wgsl, the bindings it
+/// reads, and whether it runs on one field bound to its segment of `sources`, `phi`
+/// and `fields` (bindings 4, 6 and 8) or sees them whole. Indexed by the constants
+/// below, in [`SolvePipelines`] and in a solve's bind groups alike.
+const PASSES: [(&str, &[u32], bool); 11] = [
+    ("sunlight", &[0, 1, 10, 11], false),
+    ("sweep", &[0, 1, 2, 3], false),
+    ("scatter", &[0, 1, 2, 3, 4], false),
+    ("scatter_sky", &[0, 1, 2, 3, 4], false),
+    ("faces_plain", &[0, 1, 5, 6], false),
+    ("faces_limited", &[0, 1, 5, 6], false),
+    ("right_side", &[0, 1, 4, 5, 7], true),
+    ("conjugate_gradients", &[0, 5, 6, 7, 12], true),
+    ("moments", &[0, 1, 4, 5, 6, 7], true),
+    ("dilate", &[0, 1, 7, 8], true),
+    ("toward", &[0, 2, 3, 8, 9], false),
 ];
+const SUNLIGHT: usize = 0;
+const SWEEP: usize = 1;
+const SCATTER: usize = 2;
+const SCATTER_SKY: usize = 3;
+/// The plain faces; the limited ones next.
+const FACES: usize = 4;
+const RIGHT_SIDE: usize = 6;
+const CONJUGATE_GRADIENTS: usize = 7;
+const MOMENTS: usize = 8;
+const DILATE: usize = 9;
+const TOWARD: usize = 10;
 
 /// The fields a solve holds: the sun's and the sky's three channels.
 const FIELDS: usize = 4;
@@ -221,19 +214,6 @@ impl GpuSolve {
             cells,
             &counts,
         ];
-        let passes = [
-            &pipelines.sunlight,
-            &pipelines.sweep,
-            &pipelines.scatter,
-            &pipelines.faces[0],
-            &pipelines.faces[1],
-            &pipelines.right_side,
-            &pipelines.conjugate_gradients,
-            &pipelines.moments,
-            &pipelines.dilate,
-            &pipelines.toward,
-            &pipelines.scatter_sky,
-        ];
         // A field's segment of a per-field buffer of `bytes` a cell.
         let segment = |binding: u32, field: usize| -> Option<(u64, u64)> {
             let bytes = match binding {
@@ -244,10 +224,11 @@ impl GpuSolve {
             let size = (stride * bytes) as u64;
             Some((field as u64 * size, size))
         };
-        let groups = passes
+        let groups = pipelines
+            .0
             .iter()
-            .zip(BINDINGS)
-            .map(|(pipeline, (used, per_field))| {
+            .zip(PASSES)
+            .map(|(pipeline, (_, used, per_field))| {
                 let fields = if per_field { FIELDS } else { 1 };
                 (0..fields)
                     .map(|field| {
@@ -319,10 +300,10 @@ impl GpuSolve {
             at as u64,
             bytemuck::cast_slice(&shares),
         );
-        // The sky's radiance arriving along each direction, as the CPU's SkyField.
-        let radiance: Vec<f32> = directions
+        // The sky's radiance arriving along each direction, the CPU's.
+        let radiance: Vec<f32> = sky_radiance(sky, &directions)
             .iter()
-            .flat_map(|&w| sky.along(-w).max(Vec3::ZERO).to_array())
+            .flat_map(|l| l.to_array())
             .collect();
         let at = at + DIRECTIONS * 4 * 4;
         gpu.queue.write_buffer(
@@ -340,54 +321,39 @@ impl GpuSolve {
         let warm = self.sun.is_some();
         let mut pass = encoder.begin_compute_pass(&Default::default());
         let cells = groups(gpu, self.cells.div_ceil(GROUP));
-        let one = |pass: &mut wgpu::ComputePass, pipeline, group: &wgpu::BindGroup, wide| {
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, group, &[]);
-            let (x, y) = if wide { cells } else { (1, 1) };
-            pass.dispatch_workgroups(x, y, 1);
+        let run = |pass: &mut wgpu::ComputePass, which, field, size| {
+            self.dispatch(pass, pipelines, which, field, size)
         };
-        // A field's diffusion once its faces are made: right side, conjugate gradients.
-        let diffuse = |pass: &mut wgpu::ComputePass, field: usize| {
-            one(pass, &pipelines.right_side, &self.groups[5][field], true);
-            one(
-                pass,
-                &pipelines.conjugate_gradients,
-                &self.groups[6][field],
-                false,
-            );
+        // A field's diffusion once its faces are made: right side, conjugate gradients
+        // (one workgroup).
+        let diffuse = |pass: &mut wgpu::ComputePass, field| {
+            run(pass, RIGHT_SIDE, field, cells);
+            run(pass, CONJUGATE_GRADIENTS, field, (1, 1));
         };
-        one(&mut pass, &pipelines.sunlight, &self.groups[0][0], true);
-        pass.set_pipeline(&pipelines.sweep);
-        pass.set_bind_group(0, &self.groups[1][0], &[]);
+        run(&mut pass, SUNLIGHT, 0, cells);
+        // A workgroup a direction; the sky's as many more, once for particles where they are.
         let sweeps = if with_sky && !self.through { 2 } else { 1 } * DIRECTIONS as u32;
-        pass.dispatch_workgroups(sweeps, 1, 1);
-        self.through |= with_sky;
-        one(&mut pass, &pipelines.scatter, &self.groups[2][0], true);
+        run(&mut pass, SWEEP, 0, (sweeps, 1));
+        run(&mut pass, SCATTER, 0, cells);
         let lags = if warm { LAGS_WARM } else { LAGS_COLD };
         for lag in 0..lags {
             let limited = lag > 0 || warm;
-            let faces = &pipelines.faces[limited as usize];
-            one(
-                &mut pass,
-                faces,
-                &self.groups[3 + limited as usize][0],
-                true,
-            );
+            run(&mut pass, FACES + limited as usize, 0, cells);
             diffuse(&mut pass, 0);
         }
         let fields = if with_sky {
-            one(&mut pass, &pipelines.scatter_sky, &self.groups[10][0], true);
-            for field in 1..FIELDS {
-                diffuse(&mut pass, field);
-            }
+            run(&mut pass, SCATTER_SKY, 0, cells);
+            (1..FIELDS).for_each(|field| diffuse(&mut pass, field));
             FIELDS
         } else {
             1
         };
         for field in 0..fields {
-            one(&mut pass, &pipelines.moments, &self.groups[7][field], true);
-            one(&mut pass, &pipelines.dilate, &self.groups[8][field], true);
+            run(&mut pass, MOMENTS, field, cells);
+            run(&mut pass, DILATE, field, cells);
         }
+        drop(pass);
+        self.through |= with_sky;
         self.sun = Some((to_sun, *frame, sky.harmonics));
         self.eye = None;
     }
@@ -405,10 +371,24 @@ impl GpuSolve {
             .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         let cells = groups(gpu, self.cells.div_ceil(GROUP));
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipelines.toward);
-        pass.set_bind_group(0, &self.groups[9][0], &[]);
-        pass.dispatch_workgroups(cells.0, cells.1, 1);
+        self.dispatch(&mut pass, pipelines, TOWARD, 0, cells);
+        drop(pass);
         self.eye = Some(eye);
+    }
+
+    /// Records pass `which` (of [`PASSES`]) on `field`'s segment, `size` workgroups
+    /// (x, y).
+    fn dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass,
+        pipelines: &SolvePipelines,
+        which: usize,
+        field: usize,
+        size: (u32, u32),
+    ) {
+        pass.set_pipeline(&pipelines.0[which]);
+        pass.set_bind_group(0, &self.groups[which][field], &[]);
+        pass.dispatch_workgroups(size.0, size.1, 1);
     }
 
     /// The conjugate-gradient iterations of the last solve (read back).
