@@ -25,7 +25,7 @@ use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
 use atmo_gpu::sky::{AerialTextures, DepthTarget, GpuAerial, GpuSkyModel, SkyPass, SkyTarget};
 use atmo_gpu::Gpu;
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, KeyEvent, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -280,6 +280,7 @@ impl Scene {
                 format: DEPTH,
                 reversed_z: false,
             }),
+            samples: 1,
         };
         let mut sky_pass = SkyPass::new(&gpu, target).expect("the sky's pipeline");
         sky_pass.exposure = 0.05;
@@ -369,8 +370,12 @@ impl Scene {
         let camera = Camera::look_at(eye, eye + forward, Vec3::Y, Fov::Vertical(fov_deg), size)
             .expect("a camera");
         let aspect = size.0 as f32 / size.1 as f32;
-        let clip_from_world = Mat4::perspective_rh(fov_deg.to_radians(), aspect, 1.0, 200_000.0)
-            * Mat4::look_to_rh(eye, forward, Vec3::Y);
+        let clip_from_world = glam::camera::rh::proj::directx::perspective(
+            fov_deg.to_radians(),
+            aspect,
+            1.0,
+            200_000.0,
+        ) * glam::camera::rh::view::look_to_mat4(eye, forward, Vec3::Y);
         let sun = Sun::from_degrees(self.sun_elevation_deg, 180.0).expect("a sun");
         let [sunlight, skylight] = self.light(sun);
         let mut encoder = self.device.create_command_encoder(&Default::default());

@@ -31,7 +31,7 @@
 //! let model = SkyModel::new(&atmo::Atmosphere::earth(), &SkySettings::default(), 2.0)?;
 //! let sky = GpuSkyModel::new(&gpu, model)?;
 //! let depth_target = DepthTarget { format: wgpu::TextureFormat::Depth32Float, reversed_z: false };
-//! let target = SkyTarget { format: wgpu::TextureFormat::Rgba16Float, depth: Some(depth_target) };
+//! let target = SkyTarget { format: wgpu::TextureFormat::Rgba16Float, depth: Some(depth_target), samples: 1 };
 //! let mut sky_pass = SkyPass::new(&gpu, target)?;
 //!
 //! // Each frame: the camera in atmo's world frame (+y up, metres), the sun.
@@ -176,7 +176,7 @@ pub(crate) fn frame_of(width: u32, height: u32, bytes: &[u8]) -> atmo::image::Fr
 
 /// `pixels` from RGBA f32 `bytes`, their alpha left out.
 pub(crate) fn rgb_of(bytes: &[u8], pixels: &mut [glam::Vec3]) {
-    for (pixel, v) in pixels.iter_mut().zip(bytes.chunks_exact(16)) {
+    for (pixel, v) in pixels.iter_mut().zip(bytes.as_chunks::<16>().0) {
         let v: [f32; 4] = bytemuck::pod_read_unaligned(v);
         *pixel = glam::Vec3::new(v[0], v[1], v[2]);
     }

@@ -450,11 +450,11 @@ impl Sky {
                 elevation
                     .iter()
                     .zip(azimuth)
-                    .zip(normals.chunks_exact(3))
+                    .zip(normals.as_chunks::<3>().0)
                     .map(|((&e, &a), normal)| {
                         let sun = Sun::from_degrees(e, a)?;
                         let normal =
-                            DVec3::from_slice(normal).try_normalize().ok_or_else(|| {
+                            DVec3::from_array(*normal).try_normalize().ok_or_else(|| {
                                 atmo::Error::out_of_range(
                                     "normal",
                                     format!("{normal:?}"),

@@ -83,7 +83,7 @@ impl WindowPixels {
 fn put_texels(pixels: &mut [u32], texels: Option<&[u8]>) {
     match texels.filter(|t| t.len() == 4 * pixels.len()) {
         Some(texels) => {
-            for (pixel, t) in pixels.iter_mut().zip(texels.chunks_exact(4)) {
+            for (pixel, t) in pixels.iter_mut().zip(texels.as_chunks::<4>().0) {
                 *pixel = u32::from_le_bytes([t[0], t[1], t[2], 0]);
             }
         }

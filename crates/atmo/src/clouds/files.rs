@@ -177,8 +177,10 @@ pub fn parse_binary(bytes: &[u8], origin: &str) -> Result<Vec<Particle>> {
         .enumerate()
         .map(|(i, chunk)| {
             let v: Vec<f32> = chunk
-                .chunks_exact(4)
-                .map(|b| f32::from_le_bytes(b.try_into().expect("4 bytes")))
+                .as_chunks::<4>()
+                .0
+                .iter()
+                .map(|b| f32::from_le_bytes(*b))
                 .collect();
             let p = Particle {
                 position: Vec3::new(v[0], v[1], v[2]),

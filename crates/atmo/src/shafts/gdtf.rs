@@ -173,7 +173,7 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
     let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes))
         .map_err(|e| fail(format!("not a readable zip ({e})")))?;
     let text = zip_entry(&mut zip, "description.xml", DESCRIPTION_LIMIT)
-        .map_err(&fail)?
+        .map_err(fail)?
         .ok_or_else(|| fail("no description.xml in the zip".into()))?;
     let text = String::from_utf8(text).map_err(|_| fail("description.xml is not UTF-8".into()))?;
     let doc =
@@ -270,7 +270,7 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
     let mut wheel = Vec::new();
     let mut wheels = super::dmx::gdtf_mode::Wheels::default();
     let gobo = wheel_turned_by(fixture, &functions, "gobo", |a| a.starts_with("Gobo"));
-    if let Some(node) = gobo.map_err(&fail)? {
+    if let Some(node) = gobo.map_err(fail)? {
         let name = node.attribute("Name").unwrap_or("");
         wheels.gobo.0 = name.to_string();
         for slot in slots(node) {
@@ -285,7 +285,7 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
                     zip_entry(&mut zip, path, crate::files::DATA_LIMIT_BYTES).transpose()
                 })
                 .transpose()
-                .map_err(&fail)?
+                .map_err(fail)?
                 .ok_or_else(|| {
                     fail(format!(
                         "wheel {name:?} slot {:?}: no wheels/{media}(.png) in the zip",
@@ -305,7 +305,7 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
         a.strip_prefix("Prism")
             .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
     });
-    if let Some(node) = prism_wheel.map_err(&fail)? {
+    if let Some(node) = prism_wheel.map_err(fail)? {
         let name = node.attribute("Name").unwrap_or("");
         wheels.prism = (
             name.to_string(),
@@ -340,7 +340,7 @@ pub fn read(bytes: &[u8], origin: &str, mode: &str, sampling: Sampling) -> Resul
         }
     }
     let colour_wheel = wheel_turned_by(fixture, &functions, "colour", |a| a == "Color1");
-    if let Some(node) = colour_wheel.map_err(&fail)? {
+    if let Some(node) = colour_wheel.map_err(fail)? {
         wheels.colour = (
             node.attribute("Name").unwrap_or("").to_string(),
             slots(node)

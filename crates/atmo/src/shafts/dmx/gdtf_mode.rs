@@ -125,7 +125,7 @@ pub fn read(mode: roxmltree::Node, wheels: &Wheels) -> Result<Mode, String> {
             };
             let value = |key: &str, bytes: usize| -> Result<Option<u32>, String> {
                 f.attribute(key)
-                    .map(|t| dmx_value(t, bytes).map_err(&at))
+                    .map(|t| dmx_value(t, bytes).map_err(at))
                     .transpose()
             };
             let attribute = f.attribute("Attribute").and_then(Attribute::from_gdtf);
@@ -153,7 +153,7 @@ pub fn read(mode: roxmltree::Node, wheels: &Wheels) -> Result<Mode, String> {
             for s in f.children().filter(|n| n.has_tag_name("ChannelSet")) {
                 let dmx_from = s
                     .attribute("DMXFrom")
-                    .map_or(Ok(0), |t| dmx_value(t, bytes).map_err(&at))?;
+                    .map_or(Ok(0), |t| dmx_value(t, bytes).map_err(at))?;
                 let slot = s
                     .attribute("WheelSlotIndex")
                     .and_then(|t| t.trim().parse::<usize>().ok())

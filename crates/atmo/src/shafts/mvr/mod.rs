@@ -178,7 +178,7 @@ pub fn read(bytes: &[u8], origin: &str) -> Result<Rig> {
         .map_err(|e| fail(format!("not a readable zip ({e})")))?;
     let text =
         crate::shafts::gdtf::zip_entry(&mut zip, "GeneralSceneDescription.xml", DESCRIPTION_LIMIT)
-            .map_err(&fail)?
+            .map_err(fail)?
             .ok_or_else(|| fail("no GeneralSceneDescription.xml in the zip".into()))?;
     let text = String::from_utf8(text)
         .map_err(|_| fail("GeneralSceneDescription.xml is not UTF-8".into()))?;
@@ -209,8 +209,8 @@ pub fn read(bytes: &[u8], origin: &str) -> Result<Rig> {
         .filter(|n| n.has_tag_name("Layers"))
         .flat_map(|l| l.children().filter(|n| n.has_tag_name("Layer")))
     {
-        let at = reader.placement(layer).map_err(&fail)?;
-        reader.children(layer, &at, 0).map_err(&fail)?;
+        let at = reader.placement(layer).map_err(fail)?;
+        reader.children(layer, &at, 0).map_err(fail)?;
     }
     Ok(reader.rig)
 }

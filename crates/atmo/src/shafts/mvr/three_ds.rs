@@ -104,7 +104,9 @@ fn trimesh(mesh: &[u8], limit: usize, out: &mut Vec<[Vec3; 3]>) -> Result<(), St
                     .get(2..2 + 12 * n)
                     .ok_or_else(|| format!("{n} vertices claimed, {} bytes given", body.len()))?;
                 vertices = data
-                    .chunks_exact(12)
+                    .as_chunks::<12>()
+                    .0
+                    .iter()
                     .map(|v| {
                         let f = |k: usize| f32::from_le_bytes([v[k], v[k + 1], v[k + 2], v[k + 3]]);
                         Vec3::new(f(0), f(4), f(8))
@@ -122,7 +124,7 @@ fn trimesh(mesh: &[u8], limit: usize, out: &mut Vec<[Vec3; 3]>) -> Result<(), St
                 if out.len() + n > limit {
                     return Err(format!("more than {limit} triangles"));
                 }
-                for face in data.chunks_exact(8) {
+                for face in data.as_chunks::<8>().0 {
                     let index = |k: usize| u16::from_le_bytes([face[k], face[k + 1]]) as usize;
                     let corner = |k: usize| {
                         vertices.get(index(k)).copied().ok_or_else(|| {

@@ -358,7 +358,7 @@ pub fn mesh_from_obj(bytes: &[u8], origin: &str, place: impl Fn(Vec3) -> Vec3) -
                 )))
             }
         };
-        for t in idx.chunks_exact(3) {
+        for t in idx.as_chunks::<3>().0 {
             let [a, b, c] = [vertex(t[0])?, vertex(t[1])?, vertex(t[2])?];
             if (b - a).cross(c - a).length_squared() > 1e-20 {
                 triangles.push([a, b, c]);
