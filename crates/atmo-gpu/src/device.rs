@@ -16,6 +16,14 @@ const REQUIRED_FEATURES: &[(wgpu::Features, &str)] = &[(
     "float32 blending (additive planes and billboards in f32 targets)",
 )];
 
+/// What a render pipeline draws into: its colour targets, the depth buffer it tests
+/// against, and the samples a pixel of both (1 without multisampling).
+struct Attachments<'t> {
+    colour: &'t [Option<wgpu::ColorTargetState>],
+    depth: Option<wgpu::DepthStencilState>,
+    samples: u32,
+}
+
 /// A device and queue, with what is known of the adapter behind them. A clone is the
 /// same device (wgpu's handles are shared).
 #[derive(Clone)]
@@ -327,19 +335,18 @@ impl Gpu {
             write_mask: wgpu::ColorWrites::ALL,
         };
         let targets = vec![Some(target); targets];
-        self.pipeline(
-            "a render pipeline",
-            module,
-            fragment,
-            layout,
-            &targets,
-            None,
-        )
+        let attachments = Attachments {
+            colour: &targets,
+            depth: None,
+            samples: 1,
+        };
+        self.pipeline("a render pipeline", module, fragment, layout, attachments)
     }
 
     /// A render pipeline drawing `vertex` and `fragment` of `module` (no vertex
-    /// buffers, triangles) into the colour `targets`, depth-tested by `depth` where given;
-    /// refused as a [`GpuError`] naming `what` where the device cannot make it.
+    /// buffers, triangles) into the colour `targets` of `samples` samples a pixel (1
+    /// without multisampling), depth-tested by `depth` where given; refused as a
+    /// [`GpuError`] naming `what` where the device cannot make it.
     pub fn screen_pipeline(
         &self,
         what: &str,
@@ -347,8 +354,14 @@ impl Gpu {
         layout: Option<&wgpu::PipelineLayout>,
         targets: &[Option<wgpu::ColorTargetState>],
         depth: Option<wgpu::DepthStencilState>,
+        samples: u32,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
-        self.pipeline(what, module, "fragment", layout, targets, depth)
+        let attachments = Attachments {
+            colour: targets,
+            depth,
+            samples,
+        };
+        self.pipeline(what, module, "fragment", layout, attachments)
     }
 
     /// [`Gpu::screen_pipeline`] with the fragment shader `fragment` of `module`.
@@ -358,8 +371,7 @@ impl Gpu {
         module: &wgpu::ShaderModule,
         fragment: &str,
         layout: Option<&wgpu::PipelineLayout>,
-        targets: &[Option<wgpu::ColorTargetState>],
-        depth: Option<wgpu::DepthStencilState>,
+        attachments: Attachments,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
         self.scoped(what, || {
             self.device
@@ -376,11 +388,14 @@ impl Gpu {
                         module,
                         entry_point: Some(fragment),
                         compilation_options: Default::default(),
-                        targets,
+                        targets: attachments.colour,
                     }),
                     primitive: Default::default(),
-                    depth_stencil: depth,
-                    multisample: Default::default(),
+                    depth_stencil: attachments.depth,
+                    multisample: wgpu::MultisampleState {
+                        count: attachments.samples,
+                        ..Default::default()
+                    },
                     multiview_mask: None,
                     cache: None,
                 })

@@ -58,6 +58,7 @@ impl DisplayPass {
             Some(&pipeline_layout),
             &[Some(format.into())],
             None,
+            1,
         )?;
         Ok(DisplayPass {
             pipeline,

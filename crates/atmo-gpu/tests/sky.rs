@@ -112,6 +112,7 @@ fn draw_embedded(
             format: wgpu::TextureFormat::Depth32Float,
             reversed_z,
         }),
+        samples: 1,
     };
     let mut pass = SkyPass::new(gpu, target).unwrap();
     pass.exposure = 0.5;

@@ -60,6 +60,7 @@ impl PanelLayer {
                 write_mask: wgpu::ColorWrites::ALL,
             })],
             None,
+            1,
         )?;
         let texture = gpu.texture_2d(
             "the panel layer",
@@ -143,7 +144,9 @@ impl PanelLayer {
         let origin = wgpu::Origin3d { x, y, z: 0 };
         let bytes = gpu.read_texture_region("the panel layer", &self.texture, origin, (w, h, 1))?;
         let texels = bytes
-            .chunks_exact(4)
+            .as_chunks::<4>()
+            .0
+            .iter()
             .map(|t| [t[0], t[1], t[2], t[3]])
             .collect();
         Ok(Some(PanelPixels { rect, texels }))

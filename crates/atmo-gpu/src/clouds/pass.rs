@@ -47,6 +47,7 @@ impl CloudsPass {
             Some(&pipeline_layout),
             &[Some(target)],
             None,
+            1,
         )?;
         Ok(CloudsPass {
             pipeline,

@@ -529,6 +529,7 @@ impl ShaftsPass {
             None,
             &[Some(format.into())],
             None,
+            1,
         )?;
         Ok(ShaftsPass {
             pipeline,

@@ -1,25 +1,29 @@
 //! The aerial perspective's froxels on the GPU (`atmo::sky::aerial`): a compute pass
 //! into two 3-D textures a caller's shader samples.
 
+use std::sync::Arc;
+
 use super::*;
 
 /// The aerial perspective's froxels on the GPU ([`atmo::sky::aerial`]): the marked rays
 /// of an [`AerialRays`] uploaded once; per sun and camera, one invocation per froxel
 /// column reads its row's ray at its angle to the sun, as the CPU does.
 pub struct GpuAerial {
-    pub(super) rays: AerialRays,
+    pub(super) rays: Arc<AerialRays>,
     pub(super) marked: wgpu::Buffer,
     pub(super) params: AerialParams,
     pub(super) pipeline: wgpu::ComputePipeline,
 }
 
 impl GpuAerial {
-    /// Uploads `rays` (made by `sky`'s model) for `sky`'s device.
+    /// Uploads `rays` (made by `sky`'s model) for `sky`'s device; shared rays (an `Arc`)
+    /// are kept without a copy.
     pub fn new<M: Borrow<SkyModel>>(
         gpu: &Gpu,
         sky: &GpuSkyModel<M>,
-        rays: AerialRays,
+        rays: impl Into<Arc<AerialRays>>,
     ) -> Result<Self, GpuError> {
+        let rays = rays.into();
         let arrays = rays.arrays();
         if arrays.lanes != sky.sky_params.lanes as usize {
             return Err(atmo::Error::Invalid(

@@ -147,6 +147,10 @@ pub struct SkyTarget {
     /// The depth attachment, if the pass has one: the sky is drawn only where it is
     /// still at the far plane (no depth is written).
     pub depth: Option<DepthTarget>,
+    /// Samples a pixel of the attachments (multisampling; 1 without): each sample
+    /// passes or fails the depth test on its own, so the sky's edge against a mesh is
+    /// as smooth as the mesh's.
+    pub samples: u32,
 }
 
 /// A depth attachment's format and convention.
@@ -162,6 +166,7 @@ impl SkyTarget {
     pub const HEADLESS: SkyTarget = SkyTarget {
         format: wgpu::TextureFormat::Rgba32Float,
         depth: None,
+        samples: 1,
     };
 }
 
@@ -208,6 +213,7 @@ impl SkyPass {
             None,
             &[Some(target.format.into())],
             depth_stencil,
+            target.samples,
         )?;
         Ok(SkyPass {
             pipeline,

@@ -1,0 +1,216 @@
+//! The sky a camera sees ([`AtmoSky`]): what it is drawn from, and the shell model
+//! (sky 3) built for the camera's altitude on a background thread, again when the
+//! camera has climbed or descended far enough, or when the settings change.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use atmo::sky::aerial::{quadratic_slices, AerialRays};
+use atmo::sky::{SkyModel, SkySettings, SkylightTable};
+use atmo::Atmosphere;
+use bevy::camera::Hdr;
+use bevy::prelude::*;
+use bevy::render::render_resource::TextureUsages;
+use bevy::tasks::{futures::check_ready, AsyncComputeTaskPool, Task};
+
+use crate::aerial;
+
+/// atmo's sky behind everything a 3-D camera draws: put it on the camera's entity.
+///
+/// The frame is Bevy's and atmo's alike: metres, +y up, -z north, +x east. The camera's
+/// altitude is its height above [`AtmoSky::ground_level_m`].
+#[derive(Component, Clone, Debug)]
+#[require(Hdr)]
+pub struct AtmoSky {
+    /// The atmosphere (atmo's Earth by default: molecules, aerosols, ozone).
+    pub atmosphere: Arc<Atmosphere>,
+    /// What the sky is drawn from.
+    pub source: SkySource,
+    /// The world y of altitude 0 (the ground), m.
+    pub ground_level_m: f32,
+    /// Whether the sun's disc is drawn.
+    pub sun_disc: bool,
+    /// Whether the meshes are seen through the air before them (aerial perspective),
+    /// and out to how far, m: farther surfaces get the haze of this distance. From a
+    /// model only (a table keeps no view rays).
+    pub aerial_perspective: bool,
+    pub aerial_far_m: f32,
+    /// Whether the camera's `AmbientLight` is the sky's light on a horizontal surface,
+    /// recomputed (on a background thread, a few milliseconds) once the sun has moved by
+    /// more than `sky_light_every_deg` degrees.
+    pub sky_light: bool,
+    pub sky_light_every_deg: f32,
+}
+
+/// What a sky is drawn from.
+#[derive(Clone, Debug)]
+pub enum SkySource {
+    /// The shell method's model (sky 3) with these settings (every order by default,
+    /// `SkySettings::paper()` the paper's two). A model is of one altitude: it is
+    /// built on a background thread for the camera's (a few seconds on two cores), and
+    /// again once the camera is more than `rebuild_after_m` from it; the old one draws
+    /// meanwhile, and nothing is drawn before the first is ready.
+    Model {
+        settings: SkySettings,
+        rebuild_after_m: f32,
+    },
+    /// A skylight table (sky 4, `atmo precompute sky`): every altitude of its range
+    /// (0 to 13 km by default) drawn continuously on the GPU, nothing rebuilt; above
+    /// it, its highest altitude. Its atmosphere is the table's own.
+    Table(Arc<SkylightTable>),
+}
+
+impl AtmoSky {
+    /// The Earth of atmo's defaults: every scattering order, ozone, a ground of albedo
+    /// 0.1, from the shell model rebuilt every 500 m of altitude.
+    pub fn earth() -> Self {
+        AtmoSky {
+            atmosphere: Arc::new(Atmosphere::earth()),
+            source: SkySource::Model {
+                settings: SkySettings::default(),
+                rebuild_after_m: 500.0,
+            },
+            ground_level_m: 0.0,
+            sun_disc: true,
+            aerial_perspective: true,
+            aerial_far_m: 60_000.0,
+            sky_light: true,
+            sky_light_every_deg: 0.5,
+        }
+    }
+
+    /// The sky of a skylight table file written by `atmo precompute sky`; its errors
+    /// name the file and what is wrong with it.
+    pub fn from_table_file(path: impl Into<PathBuf>) -> atmo::Result<Self> {
+        let table = SkylightTable::read(&path.into())?;
+        Ok(AtmoSky {
+            atmosphere: Arc::new(table.atmosphere().clone()),
+            source: SkySource::Table(Arc::new(table)),
+            ..AtmoSky::earth()
+        })
+    }
+
+    /// The camera's altitude for a camera at world height `y`, m (never below 0).
+    pub fn altitude_m(&self, y: f32) -> f64 {
+        f64::from(y - self.ground_level_m).max(0.0)
+    }
+}
+
+/// The sky ready to draw for a camera, as the render world takes it: a model with the
+/// view rays of its aerial perspective where it has one, or a table.
+#[derive(Clone)]
+pub(crate) enum ReadySky {
+    Model(Arc<SkyModel>, Option<Arc<AerialRays>>),
+    Table(Arc<SkylightTable>),
+}
+
+/// A model and its aerial perspective's view rays, as a build gives them.
+type Built = atmo::Result<(SkyModel, Option<AerialRays>)>;
+
+/// A sky camera's sky in the making (the plugin adds it beside [`AtmoSky`]): the sky
+/// drawn now, the model being built, and a count that changes whenever what is drawn
+/// does (so the GPU's copy is remade).
+#[derive(Component, Default)]
+pub struct AtmoSkyState {
+    pub(crate) ready: Option<ReadySky>,
+    pub(crate) generation: u64,
+    building: Option<Task<Built>>,
+    /// The settings changed since the last model was started.
+    stale: bool,
+    /// The last build failed (its error logged): none is tried until the settings change.
+    failed: bool,
+}
+
+impl AtmoSkyState {
+    /// Whether a sky is ready to draw (false until the first model is built).
+    pub fn is_ready(&self) -> bool {
+        self.ready.is_some()
+    }
+
+    /// Whether a model is being built (the first, or one for a new altitude or new
+    /// settings).
+    pub fn is_building(&self) -> bool {
+        self.building.is_some()
+    }
+}
+
+/// A sky camera, as the builds see it.
+type SkyCameraParts<'a> = (
+    Entity,
+    Ref<'a, AtmoSky>,
+    &'a GlobalTransform,
+    Option<&'a mut AtmoSkyState>,
+    Option<&'a mut Camera3d>,
+);
+
+/// Starts a model for each camera whose sky has none, whose settings changed (a build
+/// under way for the old ones is dropped), or which left its model's altitude; takes
+/// the models that are done.
+pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraParts>) {
+    for (entity, sky, transform, state, camera) in &mut cameras {
+        // The aerial pass reads the depth buffer.
+        let binding = TextureUsages::TEXTURE_BINDING.bits();
+        if let Some(mut camera) = camera.filter(|c| c.depth_texture_usages.0 & binding == 0) {
+            camera.depth_texture_usages.0 |= binding;
+        }
+        let Some(mut state) = state else {
+            commands.entity(entity).insert(AtmoSkyState {
+                stale: true,
+                ..default()
+            });
+            continue;
+        };
+        if sky.is_changed() {
+            state.building = None;
+            state.stale = true;
+            state.failed = false;
+        }
+        let settings = match &sky.source {
+            SkySource::Table(table) => {
+                if state.stale {
+                    state.stale = false;
+                    state.ready = Some(ReadySky::Table(table.clone()));
+                    state.generation += 1;
+                }
+                continue;
+            }
+            SkySource::Model {
+                settings,
+                rebuild_after_m,
+            } => (settings, f64::from(*rebuild_after_m)),
+        };
+        if let Some(done) = state.building.as_mut().and_then(check_ready) {
+            state.building = None;
+            match done {
+                Ok((model, rays)) => {
+                    state.ready = Some(ReadySky::Model(Arc::new(model), rays.map(Arc::new)));
+                    state.generation += 1;
+                }
+                Err(e) => {
+                    error!("atmo's sky model: {e}");
+                    state.failed = true;
+                }
+            }
+        }
+        let altitude = sky.altitude_m(transform.translation().y);
+        let far = match &state.ready {
+            Some(ReadySky::Model(model, _)) => (model.altitude_m() - altitude).abs() > settings.1,
+            _ => true,
+        };
+        if (state.stale || far) && state.building.is_none() && !state.failed {
+            state.stale = false;
+            let (atmosphere, settings) = (sky.atmosphere.clone(), settings.0.clone());
+            let far_m = sky
+                .aerial_perspective
+                .then_some(f64::from(sky.aerial_far_m));
+            state.building = Some(AsyncComputeTaskPool::get().spawn(async move {
+                let model = SkyModel::new(&atmosphere, &settings, altitude)?;
+                let slices = far_m.map(|far| quadratic_slices(aerial::SLICES, far));
+                let rays = slices
+                    .map(|s| model.aerial_rays(aerial::ROWS, &s))
+                    .transpose()?;
+                Ok((model, rays))
+            }));
+        }
+    }
+}

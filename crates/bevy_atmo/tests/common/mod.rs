@@ -1,0 +1,140 @@
+//! A headless Bevy app with the plugin, rendering into an image that is read back: what
+//! every test of the plugin shares.
+
+#![allow(dead_code)] // each test binary uses its own part
+
+use std::time::{Duration, Instant};
+
+use bevy::app::PluginsState;
+use bevy::camera::{Exposure, RenderTarget};
+use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
+use bevy::prelude::*;
+use bevy::render::gpu_readback::{Readback, ReadbackComplete};
+use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
+use bevy::render::render_resource::{TextureFormat, TextureUsages};
+use bevy::render::RenderPlugin;
+use bevy::window::ExitCondition;
+use bevy::winit::WinitPlugin;
+use bevy_atmo::prelude::*;
+
+/// The picture's size: rows of 64 f32 RGBA pixels are 1024 bytes, a whole number of
+/// wgpu's 256-byte copy rows, so the read-back has no padding.
+pub const WIDTH: u32 = 192;
+pub const HEIGHT: u32 = 108;
+
+/// The camera's exposure: EV100 14 (a bright day), so a day sky is written near 0.3.
+pub const EXPOSURE: Exposure = Exposure { ev100: 14.0 };
+
+/// What the last read-back gave: RGBA f32 pixels, row-major.
+#[derive(Resource, Default)]
+struct Shot(Option<Vec<[f32; 4]>>);
+
+/// An app with Bevy's renderer on whatever adapter there is (no window, frames rendered
+/// in order), the plugin, and a camera with `camera` (plus the test's exposure, no tone
+/// map, no dithering) rendering into an RGBA f32 image read back every frame.
+pub fn app(camera: impl Bundle) -> App {
+    let mut app = App::new();
+    app.add_plugins(
+        DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .set(RenderPlugin {
+                synchronous_pipeline_compilation: true,
+                ..default()
+            })
+            .disable::<PipelinedRenderingPlugin>()
+            .disable::<WinitPlugin>(),
+    )
+    .add_plugins(AtmoPlugin)
+    .init_resource::<Shot>();
+    // The renderer is made asynchronously: wait for it, then finish the plugins.
+    while app.plugins_state() == PluginsState::Adding {
+        bevy::tasks::tick_global_task_pools_on_main_thread();
+    }
+    app.finish();
+    app.cleanup();
+    let mut image = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba32Float, None);
+    image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
+    let image = app.world_mut().resource_mut::<Assets<Image>>().add(image);
+    app.world_mut().spawn((
+        Camera3d::default(),
+        RenderTarget::Image(image.clone().into()),
+        EXPOSURE,
+        Tonemapping::None,
+        DebandDither::Disabled,
+        camera,
+    ));
+    app.world_mut().spawn(Readback::texture(image)).observe(
+        |read: On<ReadbackComplete>, mut shot: ResMut<Shot>| {
+            let pixels: &[[f32; 4]] = bytemuck::cast_slice(&read.data);
+            shot.0 = Some(pixels.to_vec());
+        },
+    );
+    app
+}
+
+/// Updates `app` until every sky has been ready for a few frames (its model is built on
+/// a background thread: seconds; the GPU's copy is made a frame later, the read-back
+/// comes a frame or two after that) and two read-backs in a row agree, and returns the
+/// picture; panics after two minutes, or when the renderer has asked the app to exit
+/// (a GPU error).
+pub fn settled(app: &mut App) -> Vec<[f32; 4]> {
+    let start = Instant::now();
+    let mut last: Option<Vec<[f32; 4]>> = None;
+    let mut ready_frames = 0;
+    loop {
+        app.update();
+        assert!(
+            app.should_exit().is_none(),
+            "the renderer stopped the app (a GPU error; see the log)"
+        );
+        let mut skies = app.world_mut().query::<&AtmoSkyState>();
+        let done = skies
+            .iter(app.world())
+            .all(|s| s.is_ready() && !s.is_building());
+        ready_frames = if done { ready_frames + 1 } else { 0 };
+        let shot = app.world_mut().resource_mut::<Shot>().0.take();
+        if let (Some(shot), true) = (shot, ready_frames > 4) {
+            if last.as_ref() == Some(&shot) {
+                return shot;
+            }
+            last = Some(shot);
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no settled picture after two minutes"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Luminance per radiance (683 lm/W) times the camera's exposure: what the plugin
+/// multiplies atmo's radiance by.
+pub fn scale() -> f32 {
+    atmo::sky::lighting::LUMENS_PER_WATT as f32 * EXPOSURE.exposure()
+}
+
+/// A read-back as atmo's radiance.
+pub fn radiance(shot: &[[f32; 4]]) -> atmo::image::Frame {
+    let mut frame = atmo::image::Frame::new(WIDTH, HEIGHT);
+    for (p, s) in frame.pixels.iter_mut().zip(shot) {
+        *p = Vec3::new(s[0], s[1], s[2]) / scale();
+    }
+    frame
+}
+
+/// atmo's Earth at `altitude_m`, every order: what `AtmoSky::earth()` builds.
+pub fn earth_model(altitude_m: f32) -> atmo::sky::SkyModel {
+    let settings = atmo::sky::SkySettings::default();
+    atmo::sky::SkyModel::new(&atmo::Atmosphere::earth(), &settings, altitude_m.into()).unwrap()
+}
+
+/// atmo's camera for a Bevy camera looking along `look` (y up) with Bevy's default
+/// vertical field of view (45 deg), at the origin, of the test picture's size.
+pub fn atmo_camera(look: Vec3) -> atmo::view::Camera {
+    let fov = atmo::view::Fov::Vertical(45.0);
+    atmo::view::Camera::look_at(Vec3::ZERO, look, Vec3::Y, fov, (WIDTH, HEIGHT)).unwrap()
+}

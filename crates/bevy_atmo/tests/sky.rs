@@ -1,0 +1,128 @@
+//! The plugin's sky held to `atmo sky`'s: the same camera and sun drawn on the CPU
+//! (`SkyPicture`, which the CLI renders), compared under the CLI's PNG display.
+
+mod common;
+
+use std::sync::OnceLock;
+
+use atmo::image::{Display, Frame, ToneMap};
+use atmo::sky::{SkyPicture, View};
+use atmo::view::Sun;
+use bevy::prelude::*;
+use bevy_atmo::prelude::*;
+use common::{app, atmo_camera, earth_model, radiance, settled, HEIGHT, WIDTH};
+
+/// The camera's altitude, m: the plugin builds its model for it.
+const ALTITUDE_M: f32 = 1000.0;
+
+/// `atmo sky`'s PNG display (its default exposure and tone map).
+const DISPLAY: Display = Display {
+    exposure: 0.15,
+    tone: ToneMap::Exponential,
+};
+
+/// The sun and the view direction of the tests: the sun low in the picture's right
+/// half, the view a little above the horizon.
+fn sun() -> Sun {
+    Sun::from_degrees(20.0, 200.0).unwrap()
+}
+
+fn looking() -> Vec3 {
+    atmo::view::direction_of(170f64.to_radians(), 12f64.to_radians()).as_vec3()
+}
+
+/// The CPU's picture of the test's camera and sun, disc left out (its radiance is past
+/// what an f16 target holds at this exposure).
+fn reference() -> &'static Frame {
+    static FRAME: OnceLock<Frame> = OnceLock::new();
+    FRAME.get_or_init(|| {
+        let model = earth_model(ALTITUDE_M);
+        let view = View {
+            camera: atmo_camera(looking()),
+            sun_disc: false,
+        };
+        SkyPicture::new(&model, sun()).render(&view)
+    })
+}
+
+/// The plugin's camera and sun for the test's view, with `msaa`, no aerial perspective
+/// (tests/aerial.rs has it).
+fn scene(msaa: Msaa) -> App {
+    let sky = AtmoSky {
+        sun_disc: false,
+        aerial_perspective: false,
+        ..AtmoSky::earth()
+    };
+    let eye = Vec3::new(0.0, ALTITUDE_M, 0.0);
+    let mut app = app((
+        sky,
+        msaa,
+        Transform::from_translation(eye).looking_to(looking(), Vec3::Y),
+    ));
+    app.world_mut().spawn((
+        AtmoSun,
+        Transform::default().looking_to(-sun().toward(), Vec3::Y),
+    ));
+    app
+}
+
+#[test]
+fn the_sky_is_atmo_skys_for_the_same_camera_and_sun() {
+    let mut app = scene(Msaa::Off);
+    let frame = radiance(&settled(&mut app));
+    let e = frame.level_errors(reference(), DISPLAY).unwrap();
+    eprintln!(
+        "plugin vs atmo sky: RMS {:.3}, max {:.3} levels",
+        e.rms, e.max
+    );
+    assert!(e.rms <= 0.5, "RMS {:.3} levels (bound 0.5)", e.rms);
+    // Not a black picture matching a black one.
+    let mean =
+        frame.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / frame.pixels.len() as f32;
+    assert!(mean > 1.0, "mean radiance {mean}");
+}
+
+#[test]
+fn with_msaa_4x_the_sky_fills_around_a_mesh_and_never_over_it() {
+    let mut app = scene(Msaa::Sample4);
+    // A black box straight ahead, 200 m away, 40 m wide: about a tenth of the picture.
+    let world = app.world_mut();
+    let mesh = world
+        .resource_mut::<Assets<Mesh>>()
+        .add(Cuboid::new(40.0, 40.0, 40.0));
+    let material = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial {
+            base_color: Color::BLACK,
+            unlit: true,
+            ..default()
+        });
+    let centre = Vec3::new(0.0, ALTITUDE_M, 0.0) + 200.0 * looking();
+    world.spawn((
+        Mesh3d(mesh),
+        MeshMaterial3d(material),
+        Transform::from_translation(centre).looking_to(looking(), Vec3::Y),
+    ));
+    let frame = radiance(&settled(&mut app));
+    // The box covers the centre: (20 / 180) / tan(22.5 deg) of the half-height, 27 %,
+    // about +-14 pixels; inside +-10 it is black, outside +-18 the sky is atmo's.
+    let (cx, cy) = (WIDTH as i32 / 2, HEIGHT as i32 / 2);
+    let mut outside = Vec::new();
+    for y in 0..HEIGHT as i32 {
+        for x in 0..WIDTH as i32 {
+            let (dx, dy) = ((x - cx).abs(), (y - cy).abs());
+            let i = (y * WIDTH as i32 + x) as usize;
+            if dx.max(dy) <= 10 {
+                assert_eq!(frame.pixels[i], Vec3::ZERO, "pixel ({x}, {y}) of the box");
+            } else if dx.max(dy) > 18 {
+                outside.push(i);
+            }
+        }
+    }
+    let e = frame.level_errors_over(reference(), DISPLAY, outside);
+    eprintln!(
+        "MSAA 4x, around the box: RMS {:.3}, max {:.3} levels",
+        e.rms, e.max
+    );
+    assert!(e.rms <= 0.5, "RMS {:.3} levels (bound 0.5)", e.rms);
+}
