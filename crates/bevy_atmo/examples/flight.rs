@@ -18,6 +18,8 @@ use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use bevy_atmo::prelude::*;
 
+mod scene;
+
 /// The camera's height above the plain at the start, m.
 const START_ALTITUDE_M: f32 = 300.0;
 
@@ -54,13 +56,8 @@ struct SunAngles {
 #[derive(Resource)]
 struct Shot(Option<String>, u32);
 
-fn setup(
-    mut commands: Commands,
-    mut meshes: ResMut<Assets<Mesh>>,
-    mut materials: ResMut<Assets<StandardMaterial>>,
-    mut images: ResMut<Assets<Image>>,
-) {
-    commands.spawn((
+fn setup(world: &mut World) {
+    world.spawn((
         Camera3d::default(),
         AtmoSky::earth(),
         Exposure { ev100: 13.0 },
@@ -73,36 +70,17 @@ fn setup(
         Transform::from_xyz(0.0, START_ALTITUDE_M, 0.0)
             .looking_to(Vec3::new(0.3, -0.06, -1.0), Vec3::Y),
     ));
-    commands.spawn((AtmoSun, DirectionalLight::default(), Transform::default()));
-    // A plain 160 km across, in fields of 1.25 km (a checker texture, nearest texels).
-    let checker = checker_image(256, 128);
-    let plain = materials.add(StandardMaterial {
-        base_color_texture: Some(images.add(checker)),
+    world.spawn((AtmoSun, DirectionalLight::default(), Transform::default()));
+    // Fields of 1.25 km: a checker texture of nearest texels over the plain.
+    let checker = world
+        .resource_mut::<Assets<Image>>()
+        .add(checker_image(256, 128));
+    let ground = StandardMaterial {
+        base_color_texture: Some(checker),
         perceptual_roughness: 0.95,
         ..default()
-    });
-    commands.spawn((
-        Mesh3d(meshes.add(Plane3d::default().mesh().size(160_000.0, 160_000.0))),
-        MeshMaterial3d(plain),
-        Transform::default(),
-    ));
-    // Towers 120 m tall every 2 km, out to 40 km, in three rows.
-    let tower = meshes.add(Cuboid::new(60.0, 240.0, 60.0));
-    let concrete = materials.add(StandardMaterial {
-        base_color: Color::srgb(0.55, 0.53, 0.5),
-        perceptual_roughness: 0.9,
-        ..default()
-    });
-    for row in -1..=1 {
-        for k in 1..=20 {
-            let distance = 2000.0 * k as f32;
-            commands.spawn((
-                Mesh3d(tower.clone()),
-                MeshMaterial3d(concrete.clone()),
-                Transform::from_xyz(row as f32 * 1500.0 + 0.3 * distance, 0.0, -distance),
-            ));
-        }
-    }
+    };
+    scene::plain_and_towers(world, ground);
 }
 
 /// A `texels` square checker of `cells` x `cells` fields, in two greens and browns.

@@ -41,11 +41,11 @@ use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSyst
 use bevy::transform::TransformSystems;
 
 pub use sky::{AtmoSky, AtmoSkyState, SkySource};
-pub use sun::AtmoSun;
+pub use sun::{AtmoSun, AtmoSunAt};
 
 /// What a Bevy program imports to use atmo.
 pub mod prelude {
-    pub use crate::{AtmoPlugin, AtmoSky, AtmoSkyState, AtmoSun, SkySource};
+    pub use crate::{AtmoPlugin, AtmoSky, AtmoSkyState, AtmoSun, AtmoSunAt, SkySource};
 }
 
 /// Adds atmo's sky and sun to an app with Bevy's renderer.
@@ -65,6 +65,11 @@ impl Plugin for AtmoPlugin {
                 )
                     .chain()
                     .after(TransformSystems::Propagate),
+            )
+            // Before the transforms propagate, so the light turns in the same frame.
+            .add_systems(
+                PostUpdate,
+                sun::place_the_sun.before(TransformSystems::Propagate),
             );
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;

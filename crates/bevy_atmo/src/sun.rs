@@ -2,8 +2,10 @@
 //! sky, and whose colour and illuminance atmo sets to the sunlight at the camera.
 
 use atmo::sky::lighting::Sunlight;
+use atmo::view::place::Place;
 use atmo::view::Sun;
 use bevy::prelude::*;
+use chrono::{DateTime, FixedOffset};
 
 use crate::sky::AtmoSky;
 
@@ -16,6 +18,54 @@ use crate::sky::AtmoSky;
 #[reflect(Component, Default)]
 #[require(DirectionalLight)]
 pub struct AtmoSun;
+
+/// The sun of a place and a time (NREL's solar position algorithm, atmo's `atmo sun`):
+/// put beside [`AtmoSun`], it turns the light to the sun's geometric position at `time`
+/// seen from `place`, whenever either changes (advance `time` to move the sun through a
+/// day). North is -z, east +x.
+#[derive(Component, Clone, Debug)]
+#[require(AtmoSun)]
+pub struct AtmoSunAt {
+    pub place: Place,
+    pub time: DateTime<FixedOffset>,
+}
+
+impl AtmoSunAt {
+    /// The sun at `time` (RFC 3339 with its offset, `2026-06-21T20:30:00+02:00`) seen
+    /// from `latitude_deg` north and `longitude_deg` east at sea level; errors name the
+    /// field.
+    pub fn new(latitude_deg: f64, longitude_deg: f64, time: &str) -> atmo::Result<Self> {
+        let place = Place {
+            latitude_deg,
+            longitude_deg,
+            altitude_m: 0.0,
+        };
+        place.validate()?;
+        Ok(AtmoSunAt {
+            place,
+            time: atmo::view::place::parse_time(time)?,
+        })
+    }
+}
+
+/// Turns each [`AtmoSunAt`] light to its sun when its place or time changed.
+pub(crate) fn place_the_sun(mut suns: Query<(&AtmoSunAt, &mut Transform), Changed<AtmoSunAt>>) {
+    for (at, mut transform) in &mut suns {
+        match at.place.sun_at(at.time) {
+            Ok(position) => {
+                let toward = position.sun().toward();
+                // The light travels away from the sun; straight up, any "up" will do.
+                let up = if toward.y.abs() > 0.999 {
+                    Vec3::Z
+                } else {
+                    Vec3::Y
+                };
+                transform.look_to(-toward, up);
+            }
+            Err(e) => error!("AtmoSunAt: {e}"),
+        }
+    }
+}
 
 /// The sun this frame, for the render world: `None` without an [`AtmoSun`].
 #[derive(Resource, Clone, Copy, Debug, Default)]
@@ -56,5 +106,35 @@ pub(crate) fn light_the_sun(
     if light.color != color || light.illuminance != illuminance {
         light.color = color;
         light.illuminance = illuminance;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_place_and_a_time_turn_the_light_to_the_suns_position() {
+        let at = AtmoSunAt::new(48.1, 11.6, "2026-06-21T19:00:00+02:00").unwrap();
+        let want = at.place.sun_at(at.time).unwrap();
+        let mut app = App::new();
+        app.add_systems(Update, place_the_sun);
+        let sun = app.world_mut().spawn((at, Transform::default())).id();
+        app.update();
+        let transform = app.world().get::<Transform>(sun).unwrap();
+        // Toward the sun is the light's back; an evening sun in Munich is low in the
+        // north-west.
+        let got = Sun::from_toward(*transform.back()).unwrap();
+        assert!(
+            (got.elevation().to_degrees() - want.elevation_deg).abs() < 1e-3,
+            "{got:?}"
+        );
+        let azimuth = got.azimuth().to_degrees().rem_euclid(360.0);
+        assert!(
+            (azimuth - want.azimuth_deg).abs() < 1e-3,
+            "{azimuth} vs {want:?}"
+        );
+        assert!(want.elevation_deg > 0.0 && want.elevation_deg < 20.0);
+        assert!(want.azimuth_deg > 270.0 && want.azimuth_deg < 320.0);
     }
 }

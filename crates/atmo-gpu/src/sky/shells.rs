@@ -1,6 +1,8 @@
 //! The sky by the shell method on the GPU (sky 3): per sun one compute pass sums every
 //! view ray's shell crossings into the skylight map and the ground map.
 
+use std::sync::Mutex;
+
 use super::*;
 
 /// A sky model uploaded: its sun-independent maps in one buffer, the shell pass, and the
@@ -21,6 +23,9 @@ pub struct GpuSkyModel<M: Borrow<SkyModel>> {
     pub(super) uniforms: [wgpu::Buffer; 2],
     /// The sun disc's spectrum to linear sRGB, made once (it integrates the CMFs).
     pub(super) to_rgb: SpectrumToRgb,
+    /// The sun elevation whose maps were last recorded: `prepare` records them again
+    /// only for another sun.
+    pub(super) recorded: Mutex<Option<f64>>,
 }
 
 impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
@@ -155,6 +160,7 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
                 gpu.uniform("the shell pass (sky)", &sky_params),
                 gpu.uniform("the shell pass (ground)", &ground_params),
             ],
+            recorded: Mutex::new(None),
         })
     }
 
@@ -170,6 +176,7 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
         encoder: &mut wgpu::CommandEncoder,
         sun_elevation: f64,
     ) {
+        *self.recorded.lock().unwrap() = Some(sun_elevation);
         let (sin_s, cos_s) = sun_elevation.sin_cos();
         for (params, map, grid, uniform) in [
             (
@@ -234,7 +241,9 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
     /// Records this frame's skylight and ground maps for `sun` into `encoder` and sets
     /// `pass` to draw them in `view` (seen from the model's altitude, whatever the
     /// camera's height): what a renderer does each frame, before recording
-    /// [`SkyPass::draw`]. Nothing is read back.
+    /// [`SkyPass::draw`]. Nothing is read back. The maps of the sun last recorded are
+    /// not recorded again (a still sun costs only the picture pass): submit what is
+    /// recorded.
     pub fn prepare(
         &self,
         gpu: &Gpu,
@@ -243,7 +252,9 @@ impl<M: Borrow<SkyModel>> GpuSkyModel<M> {
         sun: Sun,
         view: &View,
     ) -> Result<(), GpuError> {
-        self.record_maps(gpu, encoder, sun.elevation());
+        if *self.recorded.lock().unwrap() != Some(sun.elevation()) {
+            self.record_maps(gpu, encoder, sun.elevation());
+        }
         let model = self.model();
         let atmosphere = model.atmosphere();
         let mut spectrum = vec![0.0f32; atmosphere.channels()];

@@ -1,6 +1,8 @@
 //! The sky from the skylight table on the GPU (sky 4.2): per frame the CPU
 //! interpolates the `t_k` and one compute pass sums the terms into the map.
 
+use std::sync::Mutex;
+
 use super::*;
 
 /// A skylight table uploaded, with its map pass; `T` is the table borrowed
@@ -18,6 +20,9 @@ pub struct GpuSkyTable<T: Borrow<SkylightTable>> {
     pub(super) map: wgpu::Buffer,
     pub(super) rows: u32,
     pub(super) map_pass: wgpu::ComputePipeline,
+    /// The sun elevation and altitude whose map was last recorded: `prepare` records it
+    /// again only for another.
+    pub(super) recorded: Mutex<Option<(f64, f64)>>,
 }
 
 impl<T: Borrow<SkylightTable>> GpuSkyTable<T> {
@@ -60,6 +65,7 @@ impl<T: Borrow<SkylightTable>> GpuSkyTable<T> {
             map,
             rows: params.rows,
             map_pass: gpu.compute_pipeline(&map_module, "main", None)?,
+            recorded: Mutex::new(None),
         })
     }
 
@@ -78,6 +84,7 @@ impl<T: Borrow<SkylightTable>> GpuSkyTable<T> {
         altitude_m: f64,
     ) -> Result<(), GpuError> {
         let coefficients = self.table().coefficients(sun_elevation, altitude_m)?;
+        *self.recorded.lock().unwrap() = Some((sun_elevation, altitude_m));
         gpu.queue
             .write_buffer(&self.coefficients, 0, bytemuck::cast_slice(&coefficients));
         let group = gpu.bind_group(
@@ -120,7 +127,8 @@ impl<T: Borrow<SkylightTable>> GpuSkyTable<T> {
     /// Records this frame's skylight map for `sun` seen from `altitude_m` into
     /// `encoder` and sets `pass` to draw it in `view`: what a renderer does each frame,
     /// before recording [`SkyPass::draw`] in a render pass of the same encoder (or a
-    /// later one). Nothing is read back.
+    /// later one). Nothing is read back. The map of the sun and altitude last recorded
+    /// is not recorded again: submit what is recorded.
     pub fn prepare(
         &self,
         gpu: &Gpu,
@@ -130,7 +138,9 @@ impl<T: Borrow<SkylightTable>> GpuSkyTable<T> {
         altitude_m: f64,
         view: &View,
     ) -> Result<(), GpuError> {
-        self.record_map(gpu, encoder, sun.elevation(), altitude_m)?;
+        if *self.recorded.lock().unwrap() != Some((sun.elevation(), altitude_m)) {
+            self.record_map(gpu, encoder, sun.elevation(), altitude_m)?;
+        }
         let atmosphere = self.table().atmosphere();
         let grid = self.table().grid(altitude_m);
         let inputs = FrameInputs {

@@ -5,17 +5,15 @@
 
 use std::time::{Duration, Instant};
 
-use bevy::app::PluginsState;
 use bevy::camera::{Exposure, RenderTarget};
 use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
-use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
-use bevy::render::RenderPlugin;
-use bevy::window::ExitCondition;
-use bevy::winit::WinitPlugin;
 use bevy_atmo::prelude::*;
+
+#[path = "../../examples/scene/mod.rs"]
+mod scene;
 
 /// The picture's size: rows of 64 f32 RGBA pixels are 1024 bytes, a whole number of
 /// wgpu's 256-byte copy rows, so the read-back has no padding.
@@ -33,29 +31,8 @@ struct Shot(Option<Vec<[f32; 4]>>);
 /// in order), the plugin, and a camera with `camera` (plus the test's exposure, no tone
 /// map, no dithering) rendering into an RGBA f32 image read back every frame.
 pub fn app(camera: impl Bundle) -> App {
-    let mut app = App::new();
-    app.add_plugins(
-        DefaultPlugins
-            .set(WindowPlugin {
-                primary_window: None,
-                exit_condition: ExitCondition::DontExit,
-                ..default()
-            })
-            .set(RenderPlugin {
-                synchronous_pipeline_compilation: true,
-                ..default()
-            })
-            .disable::<PipelinedRenderingPlugin>()
-            .disable::<WinitPlugin>(),
-    )
-    .add_plugins(AtmoPlugin)
-    .init_resource::<Shot>();
-    // The renderer is made asynchronously: wait for it, then finish the plugins.
-    while app.plugins_state() == PluginsState::Adding {
-        bevy::tasks::tick_global_task_pools_on_main_thread();
-    }
-    app.finish();
-    app.cleanup();
+    let mut app = scene::headless_app();
+    app.init_resource::<Shot>();
     let mut image = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba32Float, None);
     image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
     let image = app.world_mut().resource_mut::<Assets<Image>>().add(image);
