@@ -3,10 +3,10 @@
 
 mod common;
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use atmo::image::{Display, Frame, ToneMap};
-use atmo::sky::{SkyPicture, View};
+use atmo::sky::{SkyPicture, SkylightTable, TableSettings, View};
 use atmo::view::Sun;
 use bevy::prelude::*;
 use bevy_atmo::prelude::*;
@@ -125,4 +125,80 @@ fn with_msaa_4x_the_sky_fills_around_a_mesh_and_never_over_it() {
         e.rms, e.max
     );
     assert!(e.rms <= 0.5, "RMS {:.3} levels (bound 0.5)", e.rms);
+}
+
+/// A coarse table (16 x 16 directions, 12 suns, 4 altitudes to 13 km) that builds in a
+/// second or two.
+fn coarse_table() -> SkylightTable {
+    let settings = TableSettings {
+        sky: atmo::sky::SkySettings {
+            directions: 16,
+            shells: 24,
+            scattering_directions: 32,
+            ..Default::default()
+        },
+        sun_steps: 12,
+        altitude_steps: 4,
+        ..TableSettings::default()
+    };
+    SkylightTable::precompute(&atmo::Atmosphere::earth(), &settings, &|_, _| {}).unwrap()
+}
+
+#[test]
+fn a_table_sky_follows_the_camera_up_with_no_rebuild() {
+    let table = Arc::new(coarse_table());
+    let sky = AtmoSky {
+        atmosphere: Arc::new(table.atmosphere().clone()),
+        source: SkySource::Table(table.clone()),
+        sun_disc: false,
+        aerial_perspective: false,
+        sky_light: false,
+        ..AtmoSky::earth()
+    };
+    let mut app = app((
+        sky,
+        Msaa::Off,
+        Transform::from_xyz(0.0, 500.0, 0.0).looking_to(looking(), Vec3::Y),
+    ));
+    app.world_mut().spawn((
+        AtmoSun,
+        Transform::default().looking_to(-sun().toward(), Vec3::Y),
+    ));
+    let view = View {
+        camera: atmo_camera(looking()),
+        sun_disc: false,
+    };
+    let mut pictures = Vec::new();
+    for altitude in [500.0f32, 9000.0] {
+        let mut cameras = app.world_mut().query::<(&mut Transform, &AtmoSky)>();
+        for (mut transform, _) in cameras.iter_mut(app.world_mut()) {
+            transform.translation.y = altitude;
+        }
+        // The read-back lags the frame: let the old pictures pass first.
+        for _ in 0..5 {
+            app.update();
+        }
+        let frame = radiance(&settled(&mut app));
+        let want = SkyPicture::from_table(&table, sun(), altitude.into())
+            .unwrap()
+            .render(&view);
+        let e = frame.level_errors(&want, DISPLAY).unwrap();
+        eprintln!(
+            "table sky at {altitude} m: RMS {:.3}, max {:.3} levels",
+            e.rms, e.max
+        );
+        assert!(
+            e.rms <= 0.5,
+            "at {altitude} m: RMS {:.3} levels (bound 0.5)",
+            e.rms
+        );
+        pictures.push(frame);
+    }
+    // The climb changed the sky: a picture of one altitude would not pass at the other.
+    let apart = pictures[0].level_errors(&pictures[1], DISPLAY).unwrap();
+    assert!(
+        apart.rms > 5.0,
+        "500 m and 9 km differ by only {:.2} levels RMS",
+        apart.rms
+    );
 }

@@ -1,0 +1,93 @@
+//! The light the plugin puts on a scene: the sun's `DirectionalLight` and the sky's
+//! `AmbientLight`, against atmo's `Sunlight` and the sky's irradiance, and against what
+//! daylight measures.
+
+mod common;
+
+use atmo::atmosphere::spectrum::srgb_luminance;
+use atmo::sky::lighting::{irradiance_up, Sunlight, PROJECTION_ROWS};
+use atmo::sky::SkyPicture;
+use atmo::view::Sun;
+use atmo::Atmosphere;
+use bevy::prelude::*;
+use bevy_atmo::prelude::*;
+use common::{app, earth_model, settled};
+
+const ALTITUDE_M: f32 = 1000.0;
+
+#[test]
+fn the_sun_and_the_sky_light_the_scene_as_atmo_says() {
+    let sun = Sun::from_degrees(20.0, 200.0).unwrap();
+    let eye = Vec3::new(0.0, ALTITUDE_M, 0.0);
+    let mut app = app((
+        AtmoSky::earth(),
+        Msaa::Off,
+        Transform::from_translation(eye).looking_to(Vec3::NEG_Z, Vec3::Y),
+    ));
+    let light = app
+        .world_mut()
+        .spawn((
+            AtmoSun,
+            Transform::default().looking_to(-sun.toward(), Vec3::Y),
+        ))
+        .id();
+    settled(&mut app);
+    // The sky light is computed on a background thread once the sky is ready.
+    let mut ambient = None;
+    for _ in 0..2000 {
+        app.update();
+        let mut cameras = app.world_mut().query::<&AmbientLight>();
+        ambient = cameras.iter(app.world()).next().cloned();
+        if ambient.is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let ambient = ambient.expect("the camera got the sky's ambient light");
+
+    // The sun: atmo's sunlight at the camera, 60 to 100 klux at 20 deg.
+    let want = Sunlight::at(&Atmosphere::earth(), ALTITUDE_M.into(), sun);
+    let got = app.world().get::<DirectionalLight>(light).unwrap();
+    assert!(
+        (f64::from(got.illuminance) / want.normal_lux - 1.0).abs() < 1e-5,
+        "{} lux vs {}",
+        got.illuminance,
+        want.normal_lux
+    );
+    assert!(
+        (60e3..100e3).contains(&got.illuminance),
+        "{} lux",
+        got.illuminance
+    );
+    let colour = got.color.to_linear();
+    let want_colour = want.colour.map(|c| c as f32);
+    assert!(
+        (Vec3::new(colour.red, colour.green, colour.blue) - Vec3::from(want_colour))
+            .abs()
+            .max_element()
+            < 1e-5,
+        "{colour:?} vs {want_colour:?}"
+    );
+
+    // The sky: a horizontal surface of albedo a reflects a E / pi, E the sky's irradiance
+    // on it; a clear sky with the sun at 20 deg gives some 5 to 10 klux (less in cleaner
+    // air: atmo's Earth from 1 km gives 5.5), bluish. The range catches a lost pi or 683.
+    let picture = SkyPicture::new(&earth_model(ALTITUDE_M), sun);
+    let e = irradiance_up(&picture.equirect(PROJECTION_ROWS, false));
+    let lux = 683.0 * srgb_luminance(e);
+    let brightness = f64::from(ambient.brightness);
+    eprintln!(
+        "sun {} lux, sky {lux:.0} lux on a horizontal surface, ambient {brightness:.0} cd/m^2",
+        got.illuminance
+    );
+    assert!(
+        (brightness / (lux / std::f64::consts::PI) - 1.0).abs() < 1e-4,
+        "ambient {brightness} cd/m^2, the sky's {lux} lux / pi"
+    );
+    assert!(
+        (3e3..15e3).contains(&lux),
+        "the sky's {lux} lux on a horizontal surface"
+    );
+    let sky = ambient.color.to_linear();
+    assert!(sky.blue > sky.red, "a clear sky's light is bluish: {sky:?}");
+}
