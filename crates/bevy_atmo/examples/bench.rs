@@ -1,8 +1,8 @@
-//! The frame time of one scene drawn with bevy_atmo (atmo's every-order sky, alone and
-//! with its aerial perspective), against the same scene without a sky and with Bevy's
-//! own `Atmosphere` (Hillaire 2020: its LUTs, sky and aerial perspective), in the same
-//! run: a JSON line a case as `atmo bench --json` prints, the ratio the baseline's time
-//! over atmo's.
+//! The frame time of one scene drawn with bevy_atmo (atmo's every-order sky, alone, with
+//! its aerial perspective, and with its environment map light too), against the same
+//! scene without a sky and with Bevy's own `Atmosphere` (Hillaire 2020: its LUTs, sky
+//! and aerial perspective), in the same run: a JSON line a case as `atmo bench --json`
+//! prints, the ratio the baseline's time over atmo's.
 //!
 //! ```text
 //! cargo run -p bevy_atmo --example bench -- [--frames N] [--size WxH] [--msaa N] [--json]
@@ -28,12 +28,12 @@ use bevy_atmo::prelude::*;
 mod scene;
 
 /// Whose sky the scene is drawn with: none (Bevy's clear colour), Bevy's Atmosphere,
-/// or atmo's (with or without its aerial perspective).
+/// or atmo's (with or without its aerial perspective and its environment map light).
 #[derive(Clone, Copy)]
 enum Sky {
     None,
     Bevy,
-    Atmo { aerial: bool },
+    Atmo { aerial: bool, light: bool },
 }
 
 fn main() {
@@ -62,8 +62,30 @@ fn main() {
     let (none_ms, device) = median_frame_ms(Sky::None, frames, size, msaa);
     let none = "the same scene without a sky (Bevy's clear colour)";
     let cases = [
-        ("bevy.sky", Sky::Atmo { aerial: false }, none),
-        ("bevy.sky-and-haze", Sky::Atmo { aerial: true }, none),
+        (
+            "bevy.sky",
+            Sky::Atmo {
+                aerial: false,
+                light: false,
+            },
+            none,
+        ),
+        (
+            "bevy.sky-and-haze",
+            Sky::Atmo {
+                aerial: true,
+                light: false,
+            },
+            none,
+        ),
+        (
+            "bevy.sky-haze-and-light",
+            Sky::Atmo {
+                aerial: true,
+                light: true,
+            },
+            none,
+        ),
     ];
     let mut atmo_ms = 0.0;
     for (bench, sky, baseline) in cases {
@@ -165,10 +187,16 @@ fn scene(world: &mut World, sky: Sky, (width, height): (u32, u32), msaa: u32) {
         Sky::None => {
             world.spawn((DirectionalLight::default(), sun));
         }
-        Sky::Atmo { aerial } => {
+        Sky::Atmo { aerial, light } => {
+            let earth = AtmoSky::earth();
             camera.insert(AtmoSky {
                 aerial_perspective: aerial,
-                ..AtmoSky::earth()
+                sky_light: if light {
+                    earth.sky_light
+                } else {
+                    SkyLight::Off
+                },
+                ..earth
             });
             world.spawn((AtmoSun, sun));
         }

@@ -41,11 +41,12 @@ use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSyst
 use bevy::transform::TransformSystems;
 
 pub use sky::{AtmoSky, AtmoSkyState, SkySource};
+pub use skylight::SkyLight;
 pub use sun::{AtmoSun, AtmoSunAt};
 
 /// What a Bevy program imports to use atmo.
 pub mod prelude {
-    pub use crate::{AtmoPlugin, AtmoSky, AtmoSkyState, AtmoSun, AtmoSunAt, SkySource};
+    pub use crate::{AtmoPlugin, AtmoSky, AtmoSkyState, AtmoSun, AtmoSunAt, SkyLight, SkySource};
 }
 
 /// Adds atmo's sky and sun to an app with Bevy's renderer.

@@ -14,6 +14,7 @@ use bevy::render::render_resource::TextureUsages;
 use bevy::tasks::{futures::check_ready, AsyncComputeTaskPool, Task};
 
 use crate::aerial;
+use crate::skylight::SkyLight;
 
 /// atmo's sky behind everything a 3-D camera draws: put it on the camera's entity.
 ///
@@ -35,10 +36,10 @@ pub struct AtmoSky {
     /// model only (a table keeps no view rays).
     pub aerial_perspective: bool,
     pub aerial_far_m: f32,
-    /// Whether the camera's `AmbientLight` is the sky's light on a horizontal surface,
-    /// recomputed (on a background thread, a few milliseconds) once the sun has moved by
-    /// more than `sky_light_every_deg` degrees.
-    pub sky_light: bool,
+    /// How the sky lights the scene (an environment map by default, or an ambient
+    /// light), recomputed on a background thread (a few milliseconds) once the sun has
+    /// moved by more than `sky_light_every_deg` degrees.
+    pub sky_light: SkyLight,
     pub sky_light_every_deg: f32,
 }
 
@@ -74,7 +75,7 @@ impl AtmoSky {
             sun_disc: true,
             aerial_perspective: true,
             aerial_far_m: 60_000.0,
-            sky_light: true,
+            sky_light: SkyLight::EnvironmentMap { size: 64 },
             sky_light_every_deg: 0.5,
         }
     }

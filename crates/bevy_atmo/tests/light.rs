@@ -19,8 +19,12 @@ const ALTITUDE_M: f32 = 1000.0;
 fn the_sun_and_the_sky_light_the_scene_as_atmo_says() {
     let sun = Sun::from_degrees(20.0, 200.0).unwrap();
     let eye = Vec3::new(0.0, ALTITUDE_M, 0.0);
+    let sky = AtmoSky {
+        sky_light: SkyLight::Ambient,
+        ..AtmoSky::earth()
+    };
     let mut app = app((
-        AtmoSky::earth(),
+        sky,
         Msaa::Off,
         Transform::from_translation(eye).looking_to(Vec3::NEG_Z, Vec3::Y),
     ));
@@ -90,4 +94,73 @@ fn the_sun_and_the_sky_light_the_scene_as_atmo_says() {
     );
     let sky = ambient.color.to_linear();
     assert!(sky.blue > sky.red, "a clear sky's light is bluish: {sky:?}");
+}
+
+/// Updates `app` until its camera has a `T`, and returns it.
+fn camera_gets<T: Component + Clone>(app: &mut App) -> T {
+    settled(app);
+    for _ in 0..2000 {
+        app.update();
+        let mut cameras = app.world_mut().query::<&T>();
+        if let Some(found) = cameras.iter(app.world()).next() {
+            return found.clone();
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    panic!("the camera never got its sky light");
+}
+
+#[test]
+fn the_sky_becomes_an_environment_map_the_right_way_round() {
+    // The sun low in the south: Bevy looks the north (world -z) up on the cube's +z face
+    // (its cubemaps are left-handed), which must hold the darker, northern sky (the
+    // upper halves of the two faces differ by 23 %; the wrong way round, the other way).
+    let sun = Sun::from_degrees(10.0, 180.0).unwrap();
+    let mut app = app((
+        AtmoSky::earth(),
+        Msaa::Off,
+        Transform::from_xyz(0.0, ALTITUDE_M, 0.0).looking_to(Vec3::NEG_Z, Vec3::Y),
+    ));
+    app.world_mut().spawn((
+        AtmoSun,
+        Transform::default().looking_to(-sun.toward(), Vec3::Y),
+    ));
+    let map = camera_gets::<bevy::light::GeneratedEnvironmentMapLight>(&mut app);
+    assert_eq!(map.intensity, 683.0, "radiance in W m^-2 sr^-1 to cd/m^2");
+    let mut cameras = app.world_mut().query::<&AmbientLight>();
+    let ambient = cameras
+        .iter(app.world())
+        .next()
+        .expect("the global ambient overridden");
+    assert_eq!(ambient.brightness, 0.0);
+    let images = app.world().resource::<Assets<Image>>();
+    let image = images.get(&map.environment_map).expect("the sky's cubemap");
+    let size = image.texture_descriptor.size.width as usize;
+    let data = image.data.as_ref().expect("kept in the main world");
+    // The mean luminance of the upper half of face `face` (0 to 5: +x -x +y -y +z -z).
+    let upper_half = |face: usize| {
+        let texel = |i: usize| {
+            let at = |c: usize| {
+                let b = &data[8 * i + 2 * c..8 * i + 2 * c + 2];
+                half::f16::from_le_bytes([b[0], b[1]]).to_f32()
+            };
+            0.2126 * at(0) + 0.7152 * at(1) + 0.0722 * at(2)
+        };
+        let start = face * size * size;
+        (start..start + size * size / 2).map(texel).sum::<f32>() / (size * size / 2) as f32
+    };
+    let (north, south) = (upper_half(4), upper_half(5));
+    eprintln!("north {north}, south {south} (W m^-2 sr^-1, luminance)");
+    assert!(
+        north > 0.0 && south > 1.1 * north,
+        "north {north}, south {south}"
+    );
+    // Up is up: the zenith face is sky, the nadir face ground (dimmer, the sun's side
+    // aside).
+    assert!(
+        upper_half(2) > upper_half(3),
+        "zenith {} nadir {}",
+        upper_half(2),
+        upper_half(3)
+    );
 }

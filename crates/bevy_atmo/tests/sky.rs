@@ -152,7 +152,7 @@ fn a_table_sky_follows_the_camera_up_with_no_rebuild() {
         source: SkySource::Table(table.clone()),
         sun_disc: false,
         aerial_perspective: false,
-        sky_light: false,
+        sky_light: SkyLight::Off,
         ..AtmoSky::earth()
     };
     let mut app = app((
