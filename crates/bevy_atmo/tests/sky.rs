@@ -202,3 +202,41 @@ fn a_table_sky_follows_the_camera_up_with_no_rebuild() {
         apart.rms
     );
 }
+
+#[test]
+fn switching_msaa_and_the_orders_live_remakes_the_passes_without_errors() {
+    // MSAA off, then 4x (the passes are remade for the new sample count), then the
+    // paper's two orders (the model is rebuilt): each picture settles with no GPU error.
+    let mut app = scene(Msaa::Off);
+    let first = radiance(&settled(&mut app));
+    let mut cameras = app.world_mut().query::<(&mut Msaa, &mut AtmoSky)>();
+    for (mut msaa, _) in cameras.iter_mut(app.world_mut()) {
+        *msaa = Msaa::Sample4;
+    }
+    for _ in 0..5 {
+        app.update();
+    }
+    let multisampled = radiance(&settled(&mut app));
+    let e = multisampled.level_errors(&first, DISPLAY).unwrap();
+    assert!(e.rms <= 0.1, "MSAA 4x against off: RMS {:.3} levels", e.rms);
+    let mut cameras = app.world_mut().query::<&mut AtmoSky>();
+    for mut sky in cameras.iter_mut(app.world_mut()) {
+        sky.source = SkySource::Model {
+            settings: atmo::sky::SkySettings::paper(),
+            rebuild_after_m: 500.0,
+        };
+    }
+    for _ in 0..5 {
+        app.update();
+    }
+    let paper = radiance(&settled(&mut app));
+    eprintln!("MSAA 4x against off: RMS {:.3} levels", e.rms);
+    // Two orders leave out the light of the higher ones: a darker sky.
+    let mean = |f: &Frame| f.pixels.iter().map(|p| p.element_sum()).sum::<f32>();
+    assert!(
+        mean(&paper) < 0.97 * mean(&first),
+        "the paper's orders {} against every order {}",
+        mean(&paper),
+        mean(&first)
+    );
+}
