@@ -30,14 +30,16 @@ fn toward(azimuth_deg: f64) -> Vec3 {
 fn a_box_fades_toward_the_sky_as_atmos_aerial_perspective_says() {
     let eye = Vec3::new(0.0, ALTITUDE_M, 0.0);
     let look = toward(VIEW_AZIMUTH_DEG);
-    let mut app = app((
+    let Some(mut app) = app((
         AtmoSky {
             sun_disc: false,
             ..AtmoSky::earth()
         },
         Msaa::Off,
         Transform::from_translation(eye).looking_to(look, Vec3::Y),
-    ));
+    )) else {
+        return;
+    };
     app.world_mut().spawn((
         AtmoSun,
         Transform::default().looking_to(-sun().toward(), Vec3::Y),
