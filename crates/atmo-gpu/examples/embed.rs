@@ -23,7 +23,9 @@ use atmo::sky::lighting::{Lighting, LUMENS_PER_WATT};
 use atmo::sky::{SkyModel, SkyPicture, SkySettings, View};
 use atmo::view::{Camera, Fov, Sun};
 use atmo::Atmosphere;
-use atmo_gpu::sky::{AerialTextures, DepthTarget, GpuAerial, GpuSkyModel, SkyPass, SkyTarget};
+use atmo_gpu::sky::{
+    AerialTextures, DepthTarget, GpuAerial, GpuSkyModel, SkyPass, SkyTarget, AERIAL_LIGHT_WGSL,
+};
 use atmo_gpu::Gpu;
 use glam::Vec3;
 use winit::application::ApplicationHandler;
@@ -67,15 +69,11 @@ struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
     let albedo = field * vec3(0.9, 1.0, 0.7);
     let light = u.sun.rgb * max(u.to_sun.y, 0.0) + u.sky.rgb;
     let radiance = albedo / 3.14159265 * light;
-    // The froxel under this pixel at this distance: slices at far (k / n)^2, so the
-    // slice coordinate is sqrt(d / far) n; nearer than the first, toward no air at all.
+    // The froxels under this pixel at this distance (atmo-gpu's aerial_light).
     let d = distance(in.world, u.eye.xyz);
-    let k = sqrt(d / u.froxels.z) * u.froxels.w;
-    let at = vec3(in.clip.xy / u.froxels.xy, (k - 0.5) / u.froxels.w);
-    let near = clamp(k, 0.0, 1.0);
-    let t = mix(vec3(1.0), textureSampleLevel(transmittance, linear, at, 0.0).rgb, near);
-    let s = textureSampleLevel(inscatter, linear, at, 0.0).rgb * near;
-    return vec4((t * radiance + s) * u.exposure.x, 1.0);
+    let uv = in.clip.xy / u.froxels.xy;
+    let air = aerial_light(transmittance, inscatter, linear, uv, d, u.froxels.z, u.froxels.w);
+    return vec4((air.transmittance * radiance + air.inscatter) * u.exposure.x, 1.0);
 }";
 
 /// The froxels' columns over the window (rows: as many as keep them square) and
@@ -286,7 +284,7 @@ impl Scene {
         sky_pass.exposure = 0.05;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("ground"),
-            source: wgpu::ShaderSource::Wgsl(GROUND.into()),
+            source: wgpu::ShaderSource::Wgsl(format!("{AERIAL_LIGHT_WGSL}{GROUND}").into()),
         });
         let ground = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("ground"),

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use atmo::sky::aerial::AerialRays;
 use atmo::sky::SkyModel;
 use atmo::view::{Camera as AtmoCamera, Fov, Sun};
-use atmo_gpu::sky::{AerialTextures, GpuAerial, GpuSkyModel};
+use atmo_gpu::sky::{AerialTextures, GpuAerial, GpuSkyModel, AERIAL_LIGHT_WGSL};
 use atmo_gpu::{wgpu, Gpu, GpuError};
 use bevy::math::Mat4;
 
@@ -67,6 +67,7 @@ fn source(samples: u32, dual_source: bool) -> String {
     };
     include_str!("aerial.wgsl")
         .replace("DUAL_SOURCE", header)
+        .replace("AERIAL_LIGHT", AERIAL_LIGHT_WGSL)
         .replace("DEPTH_TEXTURE", depth)
         .replace("SAMPLE_INPUT", input)
         .replace("SAMPLE_INDEX", index)
@@ -97,7 +98,6 @@ pub(crate) struct AerialTarget {
 pub(crate) struct ViewAerial {
     froxels: GpuAerial,
     textures: AerialTextures,
-    far_m: f32,
     target: AerialTarget,
     pipeline: wgpu::RenderPipeline,
     params: wgpu::Buffer,
@@ -121,20 +121,17 @@ pub(crate) struct AerialFrame<'a> {
 }
 
 impl ViewAerial {
-    /// The froxels of `rays` (made by `sky`'s model, out to `far_m`) and the pass for
-    /// `target`.
+    /// The froxels of `rays` (made by `sky`'s model) and the pass for `target`.
     pub fn new(
         gpu: &Gpu,
         sky: &GpuSkyModel<Arc<SkyModel>>,
         rays: Arc<AerialRays>,
-        far_m: f32,
         target: AerialTarget,
     ) -> Result<Self, GpuError> {
         let slices = rays.slices_m().len() as u32;
         Ok(ViewAerial {
             froxels: GpuAerial::new(gpu, sky, rays)?,
             textures: AerialTextures::new(gpu, (FROXEL_COLUMNS, FROXEL_COLUMNS, slices))?,
-            far_m,
             target,
             pipeline: pipeline(gpu, target)?,
             params: gpu.uniform(
@@ -172,7 +169,8 @@ impl ViewAerial {
         let rows = (FROXEL_COLUMNS as f32 * height as f32 / width.max(1) as f32)
             .round()
             .clamp(1.0, 256.0) as u32;
-        let slices = self.froxels.rays().slices_m().len() as u32;
+        let slices_m = self.froxels.rays().slices_m();
+        let (slices, far_m) = (slices_m.len() as u32, slices_m[slices_m.len() - 1] as f32);
         if self.textures.size != (FROXEL_COLUMNS, rows, slices) {
             self.textures = AerialTextures::new(gpu, (FROXEL_COLUMNS, rows, slices))?;
         }
@@ -188,7 +186,7 @@ impl ViewAerial {
         let params = AerialParams {
             view_from_clip: frame.view_from_clip.to_cols_array(),
             viewport: [x, y, width, height].map(|v| v as f32),
-            froxels: [self.far_m, slices as f32, frame.scale, 0.0],
+            froxels: [far_m, slices as f32, frame.scale, 0.0],
         };
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));

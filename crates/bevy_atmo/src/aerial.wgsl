@@ -1,14 +1,16 @@
 // Aerial perspective over the scene: each pixel's surface, at the distance Bevy's depth
 // buffer gives, is seen as T L + S (atmo::sky::aerial): the colour target is blended as
 // dst * T + S, with T per channel where the device has dual-source blending (else their
-// mean). T and S come from atmo's froxels (GpuAerial), sampled as atmo-gpu's embed
-// example samples them; pixels at the far plane (the sky's) are left alone.
+// mean). T and S come from atmo's froxels (GpuAerial), read by atmo-gpu's
+// `aerial_light`, which bevy_atmo::aerial puts in below the directives.
 //
 // Variants are made by bevy_atmo::aerial: DEPTH_TEXTURE (texture_depth_2d, or
 // texture_depth_multisampled_2d read per sample with MSAA), SAMPLE_INPUT and
 // SAMPLE_INDEX, and OUTPUT (one or two blend sources).
 
 DUAL_SOURCE
+
+AERIAL_LIGHT
 
 struct AerialParams {
     // Bevy's view_from_clip: a pixel's depth back to its view-space position.
@@ -46,13 +48,9 @@ fn fragment(@builtin(position) position: vec4<f32> SAMPLE_INPUT) -> Output {
     let ndc = vec2<f32>(2.0 * p.x / params.viewport.z - 1.0, 1.0 - 2.0 * p.y / params.viewport.w);
     let at_view = params.view_from_clip * vec4<f32>(ndc, z, 1.0);
     let d = length(at_view.xyz / at_view.w);
-    // Slices at far (k / n)^2: slice coordinate sqrt(d / far) n; nearer than the first,
-    // toward no air at all.
-    let n = params.froxels.y;
-    let k = sqrt(d / params.froxels.x) * n;
-    let uvw = vec3<f32>(p / params.viewport.zw, (k - 0.5) / n);
-    let near = clamp(k, 0.0, 1.0);
-    let t = mix(vec3<f32>(1.0), textureSampleLevel(transmittance, linear, uvw, 0.0).rgb, near);
-    let s = textureSampleLevel(inscatter, linear, uvw, 0.0).rgb * (near * params.froxels.z);
+    let uv = p / params.viewport.zw;
+    let light = aerial_light(transmittance, inscatter, linear, uv, d, params.froxels.x, params.froxels.y);
+    let t = light.transmittance;
+    let s = light.inscatter * params.froxels.z;
     return OUTPUT;
 }

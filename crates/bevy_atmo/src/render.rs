@@ -75,10 +75,11 @@ pub(crate) fn extract_skies(
         let drawable = sky.and_then(|(sky, state)| Some((sky, state, state.ready.clone()?)));
         match (drawable, sun.0) {
             (Some((sky, state, ready)), Some(sun)) => {
+                let altitude_m = ready.drawn_altitude(sky.altitude_m(transform.translation().y));
                 commands.entity(render_entity).insert(ExtractedSky {
                     ready,
                     generation: state.generation,
-                    altitude_m: sky.altitude_m(transform.translation().y),
+                    altitude_m,
                     sun,
                     sun_disc: sky.sun_disc,
                 });
@@ -92,40 +93,15 @@ pub(crate) fn extract_skies(
     }
 }
 
-/// A sky on the GPU: a model's maps or a table's factors (one a view: the sizes of the
-/// variants do not matter).
-#[allow(clippy::large_enum_variant)]
-enum GpuSky {
-    Model(GpuSkyModel<Arc<SkyModel>>),
-    Table(GpuSkyTable<Arc<SkylightTable>>),
-}
+/// A sky on the GPU, shared with the main world's copy.
+type GpuSky = atmo_gpu::sky::GpuSky<Arc<SkyModel>, Arc<SkylightTable>>;
 
-impl GpuSky {
-    fn new(gpu: &Gpu, ready: &ReadySky) -> Result<Self, GpuError> {
-        Ok(match ready {
-            ReadySky::Model(model, _) => GpuSky::Model(GpuSkyModel::new(gpu, model.clone())?),
-            ReadySky::Table(table) => GpuSky::Table(GpuSkyTable::new(gpu, table.clone())?),
-        })
-    }
-
-    /// Records this frame's maps into `encoder` and sets `pass` to draw them.
-    fn prepare(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        pass: &mut SkyPass,
-        sun: Sun,
-        altitude_m: f64,
-        view: &View,
-    ) -> Result<(), GpuError> {
-        match self {
-            GpuSky::Model(sky) => sky.prepare(gpu, encoder, pass, sun, view),
-            GpuSky::Table(sky) => {
-                let top = sky.table().settings().max_altitude_m;
-                sky.prepare(gpu, encoder, pass, sun, altitude_m.min(top), view)
-            }
-        }
-    }
+/// The sky of `ready` uploaded.
+fn upload(gpu: &Gpu, ready: &ReadySky) -> Result<GpuSky, GpuError> {
+    Ok(match ready {
+        ReadySky::Model(model, _) => GpuSky::Model(GpuSkyModel::new(gpu, model.clone())?),
+        ReadySky::Table(table) => GpuSky::Table(GpuSkyTable::new(gpu, table.clone())?),
+    })
 }
 
 /// A view's sky on the GPU: the sky and its aerial perspective (remade when what is
@@ -158,8 +134,7 @@ fn aerial_of(
         warn_once!("bevy_atmo: no aerial perspective (the device does not filter f32 textures)");
         return Ok(None);
     }
-    let far_m = rays.slices_m().last().copied().unwrap_or(0.0) as f32;
-    ViewAerial::new(gpu, model, rays.clone(), far_m, target).map(Some)
+    ViewAerial::new(gpu, model, rays.clone(), target).map(Some)
 }
 
 /// The aerial pass's target for a view's colour target.
@@ -226,23 +201,20 @@ pub(crate) fn prepare_skies(
             }),
             samples: msaa.samples(),
         };
-        let made = match view_sky {
-            Some(mut view_sky) => remake(gpu, &mut view_sky, sky, wanted).map(|()| view_sky),
-            None => match made_new(gpu, sky, wanted) {
+        // A view's first sky is drawn from the next frame on, once inserted.
+        let Some(mut view_sky) = view_sky else {
+            match made_new(gpu, sky, wanted) {
                 Ok(new) => {
                     commands.entity(entity).insert(new);
-                    continue; // Drawn from the next frame on, once inserted.
                 }
-                Err(e) => Err(e),
-            },
-        };
-        let mut view_sky = match made {
-            Ok(v) => v,
-            Err(e) => {
-                error!("bevy_atmo's sky: {e}");
-                continue;
+                Err(e) => error!("bevy_atmo's sky: {e}"),
             }
+            continue;
         };
+        if let Err(e) = remake(gpu, &mut view_sky, sky, wanted) {
+            error!("bevy_atmo's sky: {e}");
+            continue;
+        }
         let view_sky = &mut *view_sky;
         view_sky.pass.exposure = LUMENS_PER_WATT as f32 * camera.exposure;
         view_sky.pass.corner = [view.viewport.x, view.viewport.y];
@@ -287,7 +259,7 @@ pub(crate) fn prepare_skies(
 
 /// A view's sky and pass made for the first time.
 fn made_new(gpu: &Gpu, sky: &ExtractedSky, target: SkyTarget) -> Result<ViewSky, GpuError> {
-    let on_gpu = GpuSky::new(gpu, &sky.ready)?;
+    let on_gpu = upload(gpu, &sky.ready)?;
     Ok(ViewSky {
         aerial: aerial_of(gpu, &on_gpu, &sky.ready, aerial_target(gpu, target))?,
         sky: on_gpu,
@@ -306,7 +278,7 @@ fn remake(
     target: SkyTarget,
 ) -> Result<(), GpuError> {
     if view_sky.generation != sky.generation {
-        view_sky.sky = GpuSky::new(gpu, &sky.ready)?;
+        view_sky.sky = upload(gpu, &sky.ready)?;
         view_sky.aerial = aerial_of(gpu, &view_sky.sky, &sky.ready, aerial_target(gpu, target))?;
         view_sky.generation = sky.generation;
     }

@@ -105,8 +105,57 @@ pub(crate) enum ReadySky {
     Table(Arc<SkylightTable>),
 }
 
+impl ReadySky {
+    /// The altitude a camera at `altitude_m` sees drawn: a table's top above its range
+    /// (a table holds no higher sky); a model draws from its own altitude whatever this.
+    pub(crate) fn drawn_altitude(&self, altitude_m: f64) -> f64 {
+        match self {
+            ReadySky::Model(..) => altitude_m,
+            ReadySky::Table(table) => altitude_m.min(table.settings().max_altitude_m),
+        }
+    }
+}
+
 /// A model and its aerial perspective's view rays, as a build gives them.
 type Built = atmo::Result<(SkyModel, Option<AerialRays>)>;
+
+/// What a camera's sky is made from: a change to any of it makes the sky again; the
+/// other fields of [`AtmoSky`] are read as they are each frame.
+#[derive(Clone)]
+struct Recipe {
+    atmosphere: Arc<Atmosphere>,
+    /// The model's settings, or the table (the same one, not an equal one).
+    source: Result<SkySettings, Arc<SkylightTable>>,
+    /// The aerial perspective's reach, m, where it is drawn.
+    aerial_far_m: Option<f32>,
+}
+
+impl Recipe {
+    fn of(sky: &AtmoSky) -> Self {
+        Recipe {
+            atmosphere: sky.atmosphere.clone(),
+            source: match &sky.source {
+                SkySource::Model { settings, .. } => Ok(settings.clone()),
+                SkySource::Table(table) => Err(table.clone()),
+            },
+            aerial_far_m: sky.aerial_perspective.then_some(sky.aerial_far_m),
+        }
+    }
+}
+
+impl PartialEq for Recipe {
+    fn eq(&self, other: &Self) -> bool {
+        let source = match (&self.source, &other.source) {
+            (Ok(a), Ok(b)) => a == b,
+            (Err(a), Err(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        };
+        source
+            && self.aerial_far_m == other.aerial_far_m
+            && (Arc::ptr_eq(&self.atmosphere, &other.atmosphere)
+                || self.atmosphere == other.atmosphere)
+    }
+}
 
 /// A sky camera's sky in the making (the plugin adds it beside [`AtmoSky`]): the sky
 /// drawn now, the model being built, and a count that changes whenever what is drawn
@@ -116,7 +165,9 @@ pub struct AtmoSkyState {
     pub(crate) ready: Option<ReadySky>,
     pub(crate) generation: u64,
     building: Option<Task<Built>>,
-    /// The settings changed since the last model was started.
+    /// What the sky is made from; `None` before the first.
+    recipe: Option<Recipe>,
+    /// The recipe changed since the last model was started.
     stale: bool,
     /// The last build failed (its error logged): none is tried until the settings change.
     failed: bool,
@@ -144,8 +195,8 @@ type SkyCameraParts<'a> = (
     Option<&'a mut Camera3d>,
 );
 
-/// Starts a model for each camera whose sky has none, whose settings changed (a build
-/// under way for the old ones is dropped), or which left its model's altitude; takes
+/// Starts a model for each camera whose sky has none, whose recipe changed (a build
+/// under way for the old one is dropped), or which left its model's altitude; takes
 /// the models that are done.
 pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraParts>) {
     for (entity, sky, transform, state, camera) in &mut cameras {
@@ -156,12 +207,15 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
         }
         let Some(mut state) = state else {
             commands.entity(entity).insert(AtmoSkyState {
+                recipe: Some(Recipe::of(&sky)),
                 stale: true,
                 ..default()
             });
             continue;
         };
-        if sky.is_changed() {
+        // A change to the sky's disc or its light, say, makes no new model.
+        if sky.is_changed() && state.recipe.as_ref() != Some(&Recipe::of(&sky)) {
+            state.recipe = Some(Recipe::of(&sky));
             state.building = None;
             state.stale = true;
             state.failed = false;

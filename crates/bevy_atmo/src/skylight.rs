@@ -199,14 +199,11 @@ pub(crate) fn light_the_scene(
                 .try_remove::<(AmbientLight, GeneratedEnvironmentMapLight)>();
             continue;
         }
-        let altitude = sky.altitude_m(transform.translation().y);
+        let altitude = ready.drawn_altitude(sky.altitude_m(transform.translation().y));
         light.building = Some(AsyncComputeTaskPool::get().spawn(async move {
             let picture = match ready {
                 ReadySky::Model(model, _) => SkyPicture::new(&model, sun),
-                ReadySky::Table(table) => {
-                    let top = table.settings().max_altitude_m;
-                    SkyPicture::from_table(&table, sun, altitude.min(top))?
-                }
+                ReadySky::Table(table) => SkyPicture::from_table(&table, sun, altitude)?,
             };
             Ok(match mode {
                 SkyLight::EnvironmentMap { size } => Built::Cube {

@@ -37,19 +37,7 @@ fn the_sun_and_the_sky_light_the_scene_as_atmo_says() {
             Transform::default().looking_to(-sun.toward(), Vec3::Y),
         ))
         .id();
-    settled(&mut app);
-    // The sky light is computed on a background thread once the sky is ready.
-    let mut ambient = None;
-    for _ in 0..2000 {
-        app.update();
-        let mut cameras = app.world_mut().query::<&AmbientLight>();
-        ambient = cameras.iter(app.world()).next().cloned();
-        if ambient.is_some() {
-            break;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
-    let ambient = ambient.expect("the camera got the sky's ambient light");
+    let ambient = camera_gets::<AmbientLight>(&mut app);
 
     // The sun: atmo's sunlight at the camera, 60 to 100 klux at 20 deg.
     let want = Sunlight::at(&Atmosphere::earth(), ALTITUDE_M.into(), sun);
@@ -98,7 +86,8 @@ fn the_sun_and_the_sky_light_the_scene_as_atmo_says() {
     assert!(sky.blue > sky.red, "a clear sky's light is bluish: {sky:?}");
 }
 
-/// Updates `app` until its camera has a `T`, and returns it.
+/// Updates `app` until its camera has a `T` (the sky's light is made on a background
+/// thread once the sky is ready), and returns it.
 fn camera_gets<T: Component + Clone>(app: &mut App) -> T {
     settled(app);
     for _ in 0..2000 {

@@ -211,8 +211,9 @@ fn a_table_sky_follows_the_camera_up_with_no_rebuild() {
 
 #[test]
 fn switching_msaa_and_the_orders_live_remakes_the_passes_without_errors() {
-    // MSAA off, then 4x (the passes are remade for the new sample count), then the
-    // paper's two orders (the model is rebuilt): each picture settles with no GPU error.
+    // MSAA off, then 4x (the passes are remade for the new sample count), the disc on
+    // (nothing rebuilt), then the paper's two orders (the model is rebuilt): each picture
+    // settles with no GPU error.
     let Some(mut app) = scene(Msaa::Off) else {
         return;
     };
@@ -227,12 +228,22 @@ fn switching_msaa_and_the_orders_live_remakes_the_passes_without_errors() {
     let multisampled = radiance(&settled(&mut app));
     let e = multisampled.level_errors(&first, DISPLAY).unwrap();
     assert!(e.rms <= 0.1, "MSAA 4x against off: RMS {:.3} levels", e.rms);
+    // The sun's disc switched on needs no new model.
+    let mut cameras = app.world_mut().query::<&mut AtmoSky>();
+    for mut sky in cameras.iter_mut(app.world_mut()) {
+        sky.sun_disc = true;
+    }
+    app.update();
+    let mut states = app.world_mut().query::<&AtmoSkyState>();
+    let building = states.iter(app.world()).any(|s| s.is_building());
+    assert!(!building, "the disc switched on rebuilt the model");
     let mut cameras = app.world_mut().query::<&mut AtmoSky>();
     for mut sky in cameras.iter_mut(app.world_mut()) {
         sky.source = SkySource::Model {
             settings: atmo::sky::SkySettings::paper(),
             rebuild_after_m: 500.0,
         };
+        sky.sun_disc = false;
     }
     for _ in 0..5 {
         app.update();

@@ -199,6 +199,12 @@ impl GpuAerial {
     }
 }
 
+/// WGSL for a caller's shader to read [`AerialTextures`]: `aerial_light(transmittance,
+/// inscatter, sampler, uv, d, far, slices)` gives the transmittance and the in-scattered
+/// radiance at the picture's point `uv` and distance `d` (`far`: the last slice, m).
+/// Put it in the caller's source, after any `enable` directive.
+pub const AERIAL_LIGHT_WGSL: &str = include_str!("../../shaders/aerial_light.wgsl");
+
 /// The aerial perspective's froxels as two 3-D RGBA f32 textures of
 /// `(columns across, columns down, slices)`: the in-scattered radiance (linear sRGB, the
 /// sky's units) and the transmittance, which [`GpuAerial::prepare`] writes and a
@@ -247,5 +253,23 @@ impl AerialTextures {
             transmittance,
             size,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_froxels_lookup_is_valid_wgsl() {
+        let module = naga::front::wgsl::parse_str(super::AERIAL_LIGHT_WGSL)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(super::AERIAL_LIGHT_WGSL)));
+        let mut validator = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        );
+        validator.validate(&module).unwrap();
+        assert!(module
+            .functions
+            .iter()
+            .any(|(_, f)| f.name.as_deref() == Some("aerial_light")));
     }
 }

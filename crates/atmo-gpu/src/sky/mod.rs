@@ -29,8 +29,8 @@ mod renderer;
 mod shells;
 mod table;
 
-pub use aerial::{AerialTextures, GpuAerial};
-pub use renderer::{Prepared, SkyRenderer, SkySource};
+pub use aerial::{AerialTextures, GpuAerial, AERIAL_LIGHT_WGSL};
+pub use renderer::{GpuSky, Prepared, SkyRenderer, SkySource};
 pub use shells::GpuSkyModel;
 pub use table::GpuSkyTable;
 

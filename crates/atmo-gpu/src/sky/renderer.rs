@@ -1,6 +1,7 @@
 //! The sky drawn from a table or a model, on the CPU or the GPU, the backend a setting:
 //! one renderer for `atmo sky` (stills and animations) and the window's sky mode.
 
+use std::borrow::Borrow;
 use std::sync::Arc;
 
 use atmo::image::Frame;
@@ -10,7 +11,7 @@ use atmo::sky::SkyModel;
 use atmo::view::Sun;
 
 use super::{GpuSkyModel, GpuSkyTable, SkyPass, SkyTarget};
-use crate::{Gpu, GpuError};
+use crate::{Gpu, GpuError, Rendered};
 
 /// What a sky is drawn from (given once to [`SkyRenderer::new`], which keeps it: the
 /// sizes of the variants do not matter).
@@ -22,6 +23,58 @@ pub enum SkySource {
     Model(SkyModel),
 }
 
+/// A sky on the GPU, from a model or a table (`M` and `T` borrowed or owned): what
+/// a renderer that draws either keeps (the sizes of the variants do not matter).
+#[allow(clippy::large_enum_variant)]
+pub enum GpuSky<M: Borrow<SkyModel>, T: Borrow<SkylightTable>> {
+    Model(GpuSkyModel<M>),
+    Table(GpuSkyTable<T>),
+}
+
+impl<M: Borrow<SkyModel>, T: Borrow<SkylightTable>> GpuSky<M, T> {
+    /// The one altitude a model draws from, m; `None` for a table (any of its range).
+    pub fn model_altitude(&self) -> Option<f64> {
+        match self {
+            GpuSky::Model(sky) => Some(sky.model().altitude_m()),
+            GpuSky::Table(_) => None,
+        }
+    }
+
+    /// Records this frame's maps for `sun` seen from `altitude_m` (a model: from its
+    /// own) into `encoder` and sets `pass` to draw them in `view`, as the model's and
+    /// the table's `prepare`.
+    pub fn prepare(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: &mut SkyPass,
+        sun: Sun,
+        altitude_m: f64,
+        view: &View,
+    ) -> Result<(), GpuError> {
+        match self {
+            GpuSky::Model(sky) => sky.prepare(gpu, encoder, pass, sun, view),
+            GpuSky::Table(sky) => sky.prepare(gpu, encoder, pass, sun, altitude_m, view),
+        }
+    }
+
+    /// The picture of `view` for `sun` seen from `altitude_m` (a model: from its own),
+    /// read back.
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        pass: &mut SkyPass,
+        sun: Sun,
+        altitude_m: f64,
+        view: &View,
+    ) -> Result<Rendered, GpuError> {
+        match self {
+            GpuSky::Model(sky) => sky.render(gpu, pass, sun, view),
+            GpuSky::Table(sky) => sky.render(gpu, pass, sun, altitude_m, view),
+        }
+    }
+}
+
 /// The sky on the CPU or on a GPU, from a table or a model (one a run: the sizes of the
 /// variants do not matter).
 #[allow(clippy::large_enum_variant)]
@@ -30,8 +83,7 @@ enum Drawer {
     CpuModel(SkyModel),
     /// The device, the sky on it and the headless pass drawn through, reused frame to
     /// frame.
-    GpuTable(Gpu, GpuSkyTable<Arc<SkylightTable>>, SkyPass),
-    GpuModel(Gpu, GpuSkyModel<SkyModel>, SkyPass),
+    Gpu(Gpu, GpuSky<SkyModel, Arc<SkylightTable>>, SkyPass),
 }
 
 /// One renderer of the sky whatever it is drawn from and wherever it runs.
@@ -54,10 +106,12 @@ impl SkyRenderer {
             (None, SkySource::Table(table)) => Drawer::CpuTable(table),
             (None, SkySource::Model(model)) => Drawer::CpuModel(model),
             (Some(gpu), SkySource::Table(table)) => {
-                Drawer::GpuTable(gpu.clone(), GpuSkyTable::new(gpu, table)?, pass(gpu)?)
+                let sky = GpuSky::Table(GpuSkyTable::new(gpu, table)?);
+                Drawer::Gpu(gpu.clone(), sky, pass(gpu)?)
             }
             (Some(gpu), SkySource::Model(model)) => {
-                Drawer::GpuModel(gpu.clone(), GpuSkyModel::new(gpu, model)?, pass(gpu)?)
+                let sky = GpuSky::Model(GpuSkyModel::new(gpu, model)?);
+                Drawer::Gpu(gpu.clone(), sky, pass(gpu)?)
             }
         };
         Ok(SkyRenderer { drawer })
@@ -67,8 +121,8 @@ impl SkyRenderer {
     pub fn model_altitude(&self) -> Option<f64> {
         match &self.drawer {
             Drawer::CpuModel(model) => Some(model.altitude_m()),
-            Drawer::GpuModel(_, sky, _) => Some(sky.model().altitude_m()),
-            Drawer::CpuTable(_) | Drawer::GpuTable(..) => None,
+            Drawer::CpuTable(_) => None,
+            Drawer::Gpu(_, sky, _) => sky.model_altitude(),
         }
     }
 
@@ -87,12 +141,8 @@ impl SkyRenderer {
                 Prepared::Cpu(SkyPicture::from_table(table, sun, altitude_m)?)
             }
             Drawer::CpuModel(model) => Prepared::Cpu(SkyPicture::new(model, sun)),
-            Drawer::GpuTable(gpu, sky, pass) => {
+            Drawer::Gpu(gpu, sky, pass) => {
                 sky.prepare(gpu, encoder, pass, sun, altitude_m, view)?;
-                Prepared::Gpu(pass)
-            }
-            Drawer::GpuModel(gpu, sky, pass) => {
-                sky.prepare(gpu, encoder, pass, sun, view)?;
                 Prepared::Gpu(pass)
             }
         })
@@ -104,8 +154,7 @@ impl SkyRenderer {
         Ok(match &mut self.drawer {
             Drawer::CpuTable(table) => SkyPicture::from_table(table, sun, altitude_m)?.render(view),
             Drawer::CpuModel(model) => SkyPicture::new(model, sun).render(view),
-            Drawer::GpuTable(gpu, sky, pass) => sky.render(gpu, pass, sun, altitude_m, view)?.frame,
-            Drawer::GpuModel(gpu, sky, pass) => sky.render(gpu, pass, sun, view)?.frame,
+            Drawer::Gpu(gpu, sky, pass) => sky.render(gpu, pass, sun, altitude_m, view)?.frame,
         })
     }
 }
