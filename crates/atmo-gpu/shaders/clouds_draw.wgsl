@@ -71,6 +71,9 @@ struct DrawParams {
 // The transfer solve's light toward the eye per cell, [x][y][z], per unit scattering
 // coefficient: the sun's (1/sr per unit sun irradiance) and the sky's (RGB).
 @group(0) @binding(7) var<storage, read> solved: array<vec4<f32>>;
+// The caller's scene in front of which the cloud is seen: each pixel's depth along the
+// view axis, m (CloudsPass::scene_depth; one texel of f32::MAX without a scene).
+@group(0) @binding(8) var scene_depth: texture_2d<f32>;
 
 // How the orders past the first are drawn: `shade`'s modes.
 const BY_OCTAVES: u32 = 0u;
@@ -328,13 +331,19 @@ fn shade(b: Billboard, mode: u32) -> Colours {
     let rr = dot(r, r);
     let t = dot(d, r) / rr;
     let s = b.centre.w;
-    let tau = faded_column(max(dot(d, d) - t * t * rr, 0.0), s, b.density);
+    let inv_length = inverseSqrt(rr);
+    // Of the column, the part in front of the scene's surface on this pixel: the
+    // Gaussian's share before it along the ray (r is 1 along the view axis, so the
+    // surface is at t = its depth), 1 in front of the sky.
+    let texels = vec2<i32>(textureDimensions(scene_depth)) - vec2<i32>(1);
+    let surface = textureLoad(scene_depth, clamp(vec2<i32>(pixel), vec2<i32>(0), texels), 0).r;
+    let before = 0.5 + 0.5 * erf(clamp((surface - t) / (sqrt(2.0) * s * inv_length), -8.0, 8.0));
+    let tau = faded_column(max(dot(d, d) - t * t * rr, 0.0), s, b.density) * before;
     if tau <= 0.0 {
         discard;
     }
     // The sunlight at the blob's emission nodes along the ray, in the grid, and the
     // cloud's extinction there (the slope of ln Gamma along the light).
-    let inv_length = inverseSqrt(rr);
     let g_ray = to_buffer(frame, r) / frame.voxel.xyz;
     let g = grid_of(frame, params.position.xyz) + t * g_ray;
     let along = (s * inv_length) * g_ray;

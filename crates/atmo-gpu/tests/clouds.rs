@@ -454,7 +454,7 @@ fn the_cloud_draws_over_a_callers_target_as_it_reads_back() {
     let (tw, th) = (w + 16, h + 8);
     let target = picture_texture(&gpu, tw, th).unwrap();
     let view = target.create_view(&Default::default());
-    let mut pass = CloudsPass::new(&gpu, target.format()).unwrap();
+    let mut pass = CloudsPass::new(&gpu, target.format(), 1).unwrap();
     pass.corner = [8, 4];
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     clouds
@@ -492,6 +492,92 @@ fn the_cloud_draws_over_a_callers_target_as_it_reads_back() {
         );
     }
     assert_eq!(at(2, 1), behind, "outside the picture: the caller's");
+}
+
+/// The cloud of `clouds` seen by `camera` over black through a [`CloudsPass`] whose
+/// scene is `scene_depth` (m along the view axis, a value a pixel), read back as RGBA.
+fn drawn_before(
+    gpu: &atmo_gpu::Gpu,
+    clouds: &GpuClouds,
+    camera: &Camera,
+    light: &CloudLight,
+    scene_depth: &[f32],
+) -> Vec<[f32; 4]> {
+    let (w, h) = (camera.width, camera.height);
+    let target = picture_texture(gpu, w, h).unwrap();
+    let view = target.create_view(&Default::default());
+    let mut pass = CloudsPass::new(gpu, target.format(), 1).unwrap();
+    let depth = gpu.float_texture("the scene", scene_depth, w, h);
+    pass.scene_depth = Some(depth.create_view(&Default::default()));
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    clouds
+        .prepare(gpu, &mut encoder, &mut pass, camera, light)
+        .unwrap();
+    {
+        let mut render = cleared_pass(&mut encoder, &view, "over black", wgpu::Color::BLACK);
+        pass.draw(&mut render);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = gpu.read_texture("the picture", &target, w, h).unwrap();
+    bytemuck::cast_slice(&bytes).to_vec()
+}
+
+#[test]
+fn a_scene_in_front_hides_the_cloud_and_one_inside_it_fades_into_it() {
+    // A wall 100 m from the eye over the left half, nothing over the right: the left
+    // half black, the right half the cloud drawn with no scene.
+    let Some(gpu) = gpu() else { return };
+    let camera = camera();
+    let light = lighting(PhaseFunction::CloudMie, Octaves::MULTIPLE);
+    let mut clouds = GpuClouds::new(&gpu, &cloud(), 48).unwrap();
+    clouds.light(&gpu, to_sun(), 0.0, Splat::Pieces).unwrap();
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let open = drawn_before(&gpu, &clouds, &camera, &light, &vec![f32::MAX; w * h]);
+    let half: Vec<f32> = (0..w * h)
+        .map(|i| if i % w < w / 2 { 100.0 } else { f32::MAX })
+        .collect();
+    let walled = drawn_before(&gpu, &clouds, &camera, &light, &half);
+    // The light of the cloud over black (green: alpha is the target's, 1).
+    let coverage = |picture: &[[f32; 4]], left: bool| -> f32 {
+        let side = |i: &usize| (i % w < w / 2) == left;
+        (0..w * h).filter(side).map(|i| picture[i][1]).sum()
+    };
+    assert!(coverage(&open, true) > 1.0 && coverage(&open, false) > 1.0);
+    assert_eq!(
+        coverage(&walled, true),
+        0.0,
+        "the cloud behind the wall shows"
+    );
+    for i in (0..w * h).filter(|i| i % w >= w / 2) {
+        let d = (0..4)
+            .map(|c| (walled[i][c] - open[i][c]).abs())
+            .fold(0.0, f32::max);
+        assert!(d <= 1e-5, "pixel {i}: {:?} vs {:?}", walled[i], open[i]);
+    }
+    // Walls through the cloud: the nearer, the less of it before the wall; the sunlit
+    // front sends most of its light (the back is seen through the front).
+    let whole = coverage(&open, true) + coverage(&open, false);
+    let mut last = 0.0;
+    for wall_m in [450.0, 600.0] {
+        let inside = drawn_before(&gpu, &clouds, &camera, &light, &vec![wall_m; w * h]);
+        let part = coverage(&inside, true) + coverage(&inside, false);
+        eprintln!(
+            "a wall at {wall_m} m: {:.3} of the cloud's light",
+            part / whole
+        );
+        assert!(
+            part > last && part < 0.99 * whole,
+            "{wall_m} m: {part} of {whole}"
+        );
+        for (a, b) in inside.iter().zip(&open) {
+            assert!(
+                a[1] <= b[1] + 1e-5,
+                "more before the wall than in all: {a:?} {b:?}"
+            );
+        }
+        last = part;
+    }
+    assert!(last > 0.2 * whole);
 }
 
 #[test]

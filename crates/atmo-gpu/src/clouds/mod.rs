@@ -168,6 +168,8 @@ pub struct GpuClouds {
     solve_pipelines: OnceCell<SolvePipelines>,
     solve: RefCell<Option<GpuSolve>>,
     no_solve: wgpu::Buffer,
+    /// What the draws bind without a scene in front: one texel of `f32::MAX`.
+    no_scene: wgpu::TextureView,
     /// [`GpuClouds::render`]'s composite, into an RGBA f32 picture (a cell: `render`
     /// reads the cloud while it prepares the pass).
     composite: RefCell<CloudsPass>,
@@ -238,7 +240,7 @@ impl GpuClouds {
             )
         };
         Ok(GpuClouds {
-            composite: RefCell::new(CloudsPass::new(gpu, wgpu::TextureFormat::Rgba32Float)?),
+            composite: RefCell::new(CloudsPass::new(gpu, wgpu::TextureFormat::Rgba32Float, 1)?),
             particles: particles.to_vec(),
             particle_buffer,
             resolution: resolution as u32,
@@ -267,6 +269,9 @@ impl GpuClouds {
             solve_pipelines: OnceCell::new(),
             solve: RefCell::new(None),
             no_solve: gpu.storage("no transfer solve", &[0; 16], "the particle count")?,
+            no_scene: gpu
+                .float_texture("no scene", &[f32::MAX], 1, 1)
+                .create_view(&Default::default()),
         })
     }
 
@@ -548,7 +553,8 @@ impl GpuClouds {
             self.record_solve(gpu, encoder, settings, light, camera.position)?;
         }
         let dimming = light.ambient.dimming(&light.scattering.octaves());
-        let billboards = self.billboards(gpu, camera, light, &dimming)?;
+        let scene = pass.scene_depth.as_ref().unwrap_or(&self.no_scene);
+        let billboards = self.billboards(gpu, camera, light, &dimming, scene)?;
         // The sky's light inside the cloud and the transfer table need each particle's
         // depths: made once for particles where they are.
         let table = light.scattering.table().is_some();
@@ -722,6 +728,7 @@ impl GpuClouds {
         camera: &Camera,
         light: &CloudLight,
         dimming: &SkyDimming,
+        scene: &wgpu::TextureView,
     ) -> Result<Billboards, GpuError> {
         let frame = self.frame.ok_or_else(|| {
             atmo::Error::Invalid("the clouds need a light pass before they are drawn".into())
@@ -829,6 +836,7 @@ impl GpuClouds {
                 solved
                     .map_or(&self.no_solve, |s| &s.seen)
                     .as_entire_binding(),
+                wgpu::BindingResource::TextureView(scene),
             ],
         );
         Ok(Billboards {

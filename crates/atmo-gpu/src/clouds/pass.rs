@@ -6,7 +6,8 @@ use super::*;
 /// The cloud drawn into a caller's colour target of one format: a full-screen
 /// triangle that puts the picture [`GpuClouds::prepare`] recorded (with its higher
 /// octaves) over what the target holds, pixel for pixel from [`CloudsPass::corner`],
-/// times [`CloudsPass::exposure`]. It keeps the two targets the billboards are drawn
+/// times [`CloudsPass::exposure`], hidden where the caller's scene is in front
+/// ([`CloudsPass::scene_depth`]). It keeps the two targets the billboards are drawn
 /// into between frames of one size.
 pub struct CloudsPass {
     pub(super) pipeline: wgpu::RenderPipeline,
@@ -19,12 +20,18 @@ pub struct CloudsPass {
     pub exposure: f32,
     /// The target's pixel where the picture's (0, 0) goes.
     pub corner: [u32; 2],
+    /// The caller's scene: each pixel's depth along the camera's view axis, m, in an
+    /// `R32Float` texture of the picture's size (`f32::MAX` where nothing is). Each
+    /// particle's column counts only in front of it, so a surface inside a cloud fades
+    /// into it as the cloud thins before it. `None`: the cloud is in front of everything.
+    pub scene_depth: Option<wgpu::TextureView>,
 }
 
 impl CloudsPass {
-    /// The pass for colour targets of `format` (blendable): refused by name where the
-    /// device cannot render to it.
-    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Result<Self, GpuError> {
+    /// The pass for colour targets of `format` (blendable) with `samples` samples a
+    /// pixel (every sample takes the pixel's cloud): refused by name where the device
+    /// cannot render to it.
+    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat, samples: u32) -> Result<Self, GpuError> {
         let module = wgsl::module(gpu, "screen.wgsl clouds_composite.wgsl")?;
         // Premultiplied "over": the cloud, then (1 - its coverage) of what is behind.
         let over = wgpu::BlendComponent {
@@ -47,7 +54,7 @@ impl CloudsPass {
             Some(&pipeline_layout),
             &[Some(target)],
             None,
-            1,
+            samples,
         )?;
         Ok(CloudsPass {
             pipeline,
@@ -60,6 +67,7 @@ impl CloudsPass {
             targets: None,
             exposure: 1.0,
             corner: [0, 0],
+            scene_depth: None,
         })
     }
 

@@ -97,7 +97,9 @@ impl CloudPictures for WindowClouds {
         write_frame(gpu, &picture.texture, &behind);
         let pass = match &mut self.pass {
             Some(pass) => pass,
-            slot => slot.insert(CloudsPass::new(gpu, picture.texture.format()).map_err(gpu_error)?),
+            slot => {
+                slot.insert(CloudsPass::new(gpu, picture.texture.format(), 1).map_err(gpu_error)?)
+            }
         };
         clouds
             .prepare(gpu, encoder, pass, &camera, &light)
