@@ -255,19 +255,6 @@ impl SkyAround {
         )
     }
 
-    /// The air between `camera` and the cloud's centre for `sun`: the aerial
-    /// perspective at that distance and direction (every order the model carries).
-    fn haze(&self, sun: Sun, camera: &Camera) -> Result<AerialHaze> {
-        let to_cloud = self.centre - camera.position;
-        let distance = to_cloud.length() as f64;
-        let light = self.at_camera.aerial_along(sun, to_cloud, &[distance])?;
-        let (transmittance, inscatter) = light[0].rgb(self.at_camera.atmosphere());
-        Ok(AerialHaze {
-            transmittance,
-            inscatter,
-        })
-    }
-
     /// For `sun`: the sun's irradiance at the cloud (RGB, through the atmosphere), the
     /// sky's radiance all around it (its ambient light), the air in front of the cloud,
     /// and the sky behind it as `camera` sees it.
@@ -280,10 +267,23 @@ impl SkyAround {
         Ok((
             self.at_cloud.sunlight(sun),
             SkyLight::from_harmonics(&self.at_cloud.skylight(sun)),
-            self.haze(sun, camera)?,
+            haze_before(&self.at_camera, sun, self.centre - camera.position)?,
             background,
         ))
     }
+}
+
+/// The air in front of a cloud `to_cloud` (m, world frame) from the eye of `model` for
+/// `sun`: the aerial perspective at that distance and direction (every order the model
+/// carries), linear sRGB.
+pub fn haze_before(model: &SkyModel, sun: Sun, to_cloud: Vec3) -> Result<AerialHaze> {
+    let distance = to_cloud.length() as f64;
+    let light = model.aerial_along(sun, to_cloud, &[distance])?;
+    let (transmittance, inscatter) = light[0].rgb(model.atmosphere());
+    Ok(AerialHaze {
+        transmittance,
+        inscatter,
+    })
 }
 
 /// The clouds on the CPU: the intensity buffer (none before the first light pass;

@@ -1,6 +1,7 @@
-//! A flight over a checkered plain toward rows of towers: atmo's every-order sky behind
-//! them, the sun as Bevy's directional light (its colour and illuminance from atmo), and
-//! the aerial perspective fading the far towers into the sky's own colour.
+//! A flight over a checkered plain toward rows of towers and cumulus clouds: atmo's
+//! every-order sky behind them, the sun as Bevy's directional light (its colour and
+//! illuminance from atmo), the aerial perspective fading the far towers into the sky's
+//! own colour, and the clouds lit by the same sun and sky.
 //!
 //! ```text
 //! cargo run --release -p bevy_atmo --example flight
@@ -71,6 +72,23 @@ fn setup(world: &mut World) {
             .looking_to(Vec3::new(0.3, -0.06, -1.0), Vec3::Y),
     ));
     world.spawn((AtmoSun, DirectionalLight::default(), Transform::default()));
+    // Two cumulus ahead: the paper's largest, and a smaller one nearer and to the left.
+    for (particles, seed, width, at) in [
+        (60_134, 1, 1200.0, Vec3::new(3500.0, 1400.0, -9000.0)),
+        (20_000, 7, 700.0, Vec3::new(-1200.0, 1200.0, -5000.0)),
+    ] {
+        let cumulus = atmo::clouds::Cumulus {
+            particles,
+            seed,
+            width,
+            base: 0.0,
+            ..default()
+        };
+        world.spawn((
+            AtmoClouds::from_particles(cumulus.generate()),
+            Transform::from_translation(at),
+        ));
+    }
     // Fields of 1.25 km: a checker texture of nearest texels over the plain.
     let checker = world
         .resource_mut::<Assets<Image>>()
@@ -161,18 +179,21 @@ fn move_sun(
     **sun = Transform::default().looking_to(-toward, up);
 }
 
-/// With `--screenshot FILE`: saves the window ten frames after the sky is built, then
-/// exits once it is written.
+/// With `--screenshot FILE`: saves the window ten frames after the sky and the clouds
+/// are built, then exits once it is written.
 fn screenshot_when_built(
     mut commands: Commands,
     mut shot: ResMut<Shot>,
     skies: Query<&AtmoSkyState>,
+    clouds: Query<&AtmoCloudsState>,
     mut exit: MessageWriter<AppExit>,
 ) {
     let Some(path) = shot.0.clone() else {
         return;
     };
-    if !skies.iter().all(|s| s.is_ready() && !s.is_building()) {
+    let built = skies.iter().all(|s| s.is_ready() && !s.is_building())
+        && clouds.iter().all(|c| c.is_ready() && !c.is_building());
+    if !built {
         return;
     }
     shot.1 += 1;

@@ -29,6 +29,8 @@
 //! for Bevy's own Atmosphere. docs/bevy.md says what the plugin does and does not do.
 
 mod aerial;
+mod cloud_pass;
+mod clouds;
 mod render;
 mod sky;
 mod skylight;
@@ -40,13 +42,17 @@ use bevy::prelude::*;
 use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
 use bevy::transform::TransformSystems;
 
+pub use clouds::{AtmoClouds, AtmoCloudsState};
 pub use sky::{AtmoSky, AtmoSkyState, SkySource};
 pub use skylight::SkyLight;
 pub use sun::{AtmoSun, AtmoSunAt};
 
 /// What a Bevy program imports to use atmo.
 pub mod prelude {
-    pub use crate::{AtmoPlugin, AtmoSky, AtmoSkyState, AtmoSun, AtmoSunAt, SkyLight, SkySource};
+    pub use crate::{
+        AtmoClouds, AtmoCloudsState, AtmoPlugin, AtmoSky, AtmoSkyState, AtmoSun, AtmoSunAt,
+        SkyLight, SkySource,
+    };
 }
 
 /// Adds atmo's sky and sun to an app with Bevy's renderer.
@@ -63,6 +69,7 @@ impl Plugin for AtmoPlugin {
                     sky::build_skies,
                     sun::light_the_sun,
                     skylight::light_the_scene,
+                    clouds::light_the_clouds,
                 )
                     .chain()
                     .after(TransformSystems::Propagate),
@@ -77,11 +84,20 @@ impl Plugin for AtmoPlugin {
         };
         render_app
             .add_systems(RenderStartup, render::init_gpu)
-            .add_systems(ExtractSchedule, render::extract_skies)
+            .add_systems(
+                ExtractSchedule,
+                (render::extract_skies, cloud_pass::extract_clouds),
+            )
+            .add_systems(
+                Render,
+                cloud_pass::prepare_clouds.in_set(RenderSystems::PrepareResources),
+            )
             // After the views' depth textures exist (made in PrepareResources).
             .add_systems(
                 Render,
-                render::prepare_skies.in_set(RenderSystems::PrepareBindGroups),
+                (render::prepare_skies, cloud_pass::prepare_view_clouds)
+                    .chain()
+                    .in_set(RenderSystems::PrepareBindGroups),
             )
             .add_systems(
                 Core3d,

@@ -21,12 +21,13 @@ use bevy::render::view::{ExtractedView, Msaa, ViewDepthStencilTexture, ViewTarge
 use bevy::render::Extract;
 
 use crate::aerial::{AerialFrame, AerialTarget, ViewAerial};
+use crate::cloud_pass::{draw_clouds, CloudOnGpu, ViewClouds};
 use crate::sky::{AtmoSky, AtmoSkyState, ReadySky};
 use crate::sun::SunNow;
 
 /// atmo on Bevy's device and queue (absent where the device lacks what atmo needs).
 #[derive(Resource)]
-pub(crate) struct AtmoGpu(Gpu);
+pub(crate) struct AtmoGpu(pub(crate) Gpu);
 
 /// Wraps Bevy's device for atmo; where it lacks float32 blending, atmo draws nothing
 /// and says why once.
@@ -50,7 +51,7 @@ pub(crate) fn init_gpu(
 /// under which sun.
 #[derive(Component)]
 pub(crate) struct ExtractedSky {
-    ready: ReadySky,
+    pub(crate) ready: ReadySky,
     generation: u64,
     altitude_m: f64,
     sun: Sun,
@@ -152,7 +153,7 @@ fn aerial_target(gpu: &Gpu, sky: SkyTarget) -> AerialTarget {
 /// The camera of a view as atmo's (at the origin: the sky is at infinity), for its
 /// viewport, and its vertical field of view, degrees; `None` for a projection that is
 /// not a perspective.
-fn atmo_camera(view: &ExtractedView) -> Option<(AtmoCamera, f32)> {
+pub(crate) fn atmo_camera(view: &ExtractedView) -> Option<(AtmoCamera, f32)> {
     let projection = view.clip_from_view;
     // Bevy's perspectives are infinite reversed z: y_axis.y = 1 / tan(fov_y / 2).
     if projection.w_axis.w != 0.0 || projection.y_axis.y <= 0.0 {
@@ -165,8 +166,9 @@ fn atmo_camera(view: &ExtractedView) -> Option<(AtmoCamera, f32)> {
     Some((camera.ok()?, fov_deg))
 }
 
-/// A view with a sky to draw: what it needs to set its sky up.
-type SkyViewParts<'a> = (
+/// A view with a sky to draw: what its sky (`T`: `ViewSky`) or its clouds
+/// (`ViewClouds`) need to be set up, and what they kept from the last frame.
+pub(crate) type SkyViewParts<'a, T> = (
     Entity,
     &'a ExtractedSky,
     &'a ExtractedView,
@@ -174,7 +176,7 @@ type SkyViewParts<'a> = (
     &'a ViewTarget,
     &'a Msaa,
     &'a ViewDepthStencilTexture,
-    Option<&'a mut ViewSky>,
+    Option<&'a mut T>,
 );
 
 /// Uploads what changed and records each sky view's maps for this frame's sun in an
@@ -182,7 +184,7 @@ type SkyViewParts<'a> = (
 pub(crate) fn prepare_skies(
     mut commands: Commands,
     gpu: Option<Res<AtmoGpu>>,
-    mut views: Query<SkyViewParts>,
+    mut views: Query<SkyViewParts<ViewSky>>,
 ) {
     let Some(gpu) = gpu else {
         return;
@@ -293,17 +295,21 @@ fn remake(
 }
 
 /// Draws the sky into the view's colour target (its multisampled one with MSAA on),
-/// depth-tested against the opaque meshes so that it fills only the far plane.
+/// depth-tested against the opaque meshes so that it fills only the far plane, the
+/// aerial perspective over the meshes, and the clouds over both.
 pub(crate) fn draw_sky(
     view: ViewQuery<(
         &ExtractedCamera,
         &ViewTarget,
         &ViewDepthStencilTexture,
         &ViewSky,
+        Option<&mut ViewClouds>,
     )>,
+    gpu: Option<Res<AtmoGpu>>,
+    clouds: Query<&CloudOnGpu>,
     mut ctx: RenderContext,
 ) {
-    let (camera, target, depth, sky) = view.into_inner();
+    let (camera, target, depth, sky, view_clouds) = view.into_inner();
     let encoder = ctx.command_encoder();
     let attachment = depth.get_attachment(StoreOp::Store);
     sky.pass.draw(&mut begin(
@@ -323,11 +329,14 @@ pub(crate) fn draw_sky(
             None,
         ));
     }
+    if let (Some(mut view_clouds), Some(gpu)) = (view_clouds, gpu) {
+        draw_clouds(&gpu.0, encoder, camera, target, &mut view_clouds, &clouds);
+    }
 }
 
 /// A render pass into the view's colour target (its multisampled one with MSAA on),
 /// over the camera's viewport.
-fn begin<'e>(
+pub(crate) fn begin<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     camera: &ExtractedCamera,
     target: &'e ViewTarget,

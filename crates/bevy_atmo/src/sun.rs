@@ -92,11 +92,7 @@ pub(crate) fn light_the_sun(
         return;
     };
     now.0 = Some(sun);
-    let first = cameras
-        .iter()
-        .filter(|(_, _, camera)| camera.is_active)
-        .min_by_key(|(_, _, camera)| camera.order);
-    let Some((sky, eye, _)) = first else {
+    let Some((sky, eye)) = first_sky_camera(&cameras) else {
         return;
     };
     let sunlight = Sunlight::at(&sky.atmosphere, sky.altitude_m(eye.translation().y), sun);
@@ -107,6 +103,18 @@ pub(crate) fn light_the_sun(
         light.color = color;
         light.illuminance = illuminance;
     }
+}
+
+/// The first active sky camera (lowest `Camera::order`): the one the sun's light and
+/// the clouds' are made for.
+pub(crate) fn first_sky_camera<'a>(
+    cameras: &'a Query<(&AtmoSky, &GlobalTransform, &Camera)>,
+) -> Option<(&'a AtmoSky, &'a GlobalTransform)> {
+    cameras
+        .iter()
+        .filter(|(_, _, camera)| camera.is_active)
+        .min_by_key(|(_, _, camera)| camera.order)
+        .map(|(sky, eye, _)| (sky, eye))
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use atmo::sky::{SkyPicture, SkylightTable, TableSettings, View};
 use atmo::view::Sun;
 use bevy::prelude::*;
 use bevy_atmo::prelude::*;
-use common::{app, atmo_camera, earth_model, radiance, settled, HEIGHT, WIDTH};
+use common::{app, around_the_box, atmo_camera, black_box, earth_model, radiance, settled};
 
 /// The camera's altitude, m: the plugin builds its model for it.
 const ALTITUDE_M: f32 = 1000.0;
@@ -90,39 +90,12 @@ fn with_msaa_4x_the_sky_fills_around_a_mesh_and_never_over_it() {
         return;
     };
     // A black box straight ahead, 200 m away, 40 m wide: about a tenth of the picture.
-    let world = app.world_mut();
-    let mesh = world
-        .resource_mut::<Assets<Mesh>>()
-        .add(Cuboid::new(40.0, 40.0, 40.0));
-    let material = world
-        .resource_mut::<Assets<StandardMaterial>>()
-        .add(StandardMaterial {
-            base_color: Color::BLACK,
-            unlit: true,
-            ..default()
-        });
     let centre = Vec3::new(0.0, ALTITUDE_M, 0.0) + 200.0 * looking();
-    world.spawn((
-        Mesh3d(mesh),
-        MeshMaterial3d(material),
-        Transform::from_translation(centre).looking_to(looking(), Vec3::Y),
-    ));
+    black_box(app.world_mut(), centre, 40.0, looking());
     let frame = radiance(&settled(&mut app));
     // The box covers the centre: (20 / 180) / tan(22.5 deg) of the half-height, 27 %,
     // about +-14 pixels; inside +-10 it is black, outside +-18 the sky is atmo's.
-    let (cx, cy) = (WIDTH as i32 / 2, HEIGHT as i32 / 2);
-    let mut outside = Vec::new();
-    for y in 0..HEIGHT as i32 {
-        for x in 0..WIDTH as i32 {
-            let (dx, dy) = ((x - cx).abs(), (y - cy).abs());
-            let i = (y * WIDTH as i32 + x) as usize;
-            if dx.max(dy) <= 10 {
-                assert_eq!(frame.pixels[i], Vec3::ZERO, "pixel ({x}, {y}) of the box");
-            } else if dx.max(dy) > 18 {
-                outside.push(i);
-            }
-        }
-    }
+    let outside = around_the_box(&frame, 10, 18);
     let e = frame.level_errors_over(reference(), DISPLAY, outside);
     eprintln!(
         "MSAA 4x, around the box: RMS {:.3}, max {:.3} levels",

@@ -314,20 +314,36 @@ impl GpuClouds {
         forward: f32,
         splat: Splat,
     ) -> Result<Option<f64>, GpuError> {
+        let mut made = Ok(());
+        let time = gpu.run("the clouds' light pass", |encoder| {
+            made = self.record_light_pass(gpu, encoder, to_sun, forward, splat);
+        })?;
+        made?;
+        Ok(time)
+    }
+
+    /// The light pass of [`GpuClouds::light`] recorded into the caller's `encoder`, for
+    /// a program that submits its own frames: draws prepared after it read it.
+    pub fn record_light_pass(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        to_sun: Vec3,
+        forward: f32,
+        splat: Splat,
+    ) -> Result<(), GpuError> {
         let frame = frame_of(&self.particles, to_sun, forward, splat, self.resolution)?;
         let params = gpu.uniform("the buffer frame", &frame);
-        let time = gpu.run("the clouds' light pass", |encoder| {
-            self.record_light(
-                gpu,
-                encoder,
-                &frame,
-                &params,
-                &self.particle_buffer,
-                self.sun_cells(),
-            )
-        })?;
+        self.record_light(
+            gpu,
+            encoder,
+            &frame,
+            &params,
+            &self.particle_buffer,
+            self.sun_cells(),
+        );
         self.frame = Some(frame);
-        Ok(time)
+        Ok(())
     }
 
     /// The sun's grid in `cells`.

@@ -79,7 +79,7 @@ pub fn app(camera: impl Bundle) -> Option<App> {
     Some(app)
 }
 
-/// Updates `app` until every sky has been ready for a few frames (its model is built on
+/// Updates `app` until every sky and cloud has been ready for a few frames (its model is built on
 /// a background thread: seconds; the GPU's copy is made a frame later, the read-back
 /// comes a frame or two after that) and two read-backs in a row agree, and returns the
 /// picture; panics after two minutes, or when the renderer has asked the app to exit
@@ -95,9 +95,13 @@ pub fn settled(app: &mut App) -> Vec<[f32; 4]> {
             "the renderer stopped the app (a GPU error; see the log)"
         );
         let mut skies = app.world_mut().query::<&AtmoSkyState>();
+        let mut clouds = app.world_mut().query::<&AtmoCloudsState>();
         let done = skies
             .iter(app.world())
-            .all(|s| s.is_ready() && !s.is_building());
+            .all(|s| s.is_ready() && !s.is_building())
+            && clouds
+                .iter(app.world())
+                .all(|c| c.is_ready() && !c.is_building());
         ready_frames = if done { ready_frames + 1 } else { 0 };
         let shot = app.world_mut().resource_mut::<Shot>().0.take();
         if let (Some(shot), true) = (shot, ready_frames > 4) {
@@ -140,4 +144,42 @@ pub fn earth_model(altitude_m: f32) -> atmo::sky::SkyModel {
 pub fn atmo_camera(look: Vec3) -> atmo::view::Camera {
     let fov = atmo::view::Fov::Vertical(45.0);
     atmo::view::Camera::look_at(Vec3::ZERO, look, Vec3::Y, fov, (WIDTH, HEIGHT)).unwrap()
+}
+
+/// Spawns a black unlit cube of `side` m at `centre`, facing `look`.
+pub fn black_box(world: &mut World, centre: Vec3, side: f32, look: Vec3) {
+    let mesh = world
+        .resource_mut::<Assets<Mesh>>()
+        .add(Cuboid::new(side, side, side));
+    let material = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial {
+            base_color: Color::BLACK,
+            unlit: true,
+            ..default()
+        });
+    world.spawn((
+        Mesh3d(mesh),
+        MeshMaterial3d(material),
+        Transform::from_translation(centre).looking_to(look, Vec3::Y),
+    ));
+}
+
+/// Of a picture with a box in its middle, asserts that the pixels within `inside` of
+/// the middle (in x and y) are black, and returns those farther than `outside`.
+pub fn around_the_box(frame: &atmo::image::Frame, inside: i32, outside: i32) -> Vec<usize> {
+    let (cx, cy) = (WIDTH as i32 / 2, HEIGHT as i32 / 2);
+    let mut around = Vec::new();
+    for y in 0..HEIGHT as i32 {
+        for x in 0..WIDTH as i32 {
+            let (dx, dy) = ((x - cx).abs(), (y - cy).abs());
+            let i = (y * WIDTH as i32 + x) as usize;
+            if dx.max(dy) <= inside {
+                assert_eq!(frame.pixels[i], Vec3::ZERO, "pixel ({x}, {y}) of the box");
+            } else if dx.max(dy) > outside {
+                around.push(i);
+            }
+        }
+    }
+    around
 }
