@@ -33,8 +33,10 @@ struct ShaftsParams {
     phase_size: u32,
     light_map_size: u32,
     attenuation_size: u32,
-    // The camera's light index for the plane pass's instances is in the vertex stage.
-    pad0: u32,
+    // 1: the surfaces' own light is drawn (the picture); 0: the haze alone, over a
+    // scene shaded elsewhere, with the haze's transmittance to each pixel's surface in
+    // the picture's alpha (GpuShafts::haze_over).
+    surfaces: u32,
     pad1: u32,
 }
 

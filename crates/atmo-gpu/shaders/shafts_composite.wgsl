@@ -1,4 +1,5 @@
-// The planes' sum added to the surfaces' radiance: the picture, in one buffer.
+// The planes' sum added to the surfaces' radiance: the picture, in one buffer (its
+// alpha, 1 or the haze's transmittance, kept).
 
 @group(0) @binding(0) var planes: texture_2d<f32>;
 @group(0) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
@@ -10,5 +11,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let at = id.y * size.x + id.x;
-    out[at] = vec4<f32>(out[at].xyz + textureLoad(planes, id.xy, 0).xyz, 1.0);
+    out[at] = vec4<f32>(out[at].xyz + textureLoad(planes, id.xy, 0).xyz, out[at].w);
 }

@@ -15,5 +15,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     let at = id.y * params.width + id.x;
-    out[at] = vec4<f32>(out[at].xyz + sum * params.up.w, 1.0);
+    out[at] = vec4<f32>(out[at].xyz + sum * params.up.w, out[at].w);
 }

@@ -1,6 +1,7 @@
 // The shafts' picture drawn into a caller's colour target: one full-screen triangle (screen.wgsl),
 // each fragment the pixel of the frame under it (linear radiance, as the composite left
-// it in the frame buffer) times the exposure. Pixels outside the frame are left.
+// it in the frame buffer) times the exposure, its alpha 1 or (the haze alone) the haze's
+// transmittance to the pixel's surface. Pixels outside the frame are left.
 
 // Mirrors atmo_gpu::shafts::ShaftsFrameParams.
 struct ShaftsFrameParams {
@@ -24,6 +25,6 @@ fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     if !in_picture(p, vec2<i32>(i32(params.width), i32(params.height))) {
         discard;
     }
-    let rgb = frame[u32(p.y) * params.width + u32(p.x)].rgb;
-    return vec4<f32>(rgb * params.exposure, 1.0);
+    let pixel = frame[u32(p.y) * params.width + u32(p.x)];
+    return vec4<f32>(pixel.rgb * params.exposure, pixel.a);
 }

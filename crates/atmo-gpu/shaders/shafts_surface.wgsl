@@ -54,6 +54,16 @@ fn shadow_ray(l: GpuLight, p: vec3<f32>, normal: vec3<f32>) -> f32 {
     return f32(best.t >= s);
 }
 
+// The length of the ray from `eye` along unit `dir` to `t` (which may be infinite)
+// inside the haze.
+fn inside_along(eye: vec3<f32>, dir: vec3<f32>, t: f32) -> f32 {
+    if params.haze_box == 0u {
+        return t;
+    }
+    let span = clip_box(params.haze_min.xyz, params.haze_max.xyz, eye, safe_recip(dir), 0.0, t);
+    return max(span.y - span.x, 0.0);
+}
+
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = params.width;
@@ -64,6 +74,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let eye = params.position.xyz;
     let far = params.position.w;
     var sum = vec3<f32>(0.0);
+    var through = 0.0;
     for (var q = 0u; q < params.supersampling * params.supersampling; q++) {
         let o = subpixel(q);
         let ray = camera_ray(f32(id.x) + o.x, f32(id.y) + o.y);
@@ -74,11 +85,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         for (var i = 0u; i < params.objects; i++) {
             intersect(i, eye, dir, &best);
         }
-        if best.t < far * len {
+        if params.surfaces == 0u {
+            through += exp(-params.haze_min.w * inside_along(eye, dir, best.t));
+        } else if best.t < far * len {
             let normal = select(best.normal, -best.normal, dot(best.normal, dir) > 0.0);
             sum += surface_radiance(eye + best.t * dir, normal, best.albedo);
         }
         ends[q * w * h + id.y * w + id.x] = best.t;
     }
-    out[id.y * w + id.x] = vec4<f32>(sum * params.up.w, 1.0);
+    let alpha = select(through * params.up.w, 1.0, params.surfaces != 0u);
+    out[id.y * w + id.x] = vec4<f32>(sum * params.up.w, alpha);
 }

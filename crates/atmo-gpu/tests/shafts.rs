@@ -8,7 +8,7 @@ use std::path::Path;
 
 use atmo::shafts::{SamplePlanes, Scene};
 use atmo_gpu::display::{cleared_pass, picture_texture};
-use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPass};
+use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPass, ShaftsPipelines};
 use common::{assert_close, gpu, mean_level};
 
 /// The example scene `name`, drawn at 1/5 of its size.
@@ -152,4 +152,73 @@ fn the_shafts_draw_into_a_callers_target_as_they_read_back() {
         "outside the picture: the caller's"
     );
     assert_eq!(at(w - 1, h - 1), [0.25, 0.0, 0.0, 1.0]);
+}
+
+/// `scene` drawn by [`GpuShafts::haze_over`] and [`ShaftsPass::over`] over a target
+/// holding `behind` everywhere, read back as RGBA.
+fn haze_over(gpu: &atmo_gpu::Gpu, scene: &Scene, behind: f64) -> Vec<[f32; 4]> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let shafts = GpuShafts::haze_over(gpu, scene, ShaftsPipelines::new(gpu).unwrap()).unwrap();
+    let target = picture_texture(gpu, w, h).unwrap();
+    let mut pass = ShaftsPass::over(gpu, target.format(), 1).unwrap();
+    let view = target.create_view(&Default::default());
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    shafts
+        .prepare(gpu, &mut encoder, &mut pass, ShaftsMethod::Planes)
+        .unwrap();
+    {
+        let colour = wgpu::Color {
+            r: behind,
+            g: behind,
+            b: behind,
+            a: 1.0,
+        };
+        pass.draw(&mut cleared_pass(&mut encoder, &view, "the scene", colour));
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = gpu.read_texture("the target", &target, w, h).unwrap();
+    bytemuck::cast_slice(&bytes).to_vec()
+}
+
+#[test]
+fn the_haze_alone_over_a_scene_is_its_light_and_its_transmittance() {
+    // Over black: the haze's light alone, the CPU's picture of the scene with every
+    // surface black (still casting its shadows and ending the rays). Over white, less
+    // that light: the haze's transmittance from the eye to each pixel's surface.
+    let Some(gpu) = gpu() else { return };
+    let scene = scene("spotlight-sphere.toml", 1);
+    let mut dark = scene.clone();
+    for object in &mut dark.objects.list {
+        object.albedo = glam::Vec3::ZERO;
+    }
+    let want = SamplePlanes::new(&dark).render();
+    let over_black = haze_over(&gpu, &scene, 0.0);
+    let mut light = atmo::image::Frame::new(scene.camera.width, scene.camera.height);
+    for (p, t) in light.pixels.iter_mut().zip(&over_black) {
+        *p = glam::Vec3::new(t[0], t[1], t[2]);
+    }
+    assert!(mean_level(&light, scene.display.exposure) > 10.0, "dark");
+    assert_close(&light, &want, scene.display.exposure, "the haze alone");
+    let over_white = haze_over(&gpu, &scene, 1.0);
+    let camera = &scene.camera;
+    let mut worst = 0.0f32;
+    for (i, (white, black)) in over_white.iter().zip(&over_black).enumerate() {
+        let (x, y) = (i as u32 % camera.width, i as u32 / camera.width);
+        let dir = camera.ray(x as f32 + 0.5, y as f32 + 0.5).normalize();
+        let ray = atmo::geometry::Ray {
+            origin: camera.position,
+            dir,
+        };
+        let far = camera.far * camera.ray(x as f32 + 0.5, y as f32 + 0.5).length();
+        let end = scene.objects.hit(&ray, far).map_or(far, |hit| hit.t);
+        let want = (-scene.haze.extinction
+            * scene
+                .haze
+                .length_inside(camera.position, camera.position + end * dir))
+        .exp();
+        worst = worst.max((white[1] - black[1] - want).abs());
+        assert_eq!(white[3], 1.0, "the target's alpha is kept");
+    }
+    eprintln!("the haze's transmittance: worst difference {worst:.2e}");
+    assert!(worst < 1e-3, "transmittance off by {worst}");
 }

@@ -55,7 +55,9 @@ gpu_struct! {
         phase_size: u32,
         light_map_size: u32,
         attenuation_size: u32,
-        pad0: u32,
+        /// 1: the surfaces' own light is drawn; 0: the haze alone, its transmittance
+        /// in alpha ([`GpuShafts::haze_over`]).
+        surfaces: u32,
         pad1: u32,
     }
 }
@@ -222,6 +224,29 @@ impl GpuShafts {
         scene: &Scene,
         pipelines: std::sync::Arc<ShaftsPipelines>,
     ) -> Result<Self, GpuError> {
+        GpuShafts::upload(gpu, scene, pipelines, true)
+    }
+
+    /// The haze of `scene` alone, for drawing over a scene an engine shaded itself
+    /// (with [`ShaftsPass::over`]): each pixel's light scattered toward the eye in front
+    /// of the first surface (shafts (1)'s second term, the objects still casting their
+    /// shadows and ending the rays), and in alpha the haze's transmittance to that
+    /// surface (the mean over the pixel's rays), which dims what the engine drew there.
+    pub fn haze_over(
+        gpu: &Gpu,
+        scene: &Scene,
+        pipelines: std::sync::Arc<ShaftsPipelines>,
+    ) -> Result<Self, GpuError> {
+        GpuShafts::upload(gpu, scene, pipelines, false)
+    }
+
+    /// Uploads `scene`, drawing its surfaces' own light where `surfaces`.
+    fn upload(
+        gpu: &Gpu,
+        scene: &Scene,
+        pipelines: std::sync::Arc<ShaftsPipelines>,
+        surfaces: bool,
+    ) -> Result<Self, GpuError> {
         let camera = &scene.camera;
         let (w, h, k) = (camera.width, camera.height, camera.supersampling);
         let (tan_half_width, tan_half_height) = camera.pinhole("the sample planes")?;
@@ -296,7 +321,7 @@ impl GpuShafts {
             phase_size: PhaseTable::SIZE as u32,
             light_map_size: IntensityMap::SIZE as u32,
             attenuation_size: AttenuationTable::SIZE as u32,
-            pad0: 0,
+            surfaces: surfaces as u32,
             pad1: 0,
         };
         let uniform = gpu.uniform("the shafts' parameters", &params);
@@ -505,8 +530,9 @@ impl GpuShafts {
 /// The shafts' picture drawn into a caller's colour target of one format: a
 /// full-screen triangle reading the picture [`GpuShafts::prepare`] recorded, pixel for
 /// pixel from [`ShaftsPass::corner`] (linear radiance times [`ShaftsPass::exposure`];
-/// an `*Srgb` format encodes it on store). Made once and kept: its pipeline is
-/// compiled here.
+/// an `*Srgb` format encodes it on store), in place of what the target holds
+/// ([`ShaftsPass::new`]) or over it ([`ShaftsPass::over`]). Made once and kept: its
+/// pipeline is compiled here.
 pub struct ShaftsPass {
     pipeline: wgpu::RenderPipeline,
     params: wgpu::Buffer,
@@ -519,17 +545,46 @@ pub struct ShaftsPass {
 }
 
 impl ShaftsPass {
-    /// The pass for colour targets of `format`: refused by name where the device
-    /// cannot render to it.
+    /// The pass for colour targets of `format`, writing the picture in place of what
+    /// they hold: refused by name where the device cannot render to it.
     pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Result<Self, GpuError> {
+        ShaftsPass::made(gpu, format.into(), 1)
+    }
+
+    /// The pass for colour targets of `format` with `samples` samples a pixel holding a
+    /// scene, drawing the haze of [`GpuShafts::haze_over`] over it: `dst T + S` (the
+    /// target's colour dimmed by the haze's transmittance, plus its light; the target's
+    /// alpha kept).
+    pub fn over(gpu: &Gpu, format: wgpu::TextureFormat, samples: u32) -> Result<Self, GpuError> {
+        let blend = wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::SrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+        };
+        let target = wgpu::ColorTargetState {
+            format,
+            blend: Some(blend),
+            write_mask: wgpu::ColorWrites::ALL,
+        };
+        ShaftsPass::made(gpu, target, samples)
+    }
+
+    fn made(gpu: &Gpu, target: wgpu::ColorTargetState, samples: u32) -> Result<Self, GpuError> {
         let module = wgsl::module(gpu, "screen.wgsl shafts_frame.wgsl")?;
         let pipeline = gpu.screen_pipeline(
             "the shafts' picture pass",
             &module,
             None,
-            &[Some(format.into())],
+            &[Some(target)],
             None,
-            1,
+            samples,
         )?;
         Ok(ShaftsPass {
             pipeline,
