@@ -140,7 +140,7 @@ impl Gpu {
         Ok(())
     }
 
-    /// A storage buffer of `contents` (at least 4 bytes: empty arrays get one zero word),
+    /// A storage buffer of `contents` (an empty one 256 zero bytes: room for a record),
     /// checked against the device's binding limit.
     pub fn storage(
         &self,
@@ -156,7 +156,9 @@ impl Gpu {
             "max_storage_buffer_binding_size",
             setting,
         )?;
-        let zero = [0u8; 4];
+        // A shader's runtime-sized array is bound with room for one element at least:
+        // an empty one gets 256 zero bytes, more than any of atmo's records.
+        let zero = [0u8; 256];
         let contents = if contents.is_empty() {
             &zero[..]
         } else {

@@ -29,6 +29,8 @@
 //! for Bevy's own Atmosphere. docs/bevy.md says what the plugin does and does not do.
 
 mod aerial;
+mod beam_pass;
+mod beams;
 mod cloud_pass;
 mod clouds;
 mod render;
@@ -42,6 +44,7 @@ use bevy::prelude::*;
 use bevy::render::{ExtractSchedule, Render, RenderApp, RenderStartup, RenderSystems};
 use bevy::transform::TransformSystems;
 
+pub use beams::{AtmoBeam, AtmoHaze};
 pub use clouds::{AtmoClouds, AtmoCloudsState};
 pub use sky::{AtmoSky, AtmoSkyState, SkySource};
 pub use skylight::SkyLight;
@@ -50,8 +53,8 @@ pub use sun::{AtmoSun, AtmoSunAt};
 /// What a Bevy program imports to use atmo.
 pub mod prelude {
     pub use crate::{
-        AtmoClouds, AtmoCloudsState, AtmoPlugin, AtmoSky, AtmoSkyState, AtmoSun, AtmoSunAt,
-        SkyLight, SkySource,
+        AtmoBeam, AtmoClouds, AtmoCloudsState, AtmoHaze, AtmoPlugin, AtmoSky, AtmoSkyState,
+        AtmoSun, AtmoSunAt, SkyLight, SkySource,
     };
 }
 
@@ -62,7 +65,9 @@ pub struct AtmoPlugin;
 impl Plugin for AtmoPlugin {
     fn build(&self, app: &mut App) {
         app.init_resource::<sun::SunNow>()
+            .init_resource::<beams::Beams>()
             .register_type::<AtmoSun>()
+            .register_type::<AtmoBeam>()
             .add_systems(
                 PostUpdate,
                 (
@@ -70,6 +75,7 @@ impl Plugin for AtmoPlugin {
                     sun::light_the_sun,
                     skylight::light_the_scene,
                     clouds::light_the_clouds,
+                    beams::gather_beams,
                 )
                     .chain()
                     .after(TransformSystems::Propagate),
@@ -83,14 +89,20 @@ impl Plugin for AtmoPlugin {
             return;
         };
         render_app
+            .init_resource::<beam_pass::ExtractedBeams>()
             .add_systems(RenderStartup, render::init_gpu)
             .add_systems(
                 ExtractSchedule,
-                (render::extract_skies, cloud_pass::extract_clouds),
+                (
+                    render::extract_skies,
+                    cloud_pass::extract_clouds,
+                    beam_pass::extract_beams,
+                ),
             )
             .add_systems(
                 Render,
-                cloud_pass::prepare_clouds.in_set(RenderSystems::PrepareResources),
+                (cloud_pass::prepare_clouds, beam_pass::prepare_beams)
+                    .in_set(RenderSystems::PrepareResources),
             )
             // After the views' depth textures exist (made in PrepareResources).
             .add_systems(
@@ -101,7 +113,8 @@ impl Plugin for AtmoPlugin {
             )
             .add_systems(
                 Core3d,
-                render::draw_sky
+                (render::draw_sky, beam_pass::draw_beams)
+                    .chain()
                     .after(main_opaque_pass_3d)
                     .before(main_transparent_pass_3d),
             );

@@ -1,0 +1,206 @@
+//! Beams in haze (shafts): Bevy's `SpotLight`s marked [`AtmoBeam`] scattering in the
+//! [`AtmoHaze`] of a camera, by atmo's sample planes (shafts 4), shadowed by the
+//! scene's meshes. The main world's part: the lights as atmo's spotlights each frame,
+//! and the meshes that cast shadows as atmo's triangle meshes (with their BVHs), made
+//! again only when one of them moved, changed or went.
+
+use std::sync::Arc;
+
+use atmo::atmosphere::PhaseFunction;
+use atmo::geometry::{Aabb, Shape};
+use atmo::shafts::haze::Haze;
+use atmo::shafts::objects::Object;
+use atmo::shafts::spotlight::{light_frame, Falloff, Profile, Spotlight};
+use bevy::asset::AssetEvent;
+use bevy::light::NotShadowCaster;
+use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
+use bevy::prelude::*;
+
+/// Haze in front of a camera that the [`AtmoBeam`] spotlights scatter in: put it on
+/// the camera's entity. Outside `bounds` the air is clear; without bounds the haze
+/// fills all space, and a ray that meets no mesh sees nothing through it.
+#[derive(Component, Clone, Debug)]
+pub struct AtmoHaze {
+    /// Extinction coefficient, 1/m (0.12: a stage haze, about 25 m visibility).
+    pub extinction: f32,
+    /// Single-scattering albedo, in [0, 1].
+    pub albedo: f32,
+    /// The haze particles' phase function (the paper's haze: shafts (4)).
+    pub phase: PhaseFunction,
+    /// Where the haze is: the box between two corners, m, world frame.
+    pub bounds: Option<(Vec3, Vec3)>,
+    /// Sample planes through each light's lit volume (shafts (5): 30, the paper's).
+    pub planes: u32,
+    /// Texels along each side of a light's shadow map.
+    pub shadow_map: u32,
+}
+
+impl Default for AtmoHaze {
+    /// The paper's Fig. 6 haze: 0.12 /m, albedo 0.9, its phase function (exponent 16),
+    /// everywhere; 30 planes, 512^2 shadow maps.
+    fn default() -> Self {
+        AtmoHaze {
+            extinction: 0.12,
+            albedo: 0.9,
+            phase: PhaseFunction::PaperHaze { exponent: 16.0 },
+            bounds: None,
+            planes: 30,
+            shadow_map: 512,
+        }
+    }
+}
+
+impl AtmoHaze {
+    /// atmo's haze, checked: errors name the field and its allowed range.
+    pub(crate) fn haze(&self) -> atmo::Result<Haze> {
+        let invalid = |what: String| Err(atmo::Error::Invalid(what));
+        if !(self.extinction.is_finite() && self.extinction > 0.0) {
+            return invalid(format!(
+                "AtmoHaze.extinction: {} /m, allowed: above 0, finite",
+                self.extinction
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.albedo) {
+            return invalid(format!("AtmoHaze.albedo: {}, allowed: 0 to 1", self.albedo));
+        }
+        if let Some((a, b)) = self.bounds {
+            if !(a.cmplt(b).all() && a.is_finite() && b.is_finite()) {
+                return invalid(format!(
+                    "AtmoHaze.bounds: {a} to {b}, allowed: a finite box, the first corner the least"
+                ));
+            }
+        }
+        Ok(Haze {
+            extinction: self.extinction,
+            albedo: self.albedo,
+            phase: self.phase,
+            bounds: self.bounds.map(|(min, max)| Aabb { min, max }),
+        })
+    }
+}
+
+/// Marks a `SpotLight` whose light scatters in every [`AtmoHaze`]: a beam of the
+/// spotlight's colour and intensity (Bevy's: its lumens over 4 pi sr, in candela),
+/// full inside `inner_angle`, falling to nothing at `outer_angle` as a smoothstep in the
+/// angle (Bevy's own falloff is a square in the cosine: the beam's edge is a little
+/// softer than the lit floor's).
+#[derive(Component, Clone, Copy, Debug, Default, Reflect)]
+#[reflect(Component, Default)]
+#[require(SpotLight)]
+pub struct AtmoBeam;
+
+/// The beams of this frame and the meshes that shadow them, as atmo's; shared with
+/// the render world.
+#[derive(Resource, Default)]
+pub(crate) struct Beams {
+    pub lights: Vec<Spotlight>,
+    /// The meshes that cast shadows, and a count that changes when they do.
+    pub occluders: Arc<Vec<Object>>,
+    pub generation: u64,
+    /// Some mesh was not loaded when they were last made: made again next frame.
+    pending: bool,
+}
+
+/// A light's beam as atmo's spotlight: at the light, along its forward (-z).
+fn spotlight(transform: &GlobalTransform, light: &SpotLight) -> Option<Spotlight> {
+    let forward = transform.forward().as_vec3();
+    let up = if forward.y.abs() > 0.999 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    };
+    let field_half = light.outer_angle.min(89.9f32.to_radians());
+    if field_half <= 0.0 {
+        return None;
+    }
+    let candela = light.intensity / (4.0 * std::f32::consts::PI);
+    let colour = Vec3::from_slice(&light.color.to_linear().to_f32_array()[..3]);
+    Some(Spotlight::new(
+        transform.translation(),
+        light_frame(forward, up)?,
+        colour * candela,
+        field_half,
+        Profile::Beam {
+            beam_half: light.inner_angle.clamp(0.0, field_half),
+            falloff: Falloff::Smooth,
+        },
+        None,
+    ))
+}
+
+/// The triangles of `mesh` placed by `transform`, world frame; `None` for a mesh that
+/// is not a triangle list with positions.
+fn triangles(mesh: &Mesh, transform: &GlobalTransform) -> Option<Vec<[Vec3; 3]>> {
+    if mesh.primitive_topology() != PrimitiveTopology::TriangleList {
+        return None;
+    }
+    let Some(VertexAttributeValues::Float32x3(positions)) =
+        mesh.attribute(Mesh::ATTRIBUTE_POSITION)
+    else {
+        return None;
+    };
+    let world: Vec<Vec3> = positions
+        .iter()
+        .map(|p| transform.transform_point(Vec3::from_array(*p)))
+        .collect();
+    let corners: Vec<usize> = match mesh.indices() {
+        Some(Indices::U16(i)) => i.iter().map(|&k| k as usize).collect(),
+        Some(Indices::U32(i)) => i.iter().map(|&k| k as usize).collect(),
+        None => (0..world.len()).collect(),
+    };
+    corners
+        .as_chunks::<3>()
+        .0
+        .iter()
+        .map(|t| Some([*world.get(t[0])?, *world.get(t[1])?, *world.get(t[2])?]))
+        .collect()
+}
+
+/// A mesh moved or given another mesh this frame.
+type MovedMesh = (
+    With<Mesh3d>,
+    Or<(Changed<GlobalTransform>, Changed<Mesh3d>)>,
+);
+
+/// A mesh that may cast a shadow into the beams.
+type Occluder<'a> = (&'a Mesh3d, &'a GlobalTransform);
+
+/// Takes this frame's beams, and the shadows' meshes again where one of them moved,
+/// changed, came or went (nothing of either without a beam).
+pub(crate) fn gather_beams(
+    mut beams: ResMut<Beams>,
+    lights: Query<(&GlobalTransform, &SpotLight), With<AtmoBeam>>,
+    occluders: Query<Occluder, Without<NotShadowCaster>>,
+    changed: Query<(), MovedMesh>,
+    mut removed: RemovedComponents<Mesh3d>,
+    mut edited: MessageReader<AssetEvent<Mesh>>,
+    meshes: Res<Assets<Mesh>>,
+) {
+    beams.lights = lights
+        .iter()
+        .filter_map(|(transform, light)| spotlight(transform, light))
+        .collect();
+    let moved = !changed.is_empty() || removed.read().count() > 0 || edited.read().count() > 0;
+    if beams.lights.is_empty() || !(moved || beams.pending || beams.generation == 0) {
+        return;
+    }
+    let mut pending = false;
+    let mut objects = Vec::new();
+    for (mesh, transform) in &occluders {
+        let Some(mesh) = meshes.get(&mesh.0) else {
+            pending = true;
+            continue;
+        };
+        if let Some(triangles) = triangles(mesh, transform).filter(|t| !t.is_empty()) {
+            objects.push(Object {
+                shape: Shape::Mesh(atmo::geometry::Mesh::new(triangles)),
+                // Unseen: the surfaces are Bevy's to shade.
+                albedo: Vec3::ZERO,
+                casts_shadow: true,
+            });
+        }
+    }
+    beams.occluders = Arc::new(objects);
+    beams.generation += 1;
+    beams.pending = pending;
+}

@@ -1,0 +1,211 @@
+//! The plugin's beams held to `atmo shafts`' CPU picture (the sample planes, every
+//! pixel): the paper's Fig. 6 light and haze, in an empty scene, and with a floor and a
+//! sphere (black, so that the picture is the haze's light alone) shadowing the beam,
+//! with MSAA 4x.
+
+mod common;
+
+use atmo::atmosphere::PhaseFunction;
+use atmo::geometry::{Aabb, Shape};
+use atmo::image::{Display, Frame, ToneMap};
+use atmo::shafts::haze::Haze;
+use atmo::shafts::objects::{Object, Objects};
+use atmo::shafts::scene::IntensityUnit;
+use atmo::shafts::spotlight::{light_frame, Falloff, Profile, Spotlight};
+use atmo::shafts::{PlaneSettings, SamplePlanes, Scene};
+use atmo::view::{Camera as AtmoCamera, Fov};
+use bevy::camera::ClearColorConfig;
+use bevy::prelude::*;
+use bevy_atmo::prelude::*;
+use common::{app, settled, EXPOSURE, HEIGHT, WIDTH};
+
+/// The paper's Fig. 6: the camera, the lamp and where it aims, m.
+const EYE: Vec3 = Vec3::new(0.0, 1.4, 6.5);
+const LOOK_AT: Vec3 = Vec3::new(0.0, 1.1, 0.0);
+const LAMP: Vec3 = Vec3::new(-4.2, 3.0, -1.2);
+const AIM: Vec3 = Vec3::new(0.6, 0.0, 0.2);
+/// On its axis, cd; its beam and field, half-angles in degrees.
+const CANDELA: f32 = 1500.0;
+const BEAM_HALF_DEG: f32 = 12.0;
+const FIELD_HALF_DEG: f32 = 17.0;
+/// The sphere's centre and radius, m.
+const SPHERE: Vec3 = Vec3::new(-1.5, 1.6, -0.6);
+const RADIUS: f32 = 0.5;
+
+/// Fig. 6's display.
+const DISPLAY: Display = Display {
+    exposure: 0.6,
+    tone: ToneMap::Exponential,
+};
+
+fn haze() -> AtmoHaze {
+    AtmoHaze {
+        bounds: Some((Vec3::new(-8.0, 0.0, -8.0), Vec3::new(8.0, 6.0, 8.0))),
+        ..AtmoHaze::default()
+    }
+}
+
+/// atmo's picture of the light in the haze, with `objects` (black) in it.
+fn reference(objects: Vec<Shape>) -> Frame {
+    let h = haze();
+    let (min, max) = h.bounds.unwrap();
+    let forward = (AIM - LAMP).normalize();
+    let scene = Scene {
+        // The plugin's far plane: the haze box's farthest corner.
+        camera: AtmoCamera::look_at(EYE, LOOK_AT, Vec3::Y, Fov::Vertical(45.0), (WIDTH, HEIGHT))
+            .unwrap()
+            .with_far(Vec3::new(-8.0, 6.0, -8.0).distance(EYE))
+            .unwrap(),
+        haze: Haze {
+            extinction: h.extinction,
+            albedo: h.albedo,
+            phase: PhaseFunction::PaperHaze { exponent: 16.0 },
+            bounds: Some(Aabb { min, max }),
+        },
+        spotlights: vec![Spotlight::new(
+            LAMP,
+            light_frame(forward, Vec3::Y).unwrap(),
+            Vec3::splat(CANDELA),
+            FIELD_HALF_DEG.to_radians(),
+            Profile::Beam {
+                beam_half: BEAM_HALF_DEG.to_radians(),
+                falloff: Falloff::Smooth,
+            },
+            None,
+        )],
+        objects: Objects {
+            list: objects
+                .into_iter()
+                .map(|shape| Object {
+                    shape,
+                    albedo: Vec3::ZERO,
+                    casts_shadow: true,
+                })
+                .collect(),
+        },
+        planes: PlaneSettings {
+            adaptive: false,
+            ..PlaneSettings::default()
+        },
+        display: DISPLAY,
+        unit: IntensityUnit::Candela,
+        files: Vec::new(),
+        files_bytes: 0,
+        show: Default::default(),
+    };
+    SamplePlanes::new(&scene).render()
+}
+
+/// The plugin's picture of the same light and haze (black behind), with `msaa` and
+/// what `furnish` adds, as radiance.
+fn drawn(msaa: Msaa, furnish: impl FnOnce(&mut World)) -> Option<Frame> {
+    let mut app = app((
+        haze(),
+        msaa,
+        Camera {
+            clear_color: ClearColorConfig::Custom(Color::BLACK),
+            ..default()
+        },
+        Transform::from_translation(EYE).looking_at(LOOK_AT, Vec3::Y),
+    ))?;
+    let world = app.world_mut();
+    world.spawn((
+        AtmoBeam,
+        SpotLight {
+            intensity: CANDELA * 4.0 * std::f32::consts::PI,
+            inner_angle: BEAM_HALF_DEG.to_radians(),
+            outer_angle: FIELD_HALF_DEG.to_radians(),
+            shadow_maps_enabled: false,
+            ..default()
+        },
+        Transform::from_translation(LAMP).looking_at(AIM, Vec3::Y),
+    ));
+    furnish(world);
+    let shot = settled(&mut app);
+    let mut frame = Frame::new(WIDTH, HEIGHT);
+    for (p, s) in frame.pixels.iter_mut().zip(&shot) {
+        *p = Vec3::new(s[0], s[1], s[2]) / EXPOSURE.exposure();
+    }
+    Some(frame)
+}
+
+/// Asserts `got` within 1 level RMS of `want` (the bound), and not dark.
+fn check(got: &Frame, want: &Frame, what: &str) {
+    if let Ok(dir) = std::env::var("ATMO_TEST_PICTURES") {
+        let dir = std::path::Path::new(&dir);
+        let name = what.replace(' ', "-");
+        got.write(
+            &dir.join(format!("bevy-{name}.png")),
+            DISPLAY.exposure,
+            DISPLAY.tone,
+        )
+        .unwrap();
+        want.write(
+            &dir.join(format!("atmo-{name}.png")),
+            DISPLAY.exposure,
+            DISPLAY.tone,
+        )
+        .unwrap();
+    }
+    let e = got.level_errors(want, DISPLAY).unwrap();
+    eprintln!(
+        "{what}: plugin vs atmo shafts RMS {:.3}, max {:.3} levels",
+        e.rms, e.max
+    );
+    let brightest = want.pixels.iter().map(|p| p.y).fold(0.0, f32::max);
+    assert!(
+        brightest * DISPLAY.exposure > 0.5,
+        "{what}: the beam is dark"
+    );
+    assert!(e.rms <= 1.0, "{what}: RMS {:.3} levels (bound 1)", e.rms);
+}
+
+#[test]
+fn a_beam_in_an_empty_scene_is_atmo_shafts() {
+    let Some(frame) = drawn(Msaa::Off, |_| {}) else {
+        return;
+    };
+    check(&frame, &reference(Vec::new()), "empty scene");
+}
+
+#[test]
+fn a_floor_and_a_sphere_end_and_shadow_the_beam_with_msaa_4x() {
+    let black = StandardMaterial {
+        base_color: Color::BLACK,
+        unlit: true,
+        ..default()
+    };
+    let Some(frame) = drawn(Msaa::Sample4, |world| {
+        let mut meshes = world.resource_mut::<Assets<Mesh>>();
+        let floor = meshes.add(Plane3d::default().mesh().size(16.0, 16.0));
+        let sphere = meshes.add(Sphere::new(RADIUS).mesh().ico(5).unwrap());
+        let material = world.resource_mut::<Assets<StandardMaterial>>().add(black);
+        world.spawn((Mesh3d(floor), MeshMaterial3d(material.clone())));
+        world.spawn((
+            Mesh3d(sphere),
+            MeshMaterial3d(material),
+            Transform::from_translation(SPHERE),
+        ));
+    }) else {
+        return;
+    };
+    let floor = Shape::Plane {
+        point: Vec3::ZERO,
+        normal: Vec3::Y,
+    };
+    let sphere = Shape::Sphere {
+        center: SPHERE,
+        radius: RADIUS,
+    };
+    let want = reference(vec![floor.clone(), sphere]);
+    check(&frame, &want, "floor and sphere");
+    // The sphere's shadow is in the picture: without it the beam is brighter.
+    let unshadowed = reference(vec![floor]);
+    let sum = |f: &Frame| f.pixels.iter().map(|p| p.y).sum::<f32>();
+    assert!(
+        sum(&unshadowed) > 1.02 * sum(&want),
+        "the sphere casts no shadow: {} vs {}",
+        sum(&unshadowed),
+        sum(&want)
+    );
+}
