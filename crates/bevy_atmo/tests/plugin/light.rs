@@ -2,8 +2,7 @@
 //! `AmbientLight`, against atmo's `Sunlight` and the sky's irradiance, and against what
 //! daylight measures.
 
-mod common;
-
+use crate::common::{app, earth_model, settled};
 use atmo::atmosphere::spectrum::srgb_luminance;
 use atmo::sky::lighting::{irradiance_up, Sunlight, PROJECTION_ROWS};
 use atmo::sky::SkyPicture;
@@ -11,7 +10,6 @@ use atmo::view::Sun;
 use atmo::Atmosphere;
 use bevy::prelude::*;
 use bevy_atmo::prelude::*;
-use common::{app, earth_model, settled};
 
 const ALTITUDE_M: f32 = 1000.0;
 

@@ -1,8 +1,6 @@
 //! A headless Bevy app with the plugin, rendering into an image that is read back: what
 //! every test of the plugin shares.
 
-#![allow(dead_code)] // each test binary uses its own part
-
 use std::time::{Duration, Instant};
 
 use bevy::camera::{Exposure, RenderTarget};
@@ -12,8 +10,7 @@ use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use bevy_atmo::prelude::*;
 
-#[path = "../../examples/scene/mod.rs"]
-mod scene;
+use crate::scene;
 
 /// The picture's size: rows of 64 f32 RGBA pixels are 1024 bytes, a whole number of
 /// wgpu's 256-byte copy rows, so the read-back has no padding.

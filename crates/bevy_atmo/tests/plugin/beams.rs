@@ -3,8 +3,7 @@
 //! sphere (black, so that the picture is the haze's light alone) shadowing the beam,
 //! with MSAA 4x.
 
-mod common;
-
+use crate::common::{app, settled, EXPOSURE, HEIGHT, WIDTH};
 use atmo::atmosphere::PhaseFunction;
 use atmo::geometry::{Aabb, Shape};
 use atmo::image::{Display, Frame, ToneMap};
@@ -17,7 +16,6 @@ use atmo::view::{Camera as AtmoCamera, Fov};
 use bevy::camera::ClearColorConfig;
 use bevy::prelude::*;
 use bevy_atmo::prelude::*;
-use common::{app, settled, EXPOSURE, HEIGHT, WIDTH};
 
 /// The paper's Fig. 6: the camera, the lamp and where it aims, m.
 const EYE: Vec3 = Vec3::new(0.0, 1.4, 6.5);

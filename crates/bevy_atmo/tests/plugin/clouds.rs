@@ -2,8 +2,9 @@
 //! and sun, lit by the same sky, in front of the same sky, with MSAA 4x and a mesh in
 //! front of the cloud.
 
-mod common;
-
+use crate::common::{
+    app, around_the_box, atmo_camera, black_box, earth_model, radiance, settled, HEIGHT, WIDTH,
+};
 use atmo::clouds::render::CloudLight;
 use atmo::clouds::{Cumulus, Particle, Splat};
 use atmo::cloudscape::{haze_before, CpuClouds};
@@ -12,9 +13,6 @@ use atmo::sky::{Daylight, SkyPicture, SkySettings, View};
 use atmo::view::{Camera as AtmoCamera, Fov, Sun};
 use bevy::prelude::*;
 use bevy_atmo::prelude::*;
-use common::{
-    app, around_the_box, atmo_camera, black_box, earth_model, radiance, settled, HEIGHT, WIDTH,
-};
 
 /// The camera's place, m.
 const EYE: Vec3 = Vec3::new(0.0, 1000.0, 0.0);

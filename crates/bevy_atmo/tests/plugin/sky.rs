@@ -1,16 +1,14 @@
 //! The plugin's sky held to `atmo sky`'s: the same camera and sun drawn on the CPU
 //! (`SkyPicture`, which the CLI renders), compared under the CLI's PNG display.
 
-mod common;
-
 use std::sync::{Arc, OnceLock};
 
+use crate::common::{app, around_the_box, atmo_camera, black_box, earth_model, radiance, settled};
 use atmo::image::{Display, Frame, ToneMap};
 use atmo::sky::{SkyPicture, SkylightTable, TableSettings, View};
 use atmo::view::Sun;
 use bevy::prelude::*;
 use bevy_atmo::prelude::*;
-use common::{app, around_the_box, atmo_camera, black_box, earth_model, radiance, settled};
 
 /// The camera's altitude, m: the plugin builds its model for it.
 const ALTITUDE_M: f32 = 1000.0;

@@ -2,12 +2,10 @@
 //! few kilometres off, seen as `T L + S` with `T` and `S` of `SkyModel::aerial_along`
 //! for the ray through each box's pixel, cut at the box's face.
 
-mod common;
-
+use crate::common::{app, atmo_camera, earth_model, scale, settled, WIDTH};
 use atmo::view::Sun;
 use bevy::prelude::*;
 use bevy_atmo::prelude::*;
-use common::{app, atmo_camera, earth_model, scale, settled, WIDTH};
 
 const ALTITUDE_M: f32 = 1000.0;
 
