@@ -1,5 +1,6 @@
 //! The frame time of one scene drawn with bevy_atmo (atmo's every-order sky, alone, with
-//! its aerial perspective, and with its environment map light too), against the same
+//! its aerial perspective, with its environment map light too, and with the aerial
+//! perspective and a cumulus of 20,000 particles), against the same
 //! scene without a sky and with Bevy's own `Atmosphere` (Hillaire 2020: its LUTs, sky
 //! and aerial perspective), in the same run: a JSON line a case as `atmo bench --json`
 //! prints, the ratio the baseline's time over atmo's.
@@ -28,12 +29,17 @@ use bevy_atmo::prelude::*;
 mod scene;
 
 /// Whose sky the scene is drawn with: none (Bevy's clear colour), Bevy's Atmosphere,
-/// or atmo's (with or without its aerial perspective and its environment map light).
+/// or atmo's (with or without its aerial perspective, its environment map light and a
+/// cloud).
 #[derive(Clone, Copy)]
 enum Sky {
     None,
     Bevy,
-    Atmo { aerial: bool, light: bool },
+    Atmo {
+        aerial: bool,
+        light: bool,
+        cloud: bool,
+    },
 }
 
 fn main() {
@@ -67,6 +73,7 @@ fn main() {
             Sky::Atmo {
                 aerial: false,
                 light: false,
+                cloud: false,
             },
             none,
         ),
@@ -75,6 +82,7 @@ fn main() {
             Sky::Atmo {
                 aerial: true,
                 light: false,
+                cloud: false,
             },
             none,
         ),
@@ -83,6 +91,16 @@ fn main() {
             Sky::Atmo {
                 aerial: true,
                 light: true,
+                cloud: false,
+            },
+            none,
+        ),
+        (
+            "bevy.sky-haze-and-cloud",
+            Sky::Atmo {
+                aerial: true,
+                light: false,
+                cloud: true,
             },
             none,
         ),
@@ -152,14 +170,18 @@ fn median_frame_ms(sky: Sky, frames: usize, size: (u32, u32), msaa: u32) -> (f64
             .expect("the GPU finished the frame");
         start.elapsed().as_secs_f64() * 1e3
     };
-    // Warm-up: pipelines, and atmo's model (built on a background thread).
+    // Warm-up: pipelines, and atmo's models (built on a background thread).
     let mut ready = 0;
     while ready < 10 {
         frame(&mut app);
         let mut skies = app.world_mut().query::<&AtmoSkyState>();
+        let mut clouds = app.world_mut().query::<&AtmoCloudsState>();
         let built = skies
             .iter(app.world())
-            .all(|s| s.is_ready() && !s.is_building());
+            .all(|s| s.is_ready() && !s.is_building())
+            && clouds
+                .iter(app.world())
+                .all(|c| c.is_ready() && !c.is_building());
         ready = if built { ready + 1 } else { 0 };
         assert!(app.should_exit().is_none(), "the renderer stopped the app");
     }
@@ -187,7 +209,11 @@ fn scene(world: &mut World, sky: Sky, (width, height): (u32, u32), msaa: u32) {
         Sky::None => {
             world.spawn((DirectionalLight::default(), sun));
         }
-        Sky::Atmo { aerial, light } => {
+        Sky::Atmo {
+            aerial,
+            light,
+            cloud,
+        } => {
             let earth = AtmoSky::earth();
             camera.insert(AtmoSky {
                 aerial_perspective: aerial,
@@ -199,6 +225,13 @@ fn scene(world: &mut World, sky: Sky, (width, height): (u32, u32), msaa: u32) {
                 ..earth
             });
             world.spawn((AtmoSun, sun));
+            if cloud {
+                // The flight's nearer cumulus, in view ahead.
+                world.spawn((
+                    AtmoClouds::cumulus(20_000),
+                    Transform::from_xyz(-1200.0, 1200.0, -5000.0),
+                ));
+            }
         }
         Sky::Bevy => {
             camera.insert(AtmosphereSettings::default());

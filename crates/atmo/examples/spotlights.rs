@@ -1,7 +1,7 @@
 //! Shafts of light (the shafts paper): a spotlight in stage haze cut by a sphere's
 //! shadow, described in TOML as a scene file would, rendered by the sample planes.
 //!
-//! `cargo run --release -p atmo --example stage -- stage.png`
+//! `cargo run --release -p atmo --example spotlights -- stage.png`
 
 use atmo::shafts::{SamplePlanes, Scene};
 
