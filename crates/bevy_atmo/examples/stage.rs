@@ -1,4 +1,5 @@
-//! A stage in haze: three moving spotlights sweep over a floor, their beams scattered by
+//! A stage in haze: three moving spotlights (one through a gobo) sweep over a floor, their
+//! beams scattered by
 //! atmo's sample planes (shafts), a sphere and a truss cutting shadows into them; Bevy
 //! lights the surfaces with the same spotlights.
 //!
@@ -10,6 +11,7 @@
 //! and exits.
 
 use std::f32::consts::PI;
+use std::path::Path;
 
 use bevy::camera::{ClearColorConfig, Exposure};
 use bevy::core_pipeline::tonemapping::Tonemapping;
@@ -151,7 +153,12 @@ fn setup(
             Transform::from_xyz(x, 2.1, truss_at.z),
         ));
     }
-    // Three heads above the truss, warm, white and cool, each 6000 cd on its axis.
+    // Three heads above the truss, warm, white and cool, each 6000 cd on its axis; the
+    // white one projects a gobo of spokes.
+    let spokes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/gobos/spokes.png");
+    let gobo = AtmoBeam::default()
+        .with_gobo(&spokes)
+        .expect("the repository's gobo");
     for (k, colour) in [
         Color::srgb(1.0, 0.75, 0.5),
         Color::WHITE,
@@ -162,7 +169,11 @@ fn setup(
     {
         let at = Vec3::new(-4.0 + 4.0 * k as f32, 6.5, 1.0);
         commands.spawn((
-            AtmoBeam,
+            if k == 1 {
+                gobo.clone()
+            } else {
+                AtmoBeam::default()
+            },
             SpotLight {
                 color: colour,
                 intensity: 6000.0 * 4.0 * PI,

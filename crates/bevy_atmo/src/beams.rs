@@ -4,13 +4,16 @@
 //! and the meshes that cast shadows as atmo's triangle meshes (with their BVHs), made
 //! again only when one of them moved, changed or went.
 
+use std::path::Path;
 use std::sync::Arc;
 
 use atmo::atmosphere::PhaseFunction;
 use atmo::geometry::{Aabb, Shape};
 use atmo::shafts::haze::Haze;
 use atmo::shafts::objects::Object;
-use atmo::shafts::spotlight::{light_frame, Falloff, Profile, Spotlight};
+use atmo::shafts::photometry::Photometry;
+use atmo::shafts::scene::{load_gobo, load_photometry, MEASURED_REACH_DEG};
+use atmo::shafts::spotlight::{light_frame, Falloff, Gobo, Profile, Sampling, Spotlight};
 use bevy::asset::AssetEvent;
 use bevy::light::NotShadowCaster;
 use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
@@ -83,11 +86,38 @@ impl AtmoHaze {
 /// spotlight's colour and intensity (Bevy's: its lumens over 4 pi sr, in candela),
 /// full inside `inner_angle`, falling to nothing at `outer_angle` as a smoothstep in the
 /// angle (Bevy's own falloff is a square in the cosine: the beam's edge is a little
-/// softer than the lit floor's).
-#[derive(Component, Clone, Copy, Debug, Default, Reflect)]
-#[reflect(Component, Default)]
+/// harder than the lit floor's). A measured profile or a gobo shapes it further.
+#[derive(Component, Clone, Debug, Default)]
 #[require(SpotLight)]
-pub struct AtmoBeam;
+pub struct AtmoBeam {
+    /// A measured distribution (IES LM-63 or EULUMDAT): the beam's shape and candela
+    /// (the file's, times the light's colour) in place of the spotlight's intensity
+    /// and angles, out to where the file's light ends (85 deg at most). Bevy still
+    /// lights the scene with the `SpotLight`'s own: give it the file's peak candela
+    /// times 4 pi in lumens, and its angles, for the floor to match.
+    pub profile: Option<Arc<Photometry>>,
+    /// A gobo in the beam, its image's top toward the light's up (its y).
+    pub gobo: Option<Gobo>,
+}
+
+impl AtmoBeam {
+    /// The beam shaped by the photometric file at `path` (`.ldt`: EULUMDAT, else IES
+    /// LM-63); errors name the file and what is wrong with it.
+    pub fn with_photometry(mut self, path: &Path) -> atmo::Result<Self> {
+        let eulumdat = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("ldt"));
+        self.profile = Some(Arc::new(load_photometry(path, eulumdat)?));
+        Ok(self)
+    }
+
+    /// The beam through the gobo image at `path` (PNG), sampled bilinearly; errors
+    /// name the file.
+    pub fn with_gobo(mut self, path: &Path) -> atmo::Result<Self> {
+        self.gobo = Some(load_gobo(path, Sampling::Bilinear)?);
+        Ok(self)
+    }
+}
 
 /// The beams of this frame and the meshes that shadow them, as atmo's; shared with
 /// the render world.
@@ -101,30 +131,42 @@ pub(crate) struct Beams {
     pending: bool,
 }
 
-/// A light's beam as atmo's spotlight: at the light, along its forward (-z).
-fn spotlight(transform: &GlobalTransform, light: &SpotLight) -> Option<Spotlight> {
+/// A light's beam as atmo's spotlight: at the light, along its forward (-z), its up
+/// the light's y.
+fn spotlight(transform: &GlobalTransform, light: &SpotLight, beam: &AtmoBeam) -> Option<Spotlight> {
     let forward = transform.forward().as_vec3();
     let up = if forward.y.abs() > 0.999 {
         Vec3::Z
     } else {
         Vec3::Y
     };
-    let field_half = light.outer_angle.min(89.9f32.to_radians());
+    let colour = Vec3::from_slice(&light.color.to_linear().to_f32_array()[..3]);
+    let (intensity, field_half, profile) = match &beam.profile {
+        Some(measured) => (
+            colour * measured.peak(),
+            measured.reach().min(MEASURED_REACH_DEG).to_radians(),
+            Profile::Measured(measured.clone()),
+        ),
+        None => {
+            let field_half = light.outer_angle.min(89.9f32.to_radians());
+            let profile = Profile::Beam {
+                beam_half: light.inner_angle.clamp(0.0, field_half),
+                falloff: Falloff::Smooth,
+            };
+            let candela = light.intensity / (4.0 * std::f32::consts::PI);
+            (colour * candela, field_half, profile)
+        }
+    };
     if field_half <= 0.0 {
         return None;
     }
-    let candela = light.intensity / (4.0 * std::f32::consts::PI);
-    let colour = Vec3::from_slice(&light.color.to_linear().to_f32_array()[..3]);
     Some(Spotlight::new(
         transform.translation(),
         light_frame(forward, up)?,
-        colour * candela,
+        intensity,
         field_half,
-        Profile::Beam {
-            beam_half: light.inner_angle.clamp(0.0, field_half),
-            falloff: Falloff::Smooth,
-        },
-        None,
+        profile,
+        beam.gobo.clone(),
     ))
 }
 
@@ -169,7 +211,7 @@ type Occluder<'a> = (&'a Mesh3d, &'a GlobalTransform);
 /// changed, came or went (nothing of either without a beam).
 pub(crate) fn gather_beams(
     mut beams: ResMut<Beams>,
-    lights: Query<(&GlobalTransform, &SpotLight), With<AtmoBeam>>,
+    lights: Query<(&GlobalTransform, &SpotLight, &AtmoBeam)>,
     occluders: Query<Occluder, Without<NotShadowCaster>>,
     changed: Query<(), MovedMesh>,
     mut removed: RemovedComponents<Mesh3d>,
@@ -178,7 +220,7 @@ pub(crate) fn gather_beams(
 ) {
     beams.lights = lights
         .iter()
-        .filter_map(|(transform, light)| spotlight(transform, light))
+        .filter_map(|(transform, light, beam)| spotlight(transform, light, beam))
         .collect();
     let moved = !changed.is_empty() || removed.read().count() > 0 || edited.read().count() > 0;
     if beams.lights.is_empty() || !(moved || beams.pending || beams.generation == 0) {

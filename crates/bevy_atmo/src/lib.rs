@@ -67,7 +67,6 @@ impl Plugin for AtmoPlugin {
         app.init_resource::<sun::SunNow>()
             .init_resource::<beams::Beams>()
             .register_type::<AtmoSun>()
-            .register_type::<AtmoBeam>()
             .add_systems(
                 PostUpdate,
                 (

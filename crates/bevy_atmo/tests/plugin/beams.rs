@@ -43,11 +43,39 @@ fn haze() -> AtmoHaze {
     }
 }
 
-/// atmo's picture of the light in the haze, with `objects` (black) in it.
-fn reference(objects: Vec<Shape>) -> Frame {
+/// Fig. 6's lamp as atmo's spotlight, shaped by `beam`'s profile and gobo where it has
+/// them (the plugin's reading of the same `SpotLight` and `AtmoBeam`).
+fn lamp(beam: &AtmoBeam) -> Spotlight {
+    let frame = light_frame((AIM - LAMP).normalize(), Vec3::Y).unwrap();
+    let (intensity, field_half, profile) = match &beam.profile {
+        Some(measured) => (
+            Vec3::splat(measured.peak()),
+            measured.reach().min(85.0).to_radians(),
+            Profile::Measured(measured.clone()),
+        ),
+        None => (
+            Vec3::splat(CANDELA),
+            FIELD_HALF_DEG.to_radians(),
+            Profile::Beam {
+                beam_half: BEAM_HALF_DEG.to_radians(),
+                falloff: Falloff::Smooth,
+            },
+        ),
+    };
+    Spotlight::new(
+        LAMP,
+        frame,
+        intensity,
+        field_half,
+        profile,
+        beam.gobo.clone(),
+    )
+}
+
+/// atmo's picture of `light` in the haze, with `objects` (black) in it.
+fn reference(light: Spotlight, objects: Vec<Shape>) -> Frame {
     let h = haze();
     let (min, max) = h.bounds.unwrap();
-    let forward = (AIM - LAMP).normalize();
     let scene = Scene {
         // The plugin's far plane: the haze box's farthest corner.
         camera: AtmoCamera::look_at(EYE, LOOK_AT, Vec3::Y, Fov::Vertical(45.0), (WIDTH, HEIGHT))
@@ -60,17 +88,7 @@ fn reference(objects: Vec<Shape>) -> Frame {
             phase: PhaseFunction::PaperHaze { exponent: 16.0 },
             bounds: Some(Aabb { min, max }),
         },
-        spotlights: vec![Spotlight::new(
-            LAMP,
-            light_frame(forward, Vec3::Y).unwrap(),
-            Vec3::splat(CANDELA),
-            FIELD_HALF_DEG.to_radians(),
-            Profile::Beam {
-                beam_half: BEAM_HALF_DEG.to_radians(),
-                falloff: Falloff::Smooth,
-            },
-            None,
-        )],
+        spotlights: vec![light],
         objects: Objects {
             list: objects
                 .into_iter()
@@ -94,9 +112,9 @@ fn reference(objects: Vec<Shape>) -> Frame {
     SamplePlanes::new(&scene).render()
 }
 
-/// The plugin's picture of the same light and haze (black behind), with `msaa` and
-/// what `furnish` adds, as radiance.
-fn drawn(msaa: Msaa, furnish: impl FnOnce(&mut World)) -> Option<Frame> {
+/// The plugin's picture of the same light with `beam` and haze (black behind), with
+/// `msaa` and what `furnish` adds, as radiance.
+fn drawn(beam: AtmoBeam, msaa: Msaa, furnish: impl FnOnce(&mut World)) -> Option<Frame> {
     let mut app = app((
         haze(),
         msaa,
@@ -108,7 +126,7 @@ fn drawn(msaa: Msaa, furnish: impl FnOnce(&mut World)) -> Option<Frame> {
     ))?;
     let world = app.world_mut();
     world.spawn((
-        AtmoBeam,
+        beam,
         SpotLight {
             intensity: CANDELA * 4.0 * std::f32::consts::PI,
             inner_angle: BEAM_HALF_DEG.to_radians(),
@@ -160,10 +178,42 @@ fn check(got: &Frame, want: &Frame, what: &str) {
 
 #[test]
 fn a_beam_in_an_empty_scene_is_atmo_shafts() {
-    let Some(frame) = drawn(Msaa::Off, |_| {}) else {
+    let Some(frame) = drawn(AtmoBeam::default(), Msaa::Off, |_| {}) else {
         return;
     };
-    check(&frame, &reference(Vec::new()), "empty scene");
+    check(
+        &frame,
+        &reference(lamp(&AtmoBeam::default()), Vec::new()),
+        "empty scene",
+    );
+}
+
+#[test]
+fn a_measured_profile_and_a_gobo_shape_the_beam_as_in_atmo_shafts() {
+    // The repository's IES spot and its gobo of spokes, from their files.
+    let files = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let beam = AtmoBeam::default()
+        .with_photometry(&files.join("photometry/spot.ies"))
+        .unwrap()
+        .with_gobo(&files.join("gobos/spokes.png"))
+        .unwrap();
+    let want = reference(lamp(&beam), Vec::new());
+    let Some(frame) = drawn(beam, Msaa::Off, |_| {}) else {
+        return;
+    };
+    check(&frame, &want, "measured with a gobo");
+    // The gobo is in the picture: the plain beam of the same file differs.
+    let plain = AtmoBeam::default()
+        .with_photometry(&files.join("photometry/spot.ies"))
+        .unwrap();
+    let apart = reference(lamp(&plain), Vec::new())
+        .level_errors(&want, DISPLAY)
+        .unwrap();
+    assert!(
+        apart.rms > 2.0,
+        "the gobo changes {:.2} levels RMS",
+        apart.rms
+    );
 }
 
 #[test]
@@ -173,7 +223,7 @@ fn a_floor_and_a_sphere_end_and_shadow_the_beam_with_msaa_4x() {
         unlit: true,
         ..default()
     };
-    let Some(frame) = drawn(Msaa::Sample4, |world| {
+    let Some(frame) = drawn(AtmoBeam::default(), Msaa::Sample4, |world| {
         let mut meshes = world.resource_mut::<Assets<Mesh>>();
         let floor = meshes.add(Plane3d::default().mesh().size(16.0, 16.0));
         let sphere = meshes.add(Sphere::new(RADIUS).mesh().ico(5).unwrap());
@@ -195,10 +245,11 @@ fn a_floor_and_a_sphere_end_and_shadow_the_beam_with_msaa_4x() {
         center: SPHERE,
         radius: RADIUS,
     };
-    let want = reference(vec![floor.clone(), sphere]);
+    let light = || lamp(&AtmoBeam::default());
+    let want = reference(light(), vec![floor.clone(), sphere]);
     check(&frame, &want, "floor and sphere");
     // The sphere's shadow is in the picture: without it the beam is brighter.
-    let unshadowed = reference(vec![floor]);
+    let unshadowed = reference(light(), vec![floor]);
     let sum = |f: &Frame| f.pixels.iter().map(|p| p.y).sum::<f32>();
     assert!(
         sum(&unshadowed) > 1.02 * sum(&want),

@@ -159,8 +159,9 @@ impl<'a> Assets<'a> {
 /// 180); light a file gives beyond it is left out.
 pub const MEASURED_REACH_DEG: f32 = 85.0;
 
-/// A photometric file: IES LM-63, or EULUMDAT when `eulumdat`.
-pub(super) fn load_photometry(path: &Path, eulumdat: bool) -> Result<Photometry> {
+/// A photometric file (through the bounded reader): IES LM-63, or EULUMDAT when
+/// `eulumdat`; errors name the file.
+pub fn load_photometry(path: &Path, eulumdat: bool) -> Result<Photometry> {
     let what = if eulumdat {
         "EULUMDAT file"
     } else {
@@ -179,8 +180,8 @@ pub(super) fn load_photometry(path: &Path, eulumdat: bool) -> Result<Photometry>
 /// 50 MB as texels.
 pub const GOBO_MAX_SIDE: u32 = 4096;
 
-/// A gobo from an image file (through the bounded reader).
-pub(super) fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
+/// A gobo from an image file (through the bounded reader); errors name the file.
+pub fn load_gobo(path: &Path, sampling: Sampling) -> Result<Gobo> {
     let bytes = crate::files::read_bounded(path, "gobo image", crate::files::DATA_LIMIT_BYTES)?;
     gobo_from_image(&bytes, &path.display().to_string(), sampling)
 }

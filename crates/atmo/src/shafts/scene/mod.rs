@@ -34,7 +34,9 @@ mod spec;
 #[cfg(feature = "obj")]
 pub use assets::mesh_from_obj;
 use assets::*;
-pub use assets::{gobo_from_image, load_obj, GOBO_MAX_SIDE, MEASURED_REACH_DEG};
+pub use assets::{
+    gobo_from_image, load_gobo, load_obj, load_photometry, GOBO_MAX_SIDE, MEASURED_REACH_DEG,
+};
 use build::*;
 pub use builder::{SceneBuilder, SpotlightBuilder};
 use spec::*;
