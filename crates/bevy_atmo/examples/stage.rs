@@ -1,7 +1,6 @@
-//! A stage in haze: three moving spotlights (one through a gobo) sweep over a floor, their
-//! beams scattered by
-//! atmo's sample planes (shafts), a sphere and a truss cutting shadows into them; Bevy
-//! lights the surfaces with the same spotlights.
+//! A stage in haze: three moving spotlights (one through a gobo) sweep over a floor,
+//! their beams scattered by atmo's sample planes (shafts), a sphere and a truss cutting
+//! shadows into them; Bevy lights the surfaces with the same spotlights.
 //!
 //! ```text
 //! cargo run --release -p bevy_atmo --example stage
