@@ -22,13 +22,17 @@ use bevy::prelude::*;
 /// Haze in front of a camera that the [`AtmoBeam`] spotlights scatter in: put it on
 /// the camera's entity. Outside `bounds` the air is clear; without bounds the haze
 /// fills all space, and a ray that meets no mesh sees nothing through it.
-#[derive(Component, Clone, Debug)]
+///
+/// Reflected (an inspector edits it) but for the phase function, atmo's own type.
+#[derive(Component, Clone, Debug, Reflect)]
+#[reflect(Component, Clone, Debug, Default)]
 pub struct AtmoHaze {
     /// Extinction coefficient, 1/m (0.12: a stage haze, about 25 m visibility).
     pub extinction: f32,
     /// Single-scattering albedo, in [0, 1].
     pub albedo: f32,
     /// The haze particles' phase function (the paper's haze: shafts (4)).
+    #[reflect(ignore, default = "paper_haze")]
     pub phase: PhaseFunction,
     /// Where the haze is: the box between two corners, m, world frame.
     pub bounds: Option<(Vec3, Vec3)>,
@@ -38,6 +42,11 @@ pub struct AtmoHaze {
     pub shadow_map: u32,
 }
 
+/// The paper's haze phase function (shafts (4), exponent 16).
+fn paper_haze() -> PhaseFunction {
+    PhaseFunction::PaperHaze { exponent: 16.0 }
+}
+
 impl Default for AtmoHaze {
     /// The paper's Fig. 6 haze: 0.12 /m, albedo 0.9, its phase function (exponent 16),
     /// everywhere; 30 planes, 512^2 shadow maps.
@@ -45,7 +54,7 @@ impl Default for AtmoHaze {
         AtmoHaze {
             extinction: 0.12,
             albedo: 0.9,
-            phase: PhaseFunction::PaperHaze { exponent: 16.0 },
+            phase: paper_haze(),
             bounds: None,
             planes: 30,
             shadow_map: 512,
@@ -87,7 +96,10 @@ impl AtmoHaze {
 /// full inside `inner_angle`, falling to nothing at `outer_angle` as a smoothstep in the
 /// angle (Bevy's own falloff is a square in the cosine: the beam's edge is a little
 /// harder than the lit floor's). A measured profile or a gobo shapes it further.
-#[derive(Component, Clone, Debug, Default)]
+///
+/// Reflected as a component; its profile and gobo, atmo's own types, are not.
+#[derive(Component, Clone, Debug, Default, Reflect)]
+#[reflect(Component, Clone, Debug, Default)]
 #[require(SpotLight)]
 pub struct AtmoBeam {
     /// A measured distribution (IES LM-63 or EULUMDAT): the beam's shape and candela
@@ -95,8 +107,10 @@ pub struct AtmoBeam {
     /// and angles, out to where the file's light ends (85 deg at most). Bevy still
     /// lights the scene with the `SpotLight`'s own: give it the file's peak candela
     /// times 4 pi in lumens, and its angles, for the floor to match.
+    #[reflect(ignore)]
     pub profile: Option<Arc<Photometry>>,
     /// A gobo in the beam, its image's top toward the light's up (its y).
+    #[reflect(ignore)]
     pub gobo: Option<Gobo>,
 }
 

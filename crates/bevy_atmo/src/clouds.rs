@@ -28,18 +28,40 @@ const RELIGHT_AFTER_M: f64 = 500.0;
 /// Drawn after the opaque meshes with their depth: a mesh in front hides the cloud, a
 /// mesh inside it fades into it. The light scattered more than once is atmo's transfer
 /// solve by default (`atmo clouds`' default: the nearest its path tracer).
-#[derive(Component, Clone, Debug)]
+///
+/// Reflected (an inspector edits its resolution) but for the particles, the scattering
+/// and the phase function, atmo's own types.
+#[derive(Component, Clone, Debug, Reflect)]
+#[reflect(Component, Clone, Debug)]
 #[require(Transform, SyncToRenderWorld)]
 pub struct AtmoClouds {
     /// The particles, in the entity's frame (m).
+    #[reflect(ignore, default = "no_particles")]
     pub particles: Arc<[Particle]>,
     /// Intensity buffer voxels along each axis (clouds 3.3): 128 by default; the paper
     /// draws its largest cloud through 256.
     pub resolution: usize,
     /// Single scattering, or every order and by which model.
+    #[reflect(ignore, default = "every_order")]
     pub scattering: Scattering,
     /// The droplets' phase function toward the eye.
+    #[reflect(ignore, default = "cloud_mie")]
     pub phase: PhaseFunction,
+}
+
+/// No particles, for a reflected [`AtmoClouds`] made without them.
+fn no_particles() -> Arc<[Particle]> {
+    Arc::new([])
+}
+
+/// Every order by the transfer solve, `atmo clouds`' default.
+fn every_order() -> Scattering {
+    Scattering::SOLVE
+}
+
+/// The droplets' Mie phase function.
+fn cloud_mie() -> PhaseFunction {
+    PhaseFunction::CloudMie
 }
 
 impl AtmoClouds {
@@ -70,8 +92,8 @@ impl AtmoClouds {
         AtmoClouds {
             particles: particles.into(),
             resolution: 128,
-            scattering: Scattering::SOLVE,
-            phase: PhaseFunction::CloudMie,
+            scattering: every_order(),
+            phase: cloud_mie(),
         }
     }
 }

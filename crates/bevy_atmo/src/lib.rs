@@ -67,6 +67,10 @@ impl Plugin for AtmoPlugin {
         app.init_resource::<sun::SunNow>()
             .init_resource::<beams::Beams>()
             .register_type::<AtmoSun>()
+            .register_type::<AtmoSky>()
+            .register_type::<AtmoClouds>()
+            .register_type::<AtmoHaze>()
+            .register_type::<AtmoBeam>()
             .add_systems(
                 PostUpdate,
                 (

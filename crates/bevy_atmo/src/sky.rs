@@ -20,12 +20,18 @@ use crate::skylight::SkyLight;
 ///
 /// The frame is Bevy's and atmo's alike: metres, +y up, -z north, +x east. The camera's
 /// altitude is its height above [`AtmoSky::ground_level_m`].
-#[derive(Component, Clone, Debug)]
+///
+/// Its plain fields can be edited in an inspector (`Reflect`); the atmosphere and the
+/// source, atmo's own types, are not reflected.
+#[derive(Component, Clone, Debug, Reflect)]
+#[reflect(Component, Clone, Debug)]
 #[require(Hdr)]
 pub struct AtmoSky {
     /// The atmosphere (atmo's Earth by default: molecules, aerosols, ozone).
+    #[reflect(ignore, default = "earth")]
     pub atmosphere: Arc<Atmosphere>,
     /// What the sky is drawn from.
+    #[reflect(ignore, default = "every_order")]
     pub source: SkySource,
     /// The world y of altitude 0 (the ground), m.
     pub ground_level_m: f32,
@@ -59,6 +65,16 @@ pub enum SkySource {
     /// (0 to 13 km by default) drawn continuously on the GPU, nothing rebuilt; above
     /// it, its highest altitude. Its atmosphere is the table's own.
     Table(Arc<SkylightTable>),
+}
+
+/// atmo's Earth, for a reflected [`AtmoSky`] made without one.
+fn earth() -> Arc<Atmosphere> {
+    AtmoSky::earth().atmosphere
+}
+
+/// The model of every order, for a reflected [`AtmoSky`] made without a source.
+fn every_order() -> SkySource {
+    AtmoSky::earth().source
 }
 
 impl AtmoSky {
@@ -267,5 +283,36 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
                 Ok((model, rays))
             }));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bevy::reflect::{FromReflect, GetPath};
+
+    #[test]
+    fn an_inspector_edits_the_plain_fields_and_keeps_the_rest() {
+        let mut sky = AtmoSky {
+            source: SkySource::Model {
+                settings: SkySettings::paper(),
+                rebuild_after_m: 200.0,
+            },
+            ..AtmoSky::earth()
+        };
+        *sky.path_mut::<bool>("sun_disc").unwrap() = false;
+        *sky.path_mut::<f32>("aerial_far_m").unwrap() = 20_000.0;
+        assert!(!sky.sun_disc && sky.aerial_far_m == 20_000.0);
+        assert!(
+            sky.reflect_path("atmosphere").is_err(),
+            "atmo's atmosphere reflected"
+        );
+        // Made from its reflection, the unreflected fields take the defaults.
+        let made = AtmoSky::from_reflect(&sky).unwrap();
+        assert_eq!((made.sun_disc, made.aerial_far_m), (false, 20_000.0));
+        let SkySource::Model { settings, .. } = made.source else {
+            panic!("a table")
+        };
+        assert_eq!(settings, SkySettings::default());
     }
 }

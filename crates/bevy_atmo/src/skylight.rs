@@ -21,7 +21,7 @@ use crate::sky::{AtmoSky, AtmoSkyState, ReadySky};
 use crate::sun::SunNow;
 
 /// How the sky lights a camera's scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Reflect)]
 pub enum SkyLight {
     /// Not at all (the scene's own lights only).
     Off,
