@@ -38,6 +38,8 @@ pub(crate) struct ExtractedBeams {
 pub(crate) struct ExtractedHaze {
     haze: Haze,
     planes: PlaneSettings,
+    /// The beams' resolution against the view's.
+    scale: f32,
 }
 
 /// A 3-D camera, with its haze where it has one.
@@ -70,7 +72,11 @@ pub(crate) fn extract_beams(
                 };
                 match planes.validate() {
                     Ok(()) => {
-                        entity.insert(ExtractedHaze { haze, planes });
+                        entity.insert(ExtractedHaze {
+                            haze,
+                            planes,
+                            scale: h.resolution_scale,
+                        });
                     }
                     Err(e) => {
                         warn_once!("bevy_atmo draws no beams: AtmoHaze: {e}");
@@ -142,6 +148,12 @@ pub(crate) fn prepare_beams(
         };
         atmo_camera.position = view.world_from_view.translation();
         atmo_camera.far = reach(&haze.haze, atmo_camera.position);
+        // A lower resolution: fewer pixels over the same frustum (the lens keeps it).
+        let shown = [view.viewport.z, view.viewport.w];
+        if haze.scale < 1.0 {
+            let fewer = shown.map(|s| ((s as f32 * haze.scale).ceil() as u32).max(1));
+            (atmo_camera.width, atmo_camera.height) = (fewer[0], fewer[1]);
+        }
         let frame = BeamFrame {
             camera: atmo_camera,
             haze,
@@ -149,6 +161,7 @@ pub(crate) fn prepare_beams(
             target: (target.main_texture_format(), msaa.samples()),
             exposure: camera.exposure,
             corner: [view.viewport.x, view.viewport.y],
+            shown: (haze.scale < 1.0).then_some(shown),
         };
         let done = match view_beams {
             Some(mut kept) => kept.record(gpu, &mut encoder, &shared, &frame),
@@ -181,8 +194,10 @@ struct BeamFrame<'a> {
     target: (wgpu::TextureFormat, u32),
     /// The camera's exposure (the picture is in cd/m^2, Bevy's units already).
     exposure: f32,
-    /// The viewport's corner in the target, pixels.
+    /// The viewport's corner in the target, pixels, and its size where the beams'
+    /// picture is of fewer pixels.
     corner: [u32; 2],
+    shown: Option<[u32; 2]>,
 }
 
 impl ViewBeams {
@@ -210,6 +225,7 @@ impl ViewBeams {
         self.scene.spotlights.clone_from(&frame.beams.lights);
         self.pass.exposure = frame.exposure;
         self.pass.corner = frame.corner;
+        self.pass.shown = frame.shown;
         let shafts = GpuShafts::haze_over(gpu, &self.scene, pipelines.clone())?;
         shafts.prepare(gpu, encoder, &mut self.pass, ShaftsMethod::Planes)
     }

@@ -93,8 +93,8 @@ gpu_struct! {
         width: u32,
         height: u32,
         pad0: u32,
-        pad1: u32,
-        pad2: u32,
+        /// The frame's size on the target, pixels.
+        shown: [f32; 2],
     }
 }
 
@@ -439,14 +439,15 @@ impl GpuShafts {
         method: ShaftsMethod,
     ) -> Result<(), GpuError> {
         self.encode(gpu, encoder, method);
+        let (width, height) = (self.params.width, self.params.height);
+        let shown = pass.shown.unwrap_or([width, height]);
         let params = ShaftsFrameParams {
             corner: pass.corner.map(|c| c as f32),
             exposure: pass.exposure,
-            width: self.params.width,
-            height: self.params.height,
+            width,
+            height,
             pad0: 0,
-            pad1: 0,
-            pad2: 0,
+            shown: shown.map(|s| s as f32),
         };
         gpu.queue
             .write_buffer(&pass.params, 0, bytemuck::bytes_of(&params));
@@ -542,6 +543,10 @@ pub struct ShaftsPass {
     pub exposure: f32,
     /// The target's pixel where the picture's (0, 0) goes.
     pub corner: [u32; 2],
+    /// The picture's size on the target, pixels, where it is drawn larger than it is
+    /// (a scene camera of a fraction of the target's resolution, read bilinearly);
+    /// `None`: pixel for pixel.
+    pub shown: Option<[u32; 2]>,
 }
 
 impl ShaftsPass {
@@ -595,6 +600,7 @@ impl ShaftsPass {
             group: None,
             exposure: 1.0,
             corner: [0, 0],
+            shown: None,
         })
     }
 

@@ -74,11 +74,16 @@ fn lamp(beam: &AtmoBeam) -> Spotlight {
 
 /// atmo's picture of `light` in the haze, with `objects` (black) in it.
 fn reference(light: Spotlight, objects: Vec<Shape>) -> Frame {
+    reference_of(light, objects, (WIDTH, HEIGHT))
+}
+
+/// [`reference`] of `size` pixels.
+fn reference_of(light: Spotlight, objects: Vec<Shape>, size: (u32, u32)) -> Frame {
     let h = haze();
     let (min, max) = h.bounds.unwrap();
     let scene = Scene {
         // The plugin's far plane: the haze box's farthest corner.
-        camera: AtmoCamera::look_at(EYE, LOOK_AT, Vec3::Y, Fov::Vertical(45.0), (WIDTH, HEIGHT))
+        camera: AtmoCamera::look_at(EYE, LOOK_AT, Vec3::Y, Fov::Vertical(45.0), size)
             .unwrap()
             .with_far(Vec3::new(-8.0, 6.0, -8.0).distance(EYE))
             .unwrap(),
@@ -185,6 +190,56 @@ fn a_beam_in_an_empty_scene_is_atmo_shafts() {
         &frame,
         &reference(lamp(&AtmoBeam::default()), Vec::new()),
         "empty scene",
+    );
+}
+
+/// `small` shown bilinearly over `width` x `height` pixels, as `ShaftsPass` shows a
+/// picture of fewer pixels.
+fn shown(small: &Frame, width: u32, height: u32) -> Frame {
+    let mut big = Frame::new(width, height);
+    let (sw, sh) = (small.width as i64, small.height as i64);
+    let texel =
+        |x: i64, y: i64| small.pixels[(y.clamp(0, sh - 1) * sw + x.clamp(0, sw - 1)) as usize];
+    for (i, p) in big.pixels.iter_mut().enumerate() {
+        let (x, y) = ((i as u32 % width) as f32, (i as u32 / width) as f32);
+        let at = (
+            (x + 0.5) * sw as f32 / width as f32 - 0.5,
+            (y + 0.5) * sh as f32 / height as f32 - 0.5,
+        );
+        let (bx, by) = (at.0.floor(), at.1.floor());
+        let (fx, fy) = (at.0 - bx, at.1 - by);
+        let (bx, by) = (bx as i64, by as i64);
+        let top = texel(bx, by).lerp(texel(bx + 1, by), fx);
+        let bottom = texel(bx, by + 1).lerp(texel(bx + 1, by + 1), fx);
+        *p = top.lerp(bottom, fy);
+    }
+    big
+}
+
+#[test]
+fn a_beam_drawn_at_half_resolution_is_the_half_picture_shown_larger() {
+    // A quarter of the pixels, shown bilinearly: atmo's picture of half the size, shown
+    // the same way. Against the whole picture it blurs what is sharp (the lamp, the
+    // beam's cut by the haze box's floor): said, not bounded.
+    let Some(frame) = drawn(AtmoBeam::default(), Msaa::Off, |world| {
+        let mut hazes = world.query::<&mut AtmoHaze>();
+        for mut haze in hazes.iter_mut(world) {
+            haze.resolution_scale = 0.5;
+        }
+    }) else {
+        return;
+    };
+    let half = reference_of(
+        lamp(&AtmoBeam::default()),
+        Vec::new(),
+        (WIDTH / 2, HEIGHT / 2),
+    );
+    check(&frame, &shown(&half, WIDTH, HEIGHT), "half resolution");
+    let whole = reference(lamp(&AtmoBeam::default()), Vec::new());
+    let e = frame.level_errors(&whole, DISPLAY).unwrap();
+    eprintln!(
+        "half resolution against every pixel: RMS {:.3}, max {:.3} levels",
+        e.rms, e.max
     );
 }
 
