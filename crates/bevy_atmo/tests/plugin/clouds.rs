@@ -3,7 +3,7 @@
 //! front of the cloud.
 
 use crate::common::{
-    app, around_the_box, atmo_camera, black_box, earth_model, radiance, settled, HEIGHT, WIDTH,
+    app, around_the_box, atmo_camera, black_box, radiance, settled, HEIGHT, WIDTH,
 };
 use atmo::clouds::render::CloudLight;
 use atmo::clouds::{Cumulus, Particle, Splat};
@@ -50,7 +50,8 @@ fn looking() -> Vec3 {
 /// sky of the cloud's, through the air in front of it (the plugin's light).
 fn reference() -> atmo::image::Frame {
     let sun = sun();
-    let model = earth_model(EYE.y);
+    let earth = atmo::Atmosphere::earth();
+    let model = atmo::sky::SkyModel::new(&earth, &settings(), EYE.y.into()).unwrap();
     let view = View {
         camera: atmo_camera(looking()),
         sun_disc: false,
@@ -64,12 +65,7 @@ fn reference() -> atmo::image::Frame {
         })
         .collect();
     let centre = atmo::cloudscape::Cloudscape::centre_of(&placed);
-    let daylight = Daylight::new(
-        &atmo::Atmosphere::earth(),
-        &SkySettings::default(),
-        centre.y.into(),
-    )
-    .unwrap();
+    let daylight = Daylight::new(&earth, &settings(), centre.y.into()).unwrap();
     let clouds = AtmoClouds::from_particles(Vec::new());
     let light = CloudLight {
         to_sun: sun.toward(),
@@ -93,6 +89,18 @@ fn reference() -> atmo::image::Frame {
     cpu.draw(&placed, &camera, &light, Some(&sky)).unwrap()
 }
 
+/// Every order on a coarse model (a fraction of a second to build, where the
+/// default's takes seconds): the plugin's sky and its light at the cloud are made with
+/// the sky camera's settings, the reference's with the same.
+fn settings() -> SkySettings {
+    SkySettings {
+        directions: 16,
+        shells: 24,
+        scattering_directions: 32,
+        ..SkySettings::default()
+    }
+}
+
 /// Intensity buffer voxels a side, the plugin's and the CPU's.
 const RESOLUTION: usize = 64;
 
@@ -102,6 +110,10 @@ fn the_cloud_is_atmo_clouds_behind_a_mesh_with_msaa_4x() {
         sun_disc: false,
         aerial_perspective: false,
         sky_light: SkyLight::Off,
+        source: SkySource::Model {
+            settings: settings(),
+            rebuild_after_m: 500.0,
+        },
         ..AtmoSky::earth()
     };
     let Some(mut app) = app((
