@@ -23,7 +23,7 @@ use bevy::render::view::{ExtractedView, Msaa, ViewTarget};
 use bevy::render::Extract;
 
 use crate::beams::{AtmoHaze, Beams};
-use crate::render::{atmo_camera, begin, AtmoGpu};
+use crate::render::{atmo_camera, begin, AtmoGpu, Said};
 
 /// This frame's beams and their shadows' meshes, as the render world takes them.
 #[derive(Resource, Default)]
@@ -120,6 +120,7 @@ type HazyView<'a> = (
 /// its own submitted before the frame's (whose pass draws their picture).
 pub(crate) fn prepare_beams(
     mut commands: Commands,
+    mut said: Local<Said>,
     gpu: Option<Res<AtmoGpu>>,
     mut pipelines: Local<Option<Arc<ShaftsPipelines>>>,
     beams: Res<ExtractedBeams>,
@@ -135,7 +136,7 @@ pub(crate) fn prepare_beams(
         None => match ShaftsPipelines::new(gpu) {
             Ok(made) => pipelines.insert(made).clone(),
             Err(e) => {
-                error!("bevy_atmo's beams: {e}");
+                said.error("bevy_atmo's beams", e);
                 return;
             }
         },
@@ -178,7 +179,7 @@ pub(crate) fn prepare_beams(
             }),
         };
         if let Err(e) = done {
-            error!("bevy_atmo's beams: {e}");
+            said.error("bevy_atmo's beams", e);
         }
     }
     gpu.queue.submit([encoder.finish()]);

@@ -21,7 +21,7 @@ use bevy::render::view::{ExtractedView, ViewTarget};
 use bevy::render::Extract;
 
 use crate::clouds::{AtmoClouds, AtmoCloudsState, CloudSun};
-use crate::render::{atmo_camera, begin, AtmoGpu, ExtractedSky, SkyViewParts};
+use crate::render::{atmo_camera, begin, AtmoGpu, ExtractedSky, Said, SkyViewParts};
 use crate::sky::ReadySky;
 
 /// A lit cloud as the render world takes it.
@@ -104,6 +104,7 @@ impl CloudOnGpu {
 /// frame's (whose draws read the buffers).
 pub(crate) fn prepare_clouds(
     mut commands: Commands,
+    mut said: Local<Said>,
     gpu: Option<Res<AtmoGpu>>,
     mut clouds: Query<(Entity, &ExtractedClouds, Option<&mut CloudOnGpu>)>,
 ) {
@@ -130,7 +131,7 @@ pub(crate) fn prepare_clouds(
             }),
         };
         if let Err(e) = done {
-            error!("bevy_atmo's clouds: {e}");
+            said.error("bevy_atmo's clouds", e);
         }
     }
     gpu.queue.submit([encoder.finish()]);
@@ -172,6 +173,7 @@ struct CloudFrame<'a> {
 /// a view without clouds to draw loses them.
 pub(crate) fn prepare_view_clouds(
     mut commands: Commands,
+    mut said: Local<Said>,
     gpu: Option<Res<AtmoGpu>>,
     mut views: Query<SkyViewParts<ViewClouds>>,
     clouds: Query<(Entity, &ExtractedClouds), With<CloudOnGpu>>,
@@ -210,7 +212,7 @@ pub(crate) fn prepare_view_clouds(
             }),
         };
         if let Err(e) = done {
-            error!("bevy_atmo's clouds: {e}");
+            said.error("bevy_atmo's clouds", e);
         }
     }
 }
@@ -279,6 +281,7 @@ pub(crate) fn draw_clouds(
     target: &ViewTarget,
     view_clouds: &mut ViewClouds,
     clouds: &Query<&CloudOnGpu>,
+    said: &mut Said,
 ) {
     view_clouds.depth.draw(encoder);
     for cloud in &mut view_clouds.clouds {
@@ -287,7 +290,7 @@ pub(crate) fn draw_clouds(
         };
         let on_gpu = on.clouds.lock().unwrap_or_else(|e| e.into_inner());
         if let Err(e) = on_gpu.prepare(gpu, encoder, &mut cloud.pass, &cloud.camera, &cloud.light) {
-            error!("bevy_atmo's clouds: {e}");
+            said.error("bevy_atmo's clouds", e);
             continue;
         }
         cloud

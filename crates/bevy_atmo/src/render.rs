@@ -47,6 +47,25 @@ pub(crate) fn init_gpu(
     }
 }
 
+/// What a render system has said went wrong: each error is logged the first time it
+/// happens, not again every frame it stays (at most the last few distinct ones kept).
+#[derive(Default)]
+pub(crate) struct Said(Vec<String>);
+
+impl Said {
+    /// Logs `what: error` unless it was said already.
+    pub(crate) fn error(&mut self, what: &str, error: impl std::fmt::Display) {
+        let line = format!("{what}: {error}");
+        if !self.0.contains(&line) {
+            error!("{line}");
+            if self.0.len() == 16 {
+                self.0.remove(0);
+            }
+            self.0.push(line);
+        }
+    }
+}
+
 /// A sky camera's frame as the render world takes it: what to draw, seen from where,
 /// under which sun.
 #[derive(Component)]
@@ -183,6 +202,7 @@ pub(crate) type SkyViewParts<'a, T> = (
 /// encoder of its own, submitted before Bevy's frame (which draws them).
 pub(crate) fn prepare_skies(
     mut commands: Commands,
+    mut said: Local<Said>,
     gpu: Option<Res<AtmoGpu>>,
     mut views: Query<SkyViewParts<ViewSky>>,
 ) {
@@ -209,12 +229,12 @@ pub(crate) fn prepare_skies(
                 Ok(new) => {
                     commands.entity(entity).insert(new);
                 }
-                Err(e) => error!("bevy_atmo's sky: {e}"),
+                Err(e) => said.error("bevy_atmo's sky", e),
             }
             continue;
         };
         if let Err(e) = remake(gpu, &mut view_sky, sky, wanted) {
-            error!("bevy_atmo's sky: {e}");
+            said.error("bevy_atmo's sky", e);
             continue;
         }
         let view_sky = &mut *view_sky;
@@ -254,7 +274,7 @@ pub(crate) fn prepare_skies(
             Ok(()) => {
                 gpu.queue.submit([encoder.finish()]);
             }
-            Err(e) => error!("bevy_atmo's sky: {e}"),
+            Err(e) => said.error("bevy_atmo's sky", e),
         }
     }
 }
@@ -307,6 +327,7 @@ pub(crate) fn draw_sky(
     )>,
     gpu: Option<Res<AtmoGpu>>,
     clouds: Query<&CloudOnGpu>,
+    mut said: Local<Said>,
     mut ctx: RenderContext,
 ) {
     let (camera, target, depth, sky, view_clouds) = view.into_inner();
@@ -330,7 +351,15 @@ pub(crate) fn draw_sky(
         ));
     }
     if let (Some(mut view_clouds), Some(gpu)) = (view_clouds, gpu) {
-        draw_clouds(&gpu.0, encoder, camera, target, &mut view_clouds, &clouds);
+        draw_clouds(
+            &gpu.0,
+            encoder,
+            camera,
+            target,
+            &mut view_clouds,
+            &clouds,
+            &mut said,
+        );
     }
 }
 
@@ -363,4 +392,24 @@ pub(crate) fn begin<'e>(
         );
     }
     pass
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_error_is_said_once_while_it_stays_and_the_oldest_are_forgotten() {
+        let mut said = Said::default();
+        for _ in 0..3 {
+            said.error("sky", "lost");
+        }
+        assert_eq!(said.0, ["sky: lost"]);
+        for k in 0..20 {
+            said.error("sky", k);
+        }
+        assert_eq!(said.0.len(), 16);
+        assert_eq!(said.0[15], "sky: 19");
+        assert!(!said.0.iter().any(|line| line == "sky: lost"));
+    }
 }
