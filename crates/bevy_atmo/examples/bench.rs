@@ -174,14 +174,7 @@ fn median_frame_ms(sky: Sky, frames: usize, size: (u32, u32), msaa: u32) -> (f64
     let mut ready = 0;
     while ready < 10 {
         frame(&mut app);
-        let mut skies = app.world_mut().query::<&AtmoSkyState>();
-        let mut clouds = app.world_mut().query::<&AtmoCloudsState>();
-        let built = skies
-            .iter(app.world())
-            .all(|s| s.is_ready() && !s.is_building())
-            && clouds
-                .iter(app.world())
-                .all(|c| c.is_ready() && !c.is_building());
+        let built = scene::built(app.world_mut());
         ready = if built { ready + 1 } else { 0 };
         assert!(app.should_exit().is_none(), "the renderer stopped the app");
     }

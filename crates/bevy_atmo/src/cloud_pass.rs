@@ -47,11 +47,10 @@ pub(crate) fn extract_clouds(
         let mut entity = commands.entity(render_entity);
         match (&state.particles, state.lit) {
             (Some(particles), Some(lit)) => {
-                let centre = atmo::cloudscape::Cloudscape::centre_of(particles);
                 entity.insert(ExtractedClouds {
                     particles: particles.clone(),
                     generation: state.generation,
-                    centre,
+                    centre: state.centre,
                     resolution: cloud.resolution,
                     scattering: cloud.scattering,
                     phase: cloud.phase,

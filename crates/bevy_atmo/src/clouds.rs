@@ -9,6 +9,7 @@ use std::sync::Arc;
 
 use atmo::atmosphere::PhaseFunction;
 use atmo::clouds::{Cumulus, Particle, Scattering, SkyLight};
+use atmo::cloudscape::Cloudscape;
 use atmo::sky::{Daylight, SkySettings};
 use atmo::view::Sun;
 use atmo::Atmosphere;
@@ -16,7 +17,7 @@ use bevy::prelude::*;
 use bevy::render::sync_world::SyncToRenderWorld;
 use bevy::tasks::{futures::check_ready, AsyncComputeTaskPool, Task};
 
-use crate::sky::{AtmoSky, SkySource};
+use crate::sky::{same_atmosphere, AtmoSky, SkySource};
 use crate::sun::{first_sky_camera, SunNow};
 
 /// How far a cloud moves up or down before the light at its height is made again, m.
@@ -110,7 +111,7 @@ struct Recipe {
 impl Recipe {
     /// Whether a model made from `self` serves `other`: the same sky, near enough.
     fn serves(&self, other: &Recipe) -> bool {
-        (Arc::ptr_eq(&self.atmosphere, &other.atmosphere) || self.atmosphere == other.atmosphere)
+        same_atmosphere(&self.atmosphere, &other.atmosphere)
             && self.settings == other.settings
             && (self.altitude_m - other.altitude_m).abs() <= RELIGHT_AFTER_M
     }
@@ -129,8 +130,10 @@ pub(crate) struct CloudSun {
 /// the world, and the light at its height.
 #[derive(Component, Default)]
 pub struct AtmoCloudsState {
-    /// The particles in the world frame, and a count that changes when they do.
+    /// The particles in the world frame, their mean position (m), and a count that
+    /// changes when they do.
     pub(crate) particles: Option<Arc<[Particle]>>,
+    pub(crate) centre: Vec3,
     pub(crate) generation: u64,
     daylight: Option<(Arc<Daylight>, Recipe)>,
     building: Option<(Task<atmo::Result<Daylight>>, Recipe)>,
@@ -188,19 +191,18 @@ pub(crate) fn light_the_clouds(
                     ..*p
                 })
                 .collect();
+            state.centre = Cloudscape::centre_of(&placed);
             state.particles = Some(placed);
             state.generation += 1;
         }
         let Some(sky) = sky else { continue };
-        let particles = state.particles.as_ref().expect("placed above");
-        let height = particles.iter().map(|p| p.position.y).sum::<f32>() / particles.len() as f32;
         let wanted = Recipe {
             atmosphere: sky.atmosphere.clone(),
             settings: match &sky.source {
                 SkySource::Model { settings, .. } => settings.clone(),
                 SkySource::Table(_) => SkySettings::default(),
             },
-            altitude_m: sky.altitude_m(height),
+            altitude_m: sky.altitude_m(state.centre.y),
         };
         if let Some(done) = state
             .building

@@ -168,9 +168,13 @@ impl PartialEq for Recipe {
         };
         source
             && self.aerial_far_m == other.aerial_far_m
-            && (Arc::ptr_eq(&self.atmosphere, &other.atmosphere)
-                || self.atmosphere == other.atmosphere)
+            && same_atmosphere(&self.atmosphere, &other.atmosphere)
     }
+}
+
+/// Whether two atmospheres are the same: one shared, or equal (a cheap test first).
+pub(crate) fn same_atmosphere(a: &Arc<Atmosphere>, b: &Arc<Atmosphere>) -> bool {
+    Arc::ptr_eq(a, b) || a == b
 }
 
 /// A sky camera's sky in the making (the plugin adds it beside [`AtmoSky`]): the sky

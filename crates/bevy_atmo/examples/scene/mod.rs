@@ -1,5 +1,5 @@
-//! What the examples and the tests share: a headless app with the plugin, and the
-//! flight's plain with its towers.
+//! What the examples and the tests share: a headless app with the plugin, whether
+//! atmo has built what it draws, and the flight's plain with its towers.
 
 #![allow(dead_code)] // each example and test uses its own part
 
@@ -38,6 +38,15 @@ pub fn headless_app() -> App {
     app.finish();
     app.cleanup();
     app
+}
+
+/// Whether every sky and every cloud in `world` is ready and none is being built again
+/// (their models are built on background threads: seconds).
+pub fn built(world: &mut World) -> bool {
+    let mut skies = world.query::<&AtmoSkyState>();
+    let mut clouds = world.query::<&AtmoCloudsState>();
+    skies.iter(world).all(|s| s.is_ready() && !s.is_building())
+        && clouds.iter(world).all(|c| c.is_ready() && !c.is_building())
 }
 
 /// A plain 160 km across of `ground` at y = 0, and towers 120 m tall (half of them

@@ -8,7 +8,6 @@ use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
-use bevy_atmo::prelude::*;
 
 use crate::scene;
 
@@ -91,14 +90,7 @@ pub fn settled(app: &mut App) -> Vec<[f32; 4]> {
             app.should_exit().is_none(),
             "the renderer stopped the app (a GPU error; see the log)"
         );
-        let mut skies = app.world_mut().query::<&AtmoSkyState>();
-        let mut clouds = app.world_mut().query::<&AtmoCloudsState>();
-        let done = skies
-            .iter(app.world())
-            .all(|s| s.is_ready() && !s.is_building())
-            && clouds
-                .iter(app.world())
-                .all(|c| c.is_ready() && !c.is_building());
+        let done = scene::built(app.world_mut());
         ready_frames = if done { ready_frames + 1 } else { 0 };
         let shot = app.world_mut().resource_mut::<Shot>().0.take();
         if let (Some(shot), true) = (shot, ready_frames > 4) {
