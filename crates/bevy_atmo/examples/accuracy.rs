@@ -3,10 +3,11 @@
 //! atmosphere, suns and altitudes, against atmo's reference: single scattering by
 //! quadrature and orders 2 and up by its path tracer (`atmo::reference::sky`), for
 //! Bevy's own Earth (`bevy-earth.toml` beside this file: its coefficients as Bevy's code
-//! makes them).
+//! makes them) or Hillaire's (`--earth hillaire`, `hillaire-earth.toml`).
 //!
 //! ```text
-//! cargo run --release -p bevy_atmo --example accuracy -- [--paths N] [--json FILE]
+//! cargo run -p bevy_atmo --example accuracy -- [--earth bevy|hillaire] [--paths N]
+//!     [--json FILE] [--directions FILE]
 //! ```
 //! For every altitude (0, 1, 7, 13 km) and sun (0, 2, 5, 10, 30, 60 deg) each renderer
 //! draws the five upper faces of a cube around the camera (128 x 128 pixels, no tone
@@ -15,8 +16,10 @@
 //! to its opposite), less those within 10 deg of the sun. The reference is computed at
 //! exactly those pixels' directions (`--paths` per channel, 6,000 by default; kept in
 //! `target/` and reused), and each renderer's relative error per channel is summed up
-//! by its median and 95th percentile, over everything and by the sun's elevation.
-//! `--json FILE` writes every direction's numbers.
+//! by its median and 95th percentile, over everything, by the sun's elevation and by the
+//! altitude (Markdown tables). `--json FILE` writes a line a renderer of the summary (as
+//! `atmo bench --json` does: docs/bench/bevy-accuracy.json), `--directions FILE` a line
+//! a direction of every number.
 //!
 //! Bevy's Atmosphere crashes lavapipe 22.3 (Debian 12's Mesa): run this on a hardware
 //! GPU, or on lavapipe 25 (`scripts/lavapipe-25.sh`).
@@ -24,9 +27,10 @@
 use std::path::PathBuf;
 
 use atmo::reference::sky::{ReferenceSettings, ReferenceSky};
+use atmo::sky::{Order, SkySettings};
 use bevy::camera::{Exposure, RenderTarget};
 use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
-use bevy::light::atmosphere::ScatteringMedium;
+use bevy::light::atmosphere::{Falloff, ScatteringMedium};
 use bevy::light::{Atmosphere, SunDisk};
 use bevy::pbr::{AtmosphereMode, AtmosphereSettings};
 use bevy::prelude::*;
@@ -74,6 +78,15 @@ enum Renderer {
 
 impl Renderer {
     const ALL: [Renderer; 3] = [Renderer::BevyLut, Renderer::BevyRaymarched, Renderer::Atmo];
+
+    /// Its name in the JSON lines' `bench`.
+    fn key(self) -> &'static str {
+        match self {
+            Renderer::BevyLut => "bevy-lut",
+            Renderer::BevyRaymarched => "bevy-raymarched",
+            Renderer::Atmo => "bevy-atmo",
+        }
+    }
 
     fn name(self) -> &'static str {
         match self {
@@ -160,24 +173,86 @@ fn probes(sun_deg: f64) -> Vec<Probe> {
     out
 }
 
-/// Bevy's own Earth as atmo's atmosphere.
-fn bevy_earth() -> atmo::Atmosphere {
-    atmo::Atmosphere::from_toml_str(include_str!("bevy-earth.toml"), "bevy-earth.toml")
-        .expect("the example's atmosphere is valid")
+/// Which Earth both sides draw.
+#[derive(Clone, Copy, PartialEq)]
+enum Earth {
+    /// Bevy's own (`ScatteringMedium::earth`, its default): `bevy-earth.toml`.
+    Bevy,
+    /// Hillaire's (2020, his paper's Earth): molecules of scale height 8 km, aerosols of
+    /// 1.2 km scattering 3.996e-6 per m with an albedo of 0.9, Bevy's ozone and ground;
+    /// for Bevy, a medium of those terms (`hillaire-earth.toml`).
+    Hillaire,
+}
+
+impl Earth {
+    fn name(self) -> &'static str {
+        match self {
+            Earth::Bevy => "bevy",
+            Earth::Hillaire => "hillaire",
+        }
+    }
+
+    /// The atmosphere as atmo's.
+    fn atmo(self) -> atmo::Atmosphere {
+        let (text, origin) = match self {
+            Earth::Bevy => (include_str!("bevy-earth.toml"), "bevy-earth.toml"),
+            Earth::Hillaire => (include_str!("hillaire-earth.toml"), "hillaire-earth.toml"),
+        };
+        atmo::Atmosphere::from_toml_str(text, origin).expect("the example's atmosphere is valid")
+    }
+
+    /// The atmosphere as Bevy's medium: its falloffs are fractions of Bevy's 100 km.
+    fn medium(self) -> ScatteringMedium {
+        match self {
+            Earth::Bevy => ScatteringMedium::default(),
+            Earth::Hillaire => {
+                let mut medium = ScatteringMedium::default();
+                let [rayleigh, mie, _ozone] = &mut medium.terms[..] else {
+                    panic!("Bevy's Earth has three terms");
+                };
+                rayleigh.falloff = Falloff::Exponential { scale: 0.08 };
+                mie.falloff = Falloff::Exponential { scale: 0.012 };
+                mie.scattering = Vec3::splat(3.996e-6);
+                mie.absorption = Vec3::splat(0.444e-6);
+                medium
+            }
+        }
+    }
+}
+
+/// What is compared: which Earth, and whether single scattering alone (`--single`:
+/// Bevy's multiple-scattering LUT emptied, its ground black, atmo's model of order 1,
+/// the reference's quadrature alone), which checks that both sides draw the same
+/// atmosphere before the orders past the first are compared.
+#[derive(Clone, Copy)]
+struct Setup {
+    earth: Earth,
+    single: bool,
+}
+
+impl Setup {
+    /// Its name in file names and the JSON lines' `bench`.
+    fn name(self) -> String {
+        let single = if self.single { "-single" } else { "" };
+        format!("{}-earth{single}", self.earth.name())
+    }
 }
 
 /// The reference's radiance per channel (red, green, blue) and its standard error, for
 /// every case's probes, in the order of [`cases`]; computed once for `paths` and kept.
-fn reference(paths: usize) -> Vec<Vec<Truth>> {
+fn reference(setup: Setup, paths: usize) -> Vec<Vec<Truth>> {
     let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../target")
-        .join(format!("bevy-accuracy-reference-{paths}.json"));
+        .join(format!(
+            "bevy-accuracy-reference-{}-{paths}.json",
+            setup.name()
+        ));
     if let Ok(text) = std::fs::read_to_string(&cache) {
         if let Ok(kept) = serde_json::from_str(&text) {
             return kept;
         }
     }
-    let atmosphere = bevy_earth();
+    let atmosphere = setup.earth.atmo();
     let jobs: Vec<(usize, usize, Probe)> = cases()
         .iter()
         .enumerate()
@@ -203,7 +278,11 @@ fn reference(paths: usize) -> Vec<Vec<Truth>> {
                 ReferenceSettings::CONVERGED,
             );
             let single = sky.radiance(p.azimuth, p.elevation, 1, 1);
-            let (multiple, error) = sky.multiple_scattering(p.azimuth, p.elevation, paths, 7);
+            let (multiple, error) = if setup.single {
+                (vec![0.0; 3], vec![0.0; 3])
+            } else {
+                sky.multiple_scattering(p.azimuth, p.elevation, paths, 7)
+            };
             // atmo's channels are blue, green, red (increasing wavelength).
             let rgb = |v: &[f64]| [v[2], v[1], v[0]];
             let total: Vec<f64> = single.iter().zip(&multiple).map(|(s, m)| s + m).collect();
@@ -234,7 +313,7 @@ struct Shots([Option<Vec<[f32; 4]>>; 5]);
 
 /// An app drawing the sky with `renderer` into five f32 images, one a face, read back
 /// every frame.
-fn app(renderer: Renderer) -> App {
+fn app(renderer: Renderer, setup: Setup) -> App {
     let mut app = scene::headless_app();
     app.init_resource::<Shots>();
     let world = app.world_mut();
@@ -263,8 +342,20 @@ fn app(renderer: Renderer) -> App {
         ));
         match renderer {
             Renderer::Atmo => {
+                let settings = SkySettings {
+                    order: if setup.single {
+                        Order::Through(1)
+                    } else {
+                        Order::All
+                    },
+                    ..default()
+                };
                 camera.insert(AtmoSky {
-                    atmosphere: std::sync::Arc::new(bevy_earth()),
+                    atmosphere: std::sync::Arc::new(setup.earth.atmo()),
+                    source: SkySource::Model {
+                        settings,
+                        rebuild_after_m: 500.0,
+                    },
                     sun_disc: false,
                     aerial_perspective: false,
                     sky_light: SkyLight::Off,
@@ -277,6 +368,12 @@ fn app(renderer: Renderer) -> App {
                         AtmosphereMode::LookupTexture
                     } else {
                         AtmosphereMode::Raymarched
+                    },
+                    // No samples: only the ground's light would be left, and it is black.
+                    multiscattering_lut_samples: if setup.single {
+                        0
+                    } else {
+                        AtmosphereSettings::default().multiscattering_lut_samples
                     },
                     ..default()
                 });
@@ -295,8 +392,12 @@ fn app(renderer: Renderer) -> App {
         Renderer::BevyLut | Renderer::BevyRaymarched => {
             let medium = world
                 .resource_mut::<Assets<ScatteringMedium>>()
-                .add(ScatteringMedium::default());
-            world.spawn(Atmosphere::earth(medium));
+                .add(setup.earth.medium());
+            let mut atmosphere = Atmosphere::earth(medium);
+            if setup.single {
+                atmosphere.ground_albedo = Vec3::ZERO;
+            }
+            world.spawn(atmosphere);
             world.spawn((
                 DirectionalLight {
                     illuminance: BEVY_SUN_LUX,
@@ -371,19 +472,27 @@ fn main() {
             .cloned()
     };
     let paths: usize = value("--paths").map_or(6000, |p| p.parse().expect("--paths: a count"));
-    let reference = reference(paths);
+    let earth = match value("--earth").as_deref() {
+        None | Some("bevy") => Earth::Bevy,
+        Some("hillaire") => Earth::Hillaire,
+        Some(other) => panic!("--earth: bevy or hillaire, not {other}"),
+    };
+    let setup = Setup {
+        earth,
+        single: args.iter().any(|a| a == "--single"),
+    };
+    let reference = reference(setup, paths);
     // errors[renderer][case][probe][channel], relative
     let mut errors = Vec::new();
-    let mut records = Vec::new();
+    let mut directions = Vec::new();
+    let mut device = String::new();
     for renderer in Renderer::ALL {
-        let mut app = app(renderer);
-        if renderer == Renderer::BevyLut {
-            let info = app
-                .sub_app(RenderApp)
-                .world()
-                .resource::<RenderAdapterInfo>();
-            println!("Drawn on {} ({}).\n", info.name, info.driver_info);
-        }
+        let mut app = app(renderer, setup);
+        let info = app
+            .sub_app(RenderApp)
+            .world()
+            .resource::<RenderAdapterInfo>();
+        device = format!("{} ({})", info.name, info.driver_info);
         let mut per_case = Vec::new();
         for (c, &(altitude, sun)) in cases().iter().enumerate() {
             let faces = draw(&mut app, altitude, sun);
@@ -393,26 +502,78 @@ fn main() {
                 let pixel = faces[probe.face][(y * FACE + x) as usize];
                 let (truth, error) = reference[c][p];
                 let got: [f64; 3] = std::array::from_fn(|k| f64::from(pixel[k]) / renderer.scale());
-                let relative: [f64; 3] = std::array::from_fn(|k| got[k] / truth[k] - 1.0);
-                records.push(json!({
-                    "renderer": renderer.name(), "altitude_m": altitude, "sun_deg": sun,
+                directions.push(json!({
+                    "renderer": renderer.key(), "altitude_m": altitude, "sun_deg": sun,
                     "elevation_deg": probe.elevation.to_degrees(),
                     "azimuth_from_sun_deg": probe.azimuth.to_degrees(),
                     "radiance_rgb": got, "reference_rgb": truth,
                     "reference_standard_error_rgb": error,
                 }));
-                per_probe.push(relative);
+                per_probe.push(std::array::from_fn(|k| got[k] / truth[k] - 1.0));
             }
             per_case.push(per_probe);
         }
         errors.push(per_case);
         eprintln!("drawn: {}", renderer.name());
     }
-    if let Some(path) = value("--json") {
-        let lines: Vec<String> = records.iter().map(|r| r.to_string()).collect();
-        std::fs::write(&path, lines.join("\n") + "\n").expect("--json: a writable file");
+    if let Some(path) = value("--directions") {
+        write_lines(&path, &directions);
     }
+    if let Some(path) = value("--json") {
+        let noise = median_and_p95(&reference_noise(&reference)).0;
+        let lines: Vec<serde_json::Value> = Renderer::ALL
+            .iter()
+            .zip(&errors)
+            .map(|(renderer, errors)| {
+                let channel =
+                    |k: usize| -> Vec<f64> { errors.iter().flatten().map(|e| e[k]).collect() };
+                let stats: [(f64, f64); 3] = std::array::from_fn(|k| median_and_p95(&channel(k)));
+                let bias: [f64; 3] = std::array::from_fn(|k| {
+                    let v = channel(k);
+                    100.0 * v.iter().sum::<f64>() / v.len() as f64
+                });
+                json!({
+                    "bench": format!("bevy.accuracy.{}.{}", setup.name(), renderer.key()),
+                    "command": format!(
+                        "cargo run -p bevy_atmo --example accuracy -- --earth {}{} --json FILE",
+                        earth.name(),
+                        if setup.single { " --single" } else { "" }
+                    ),
+                    "params": {
+                        "earth": earth.name(), "single": setup.single, "paths_per_channel": paths,
+                        "altitudes_m": ALTITUDES_M, "suns_deg": SUNS_DEG,
+                        "directions": directions.len() / Renderer::ALL.len(),
+                    },
+                    "device": device,
+                    "renderer": renderer.name(),
+                    "median_error_pct_rgb": stats.map(|s| 100.0 * s.0),
+                    "p95_error_pct_rgb": stats.map(|s| 100.0 * s.1),
+                    "mean_signed_error_pct_rgb": bias,
+                    "reference_noise_median_pct": 100.0 * noise,
+                })
+            })
+            .collect();
+        write_lines(&path, &lines);
+    }
+    println!("Drawn on {device}.\n");
     print_tables(&errors, &reference, paths);
+}
+
+/// Writes one JSON object a line to `path`, through a temporary file renamed when whole.
+fn write_lines(path: &str, lines: &[serde_json::Value]) {
+    let text: String = lines.iter().map(|l| format!("{l}\n")).collect();
+    let part = format!("{path}.part");
+    std::fs::write(&part, text).expect("a writable file for --json or --directions");
+    std::fs::rename(&part, path).expect("a writable file for --json or --directions");
+}
+
+/// The reference's standard error over its radiance, every direction and channel.
+fn reference_noise(reference: &[Vec<Truth>]) -> Vec<f64> {
+    reference
+        .iter()
+        .flatten()
+        .flat_map(|(t, e)| (0..3).map(move |k| e[k] / t[k]))
+        .collect()
 }
 
 /// The summary tables, as Markdown.
@@ -421,11 +582,7 @@ fn print_tables(errors: &[Vec<Vec<[f64; 3]>>], reference: &[Vec<Truth>], paths: 
         let (m, p) = median_and_p95(&values);
         format!("{:.1} / {:.1}", 100.0 * m, 100.0 * p)
     };
-    let noise: Vec<f64> = reference
-        .iter()
-        .flatten()
-        .flat_map(|(t, e)| (0..3).map(move |k| e[k] / t[k]))
-        .collect();
+    let noise = reference_noise(reference);
     println!(
         "The reference's own noise (standard error over the radiance, {paths} paths a channel): median {:.2} %, 95th percentile {:.2} %.\n",
         100.0 * median_and_p95(&noise).0,
