@@ -584,6 +584,29 @@ fn shadow_maps_kept_from_an_earlier_frame_give_the_same_picture() {
 }
 
 #[test]
+fn a_camera_without_a_far_plane_sees_as_far_as_the_haze_sends_light() {
+    // `Camera::look_at` makes an infinite far plane; rays that meet nothing (above the
+    // floor's horizon) then end where the haze can send no more light: 20 mean free
+    // paths where it fills all space, its box's farthest corner where it has one.
+    let room = atmo::geometry::Aabb {
+        min: Vec3::new(-8.0, 0.0, -8.0),
+        max: Vec3::new(8.0, 6.0, 8.0),
+    };
+    for (bounds, least) in [(None, 20.0 / 0.12), (Some(room), 15.0)] {
+        let mut scene = parse(&small_scene("")).unwrap();
+        scene.haze.bounds = bounds;
+        scene.camera.far = f32::INFINITY;
+        let reach = scene.far_m();
+        assert!(reach.is_finite() && reach >= least, "{reach}");
+        let endless = SamplePlanes::new(&scene).render();
+        assert_physical(&endless);
+        assert!(endless.pixels.iter().any(|p| p.max_element() > 0.0));
+        scene.camera.far = reach;
+        assert_eq!(endless, SamplePlanes::new(&scene).render(), "{bounds:?}");
+    }
+}
+
+#[test]
 fn the_picture_does_not_depend_on_the_thread_count() {
     let scene = Scene::from_file(&scenes().join("stage.toml")).unwrap();
     let mut small = scene.clone();

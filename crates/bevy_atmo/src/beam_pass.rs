@@ -148,7 +148,6 @@ pub(crate) fn prepare_beams(
             continue;
         };
         atmo_camera.position = view.world_from_view.translation();
-        atmo_camera.far = reach(&haze.haze, atmo_camera.position);
         // A lower resolution: fewer pixels over the same frustum (the lens keeps it).
         let shown = [view.viewport.z, view.viewport.w];
         if haze.scale < 1.0 {
@@ -245,20 +244,6 @@ pub(crate) fn draw_beams(
         "atmo beams",
         None,
     ));
-}
-
-/// How far from `eye` the haze can send light to it, m (the sample planes need a far
-/// plane): to the farthest corner of its box, or where unbounded, 20 of its mean free
-/// paths (a transmittance of 2e-9: nothing beyond shows).
-fn reach(haze: &Haze, eye: Vec3) -> f32 {
-    match haze.bounds {
-        Some(b) => b
-            .corners()
-            .into_iter()
-            .map(|c| c.distance(eye))
-            .fold(0.0, f32::max),
-        None => 20.0 / haze.extinction,
-    }
 }
 
 /// An atmo scene of `beams` in `haze` seen by `camera`.

@@ -295,7 +295,7 @@ impl GpuShafts {
         )?;
         let out = gpu.output("the picture", pixels * 16, "camera.width or camera.height")?;
         let params = ShaftsParams {
-            position: v4(camera.position, camera.far),
+            position: v4(camera.position, scene.far_m()),
             forward: v4(camera.forward, tan_half_width),
             right: v4(camera.right, tan_half_height),
             up: v4(camera.up, 1.0 / (k * k) as f32),

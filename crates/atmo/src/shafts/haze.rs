@@ -46,6 +46,20 @@ impl Haze {
         }
     }
 
+    /// How far from `eye` the haze can send light to it, m: to the farthest corner of
+    /// its box, or, where it fills all space, 20 of its mean free paths (a transmittance
+    /// of 2e-9: nothing beyond shows); infinite in clear air.
+    pub fn reach(&self, eye: Vec3) -> f32 {
+        match self.bounds {
+            Some(b) => b
+                .corners()
+                .into_iter()
+                .map(|c| c.distance(eye))
+                .fold(0.0, f32::max),
+            None => 20.0 / self.extinction,
+        }
+    }
+
     /// The part `[t0, t1]` of `[t_min, t_max]` where the ray `origin + t dir` is in the
     /// haze.
     #[inline]

@@ -111,6 +111,6 @@ pub fn pixel_kinds(scene: &Scene) -> (Vec<usize>, Vec<usize>) {
     (0..width * camera.height as usize).partition(|&k| {
         let ray = camera.ray((k % width) as f32 + 0.5, (k / width) as f32 + 0.5);
         let length = ray.length();
-        first_hit(scene, ray / length, camera.far * length).is_some()
+        first_hit(scene, ray / length, scene.far_m() * length).is_some()
     })
 }

@@ -149,6 +149,7 @@ impl<'a> SamplePlanes<'a> {
 
     fn prepare(scene: &'a Scene, maps: Vec<Cow<'a, ShadowMap>>) -> SamplePlanes<'a> {
         let camera = &scene.camera;
+        let far = scene.far_m();
         let mut s_max = 0.0f32;
         let mut t_max = 0.0f32;
         let lights = scene
@@ -156,7 +157,7 @@ impl<'a> SamplePlanes<'a> {
             .zip(maps)
             .map(|(light, shadow)| {
                 // Farther than this from the lamp is beyond the far plane anyway.
-                let reach = camera.far * 2.0 + (light.position - camera.position).length();
+                let reach = far * 2.0 + (light.position - camera.position).length();
                 let extent = Extent::of(&shadow, light, camera, reach);
                 let (mut lo, mut hi) = (extent.near, extent.far);
                 s_max = s_max.max(extent.from_lamp.sqrt());
@@ -175,7 +176,7 @@ impl<'a> SamplePlanes<'a> {
                 LightPlanes {
                     shadow,
                     z_near: lo.max(NEAR_PLANE),
-                    z_far: hi.min(camera.far),
+                    z_far: hi.min(far),
                     bounds: extent.bounds,
                     view: ViewBox::of(Some(extent.bounds), camera),
                     lamp_in_haze: scene.haze.bounds.is_none_or(|b| b.contains(light.position)),
@@ -190,7 +191,7 @@ impl<'a> SamplePlanes<'a> {
             .map_or(f32::INFINITY, |(tw, th)| {
                 (1.0 + tw.powi(2) + th.powi(2)).sqrt()
             });
-        let t_max = t_max.min(camera.far * corner);
+        let t_max = t_max.min(far * corner);
         SamplePlanes {
             scene,
             lights,
@@ -432,7 +433,7 @@ impl<'a> SamplePlanes<'a> {
     fn surface(&self, ray: Vec3) -> (Vec3, f32) {
         let scene = self.scene;
         let length = ray.length();
-        let far = scene.camera.far * length;
+        let far = scene.far_m() * length;
         let at = view_point(&scene.camera, ray);
         let objects = (scene.objects.list.iter().zip(&self.objects))
             .filter(|(_, b)| b.holds(at))

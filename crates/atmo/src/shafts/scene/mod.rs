@@ -262,6 +262,18 @@ impl Scene {
         self.objects.list.extend(self.show.bodies());
     }
 
+    /// The farthest camera depth drawn, m: the camera's far plane, or, where it has none
+    /// (`Camera::look_at` makes an infinite one; a scene file always gives `far_m`), as
+    /// far as the haze can send light to the eye ([`Haze::reach`]). The sample planes
+    /// need a finite one: rays that meet nothing end there.
+    pub fn far_m(&self) -> f32 {
+        if self.camera.far.is_finite() {
+            self.camera.far
+        } else {
+            self.haze.reach(self.camera.position)
+        }
+    }
+
     /// Checks the plane settings, and that the shadow maps they make for these lights
     /// fit the run's memory budget ([`crate::budget`]); again after a caller changes
     /// them.
