@@ -16,7 +16,7 @@ use atmo::image::Frame;
 use atmo::view::{Camera, Fov};
 use atmo_gpu::clouds::{CloudsPass, GpuClouds};
 use atmo_gpu::display::{cleared_pass, picture_texture};
-use common::{assert_close, gpu, mean_level};
+use common::{assert_close, drawn_over, gpu, mean_level};
 use glam::Vec3;
 
 fn cloud() -> Vec<Particle> {
@@ -504,22 +504,15 @@ fn drawn_before(
     scene_depth: &[f32],
 ) -> Vec<[f32; 4]> {
     let (w, h) = (camera.width, camera.height);
-    let target = picture_texture(gpu, w, h).unwrap();
-    let view = target.create_view(&Default::default());
-    let mut pass = CloudsPass::new(gpu, target.format(), 1).unwrap();
     let depth = gpu.float_texture("the scene", scene_depth, w, h);
-    pass.scene_depth = Some(depth.create_view(&Default::default()));
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    clouds
-        .prepare(gpu, &mut encoder, &mut pass, camera, light)
-        .unwrap();
-    {
-        let mut render = cleared_pass(&mut encoder, &view, "over black", wgpu::Color::BLACK);
-        pass.draw(&mut render);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    let bytes = gpu.read_texture("the picture", &target, w, h).unwrap();
-    bytemuck::cast_slice(&bytes).to_vec()
+    drawn_over(gpu, (w, h), 0.0, |encoder, format| {
+        let mut pass = CloudsPass::new(gpu, format, 1).unwrap();
+        pass.scene_depth = Some(depth.create_view(&Default::default()));
+        clouds
+            .prepare(gpu, encoder, &mut pass, camera, light)
+            .unwrap();
+        pass
+    })
 }
 
 #[test]

@@ -9,7 +9,7 @@ use std::path::Path;
 use atmo::shafts::{SamplePlanes, Scene};
 use atmo_gpu::display::{cleared_pass, picture_texture};
 use atmo_gpu::shafts::{GpuShafts, ShaftsMethod, ShaftsPass, ShaftsPipelines};
-use common::{assert_close, gpu, mean_level};
+use common::{assert_close, drawn_over, gpu, mean_level};
 
 /// The example scene `name`, drawn at 1/5 of its size.
 fn scene(name: &str, supersampling: u32) -> Scene {
@@ -56,6 +56,21 @@ fn measured_profiles_match_the_cpu_planes() {
 #[test]
 fn the_sphere_in_a_beam_matches_with_supersampling() {
     check(&scene("spotlight-sphere.toml", 2), "spotlight-sphere 2x2");
+}
+
+#[test]
+fn a_camera_without_a_far_plane_matches_the_cpu_planes() {
+    // An infinite far plane (as `Camera::look_at` makes it): both devices end the rays
+    // that meet nothing where the haze sends no more light (`Scene::far_m`), in its box
+    // and in haze filling all space.
+    let mut scene = scene("spotlight-sphere.toml", 1);
+    scene.camera.far = f32::INFINITY;
+    check(&scene, "no far plane, haze everywhere");
+    scene.haze.bounds = Some(atmo::geometry::Aabb {
+        min: glam::Vec3::new(-8.0, 0.0, -3.0),
+        max: glam::Vec3::new(8.0, 6.0, 3.0),
+    });
+    check(&scene, "no far plane, a haze box");
 }
 
 #[test]
@@ -157,27 +172,15 @@ fn the_shafts_draw_into_a_callers_target_as_they_read_back() {
 /// `scene` drawn by [`GpuShafts::haze_over`] and [`ShaftsPass::over`] over a target
 /// holding `behind` everywhere, read back as RGBA.
 fn haze_over(gpu: &atmo_gpu::Gpu, scene: &Scene, behind: f64) -> Vec<[f32; 4]> {
-    let (w, h) = (scene.camera.width, scene.camera.height);
+    let size = (scene.camera.width, scene.camera.height);
     let shafts = GpuShafts::haze_over(gpu, scene, ShaftsPipelines::new(gpu).unwrap()).unwrap();
-    let target = picture_texture(gpu, w, h).unwrap();
-    let mut pass = ShaftsPass::over(gpu, target.format(), 1).unwrap();
-    let view = target.create_view(&Default::default());
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    shafts
-        .prepare(gpu, &mut encoder, &mut pass, ShaftsMethod::Planes)
-        .unwrap();
-    {
-        let colour = wgpu::Color {
-            r: behind,
-            g: behind,
-            b: behind,
-            a: 1.0,
-        };
-        pass.draw(&mut cleared_pass(&mut encoder, &view, "the scene", colour));
-    }
-    gpu.queue.submit([encoder.finish()]);
-    let bytes = gpu.read_texture("the target", &target, w, h).unwrap();
-    bytemuck::cast_slice(&bytes).to_vec()
+    drawn_over(gpu, size, behind, |encoder, format| {
+        let mut pass = ShaftsPass::over(gpu, format, 1).unwrap();
+        shafts
+            .prepare(gpu, encoder, &mut pass, ShaftsMethod::Planes)
+            .unwrap();
+        pass
+    })
 }
 
 #[test]

@@ -464,13 +464,7 @@ fn median_and_p95(values: &[f64]) -> (f64, f64) {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let value = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
+    let value = scene::option;
     let paths: usize = value("--paths").map_or(6000, |p| p.parse().expect("--paths: a count"));
     let earth = match value("--earth").as_deref() {
         None | Some("bevy") => Earth::Bevy,
@@ -479,7 +473,7 @@ fn main() {
     };
     let setup = Setup {
         earth,
-        single: args.iter().any(|a| a == "--single"),
+        single: scene::switch("--single"),
     };
     let reference = reference(setup, paths);
     // errors[renderer][case][probe][channel], relative

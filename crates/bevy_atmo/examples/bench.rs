@@ -43,13 +43,7 @@ enum Sky {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let value = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
+    let value = scene::option;
     let frames: usize = value("--frames").map_or(30, |f| f.parse().expect("--frames: a count"));
     let (width, height) = value("--size").map_or((1280, 720), |s| {
         let (w, h) = s.split_once('x').expect("--size: WIDTHxHEIGHT");
@@ -64,7 +58,7 @@ fn main() {
         "width": width, "height": height, "msaa": msaa, "frames": frames,
         "sun_elevation_deg": 20, "altitude_m": 300,
     });
-    let json = args.iter().any(|a| a == "--json");
+    let json = scene::switch("--json");
     let (none_ms, device) = median_frame_ms(Sky::None, frames, size, msaa);
     let none = "the same scene without a sky (Bevy's clear colour)";
     let cases = [

@@ -181,28 +181,22 @@ fn move_sun(
 
 /// With `--screenshot FILE`: saves the window ten frames after the sky and the clouds
 /// are built, then exits once it is written.
-fn screenshot_when_built(
-    mut commands: Commands,
-    mut shot: ResMut<Shot>,
-    skies: Query<&AtmoSkyState>,
-    clouds: Query<&AtmoCloudsState>,
-    mut exit: MessageWriter<AppExit>,
-) {
-    let Some(path) = shot.0.clone() else {
+fn screenshot_when_built(world: &mut World) {
+    let Some(path) = world.resource::<Shot>().0.clone() else {
         return;
     };
-    let built = skies.iter().all(|s| s.is_ready() && !s.is_building())
-        && clouds.iter().all(|c| c.is_ready() && !c.is_building());
-    if !built {
+    if !scene::built(world) {
         return;
     }
+    let mut shot = world.resource_mut::<Shot>();
     shot.1 += 1;
-    if shot.1 == 10 {
-        commands
+    let frames = shot.1;
+    if frames == 10 {
+        world
             .spawn(Screenshot::primary_window())
             .observe(save_to_disk(path));
     }
-    if shot.1 == 40 {
-        exit.write(AppExit::Success);
+    if frames == 40 {
+        world.write_message(AppExit::Success);
     }
 }

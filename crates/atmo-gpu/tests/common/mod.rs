@@ -65,3 +65,51 @@ pub fn mean_level(frame: &Frame, exposure: f32) -> f64 {
         .sum();
     255.0 * sum / (3.0 * frame.pixels.len() as f64)
 }
+
+/// A pass that draws into a caller's render pass ([`atmo_gpu::shafts::ShaftsPass`],
+/// [`atmo_gpu::clouds::CloudsPass`]).
+pub trait Draws {
+    fn draw_into(&self, render: &mut wgpu::RenderPass<'_>);
+}
+
+impl Draws for atmo_gpu::shafts::ShaftsPass {
+    fn draw_into(&self, render: &mut wgpu::RenderPass<'_>) {
+        self.draw(render);
+    }
+}
+
+impl Draws for atmo_gpu::clouds::CloudsPass {
+    fn draw_into(&self, render: &mut wgpu::RenderPass<'_>) {
+        self.draw(render);
+    }
+}
+
+/// What a pass draws over a `width` x `height` picture cleared to grey `behind`, read
+/// back as RGBA: `make` gets the encoder (for what the pass records first) and the
+/// target's format, and gives the pass.
+pub fn drawn_over<P: Draws>(
+    gpu: &Gpu,
+    (width, height): (u32, u32),
+    behind: f64,
+    make: impl FnOnce(&mut wgpu::CommandEncoder, wgpu::TextureFormat) -> P,
+) -> Vec<[f32; 4]> {
+    let target = atmo_gpu::display::picture_texture(gpu, width, height).unwrap();
+    let view = target.create_view(&Default::default());
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let pass = make(&mut encoder, target.format());
+    {
+        let colour = wgpu::Color {
+            r: behind,
+            g: behind,
+            b: behind,
+            a: 1.0,
+        };
+        let mut render = atmo_gpu::display::cleared_pass(&mut encoder, &view, "behind", colour);
+        pass.draw_into(&mut render);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = gpu
+        .read_texture("the picture", &target, width, height)
+        .unwrap();
+    bytemuck::cast_slice(&bytes).to_vec()
+}

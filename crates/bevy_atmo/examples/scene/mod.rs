@@ -40,6 +40,20 @@ pub fn headless_app() -> App {
     app
 }
 
+/// The value after `flag` on the command line (`--frames 30`), if it is there.
+pub fn option(flag: &str) -> Option<String> {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == flag)
+        .and_then(|i| args.get(i + 1))
+        .cloned()
+}
+
+/// Whether `flag` is on the command line (`--json`).
+pub fn switch(flag: &str) -> bool {
+    std::env::args().any(|a| a == flag)
+}
+
 /// Whether every sky and every cloud in `world` is ready and none is being built again
 /// (their models are built on background threads: seconds).
 pub fn built(world: &mut World) -> bool {
