@@ -1,5 +1,6 @@
 //! How near the truth Bevy's own `Atmosphere` (Hillaire 2020, its LUTs and its
-//! raymarched mode) and bevy_atmo's sky come, each drawn by Bevy for the same
+//! raymarched mode) and bevy_atmo's sky (from a model of the camera's altitude, and
+//! from a skylight table of every altitude) come, each drawn by Bevy for the same
 //! atmosphere, suns and altitudes, against atmo's reference: single scattering by
 //! quadrature and orders 2 and up by its path tracer (`atmo::reference::sky`), for
 //! Bevy's own Earth (`bevy-earth.toml` beside this file: its coefficients as Bevy's code
@@ -25,9 +26,10 @@
 //! GPU, or on lavapipe 25 (`scripts/lavapipe-25.sh`).
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use atmo::reference::sky::{ReferenceSettings, ReferenceSky};
-use atmo::sky::{Order, SkySettings};
+use atmo::sky::{Order, SkySettings, SkylightTable, TableSettings};
 use bevy::camera::{Exposure, RenderTarget};
 use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::light::atmosphere::{Falloff, ScatteringMedium};
@@ -73,11 +75,19 @@ type Keep = Box<dyn Fn(f64, f64) -> bool>;
 enum Renderer {
     BevyLut,
     BevyRaymarched,
+    /// atmo's model of the camera's altitude.
     Atmo,
+    /// atmo's skylight table (sky 4, its default settings): every altitude to 13 km.
+    AtmoTable,
 }
 
 impl Renderer {
-    const ALL: [Renderer; 3] = [Renderer::BevyLut, Renderer::BevyRaymarched, Renderer::Atmo];
+    const ALL: [Renderer; 4] = [
+        Renderer::BevyLut,
+        Renderer::BevyRaymarched,
+        Renderer::Atmo,
+        Renderer::AtmoTable,
+    ];
 
     /// Its name in the JSON lines' `bench`.
     fn key(self) -> &'static str {
@@ -85,6 +95,7 @@ impl Renderer {
             Renderer::BevyLut => "bevy-lut",
             Renderer::BevyRaymarched => "bevy-raymarched",
             Renderer::Atmo => "bevy-atmo",
+            Renderer::AtmoTable => "bevy-atmo-table",
         }
     }
 
@@ -93,6 +104,7 @@ impl Renderer {
             Renderer::BevyLut => "Bevy's Atmosphere (LUTs, its default)",
             Renderer::BevyRaymarched => "Bevy's Atmosphere (raymarched)",
             Renderer::Atmo => "bevy_atmo (every order)",
+            Renderer::AtmoTable => "bevy_atmo (a table)",
         }
     }
 
@@ -101,7 +113,7 @@ impl Renderer {
         let exposure = f64::from(EXPOSURE.exposure());
         match self {
             Renderer::BevyLut | Renderer::BevyRaymarched => f64::from(BEVY_SUN_LUX) * exposure,
-            Renderer::Atmo => atmo::sky::lighting::LUMENS_PER_WATT * exposure,
+            Renderer::Atmo | Renderer::AtmoTable => atmo::sky::lighting::LUMENS_PER_WATT * exposure,
         }
     }
 }
@@ -231,11 +243,44 @@ struct Setup {
 }
 
 impl Setup {
+    /// atmo's settings: every order, or with `--single` the first.
+    fn sky_settings(self) -> SkySettings {
+        SkySettings {
+            order: if self.single {
+                Order::Through(1)
+            } else {
+                Order::All
+            },
+            ..default()
+        }
+    }
+
     /// Its name in file names and the JSON lines' `bench`.
     fn name(self) -> String {
         let single = if self.single { "-single" } else { "" };
         format!("{}-earth{single}", self.earth.name())
     }
+}
+
+/// atmo's skylight table of `setup`'s atmosphere and settings (the rest its defaults),
+/// made once (about a minute on two cores) and kept in `target/`.
+fn table(setup: Setup) -> Arc<SkylightTable> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../target")
+        .join(format!("bevy-accuracy-{}.atmo-sky", setup.name()));
+    let table = SkylightTable::read(&path).unwrap_or_else(|_| {
+        eprintln!("the table: {}", path.display());
+        let settings = TableSettings {
+            sky: setup.sky_settings(),
+            ..TableSettings::default()
+        };
+        let table = SkylightTable::precompute(&setup.earth.atmo(), &settings, &|_, _| {})
+            .expect("the example's table");
+        // Kept for the next run where it can be; this one has it either way.
+        let _ = table.write(&path);
+        table
+    });
+    Arc::new(table)
 }
 
 /// The reference's radiance per channel (red, green, blue) and its standard error, for
@@ -341,21 +386,18 @@ fn app(renderer: Renderer, setup: Setup) -> App {
             Transform::default().looking_to(look, up),
         ));
         match renderer {
-            Renderer::Atmo => {
-                let settings = SkySettings {
-                    order: if setup.single {
-                        Order::Through(1)
-                    } else {
-                        Order::All
-                    },
-                    ..default()
+            Renderer::Atmo | Renderer::AtmoTable => {
+                let source = if renderer == Renderer::Atmo {
+                    SkySource::Model {
+                        settings: setup.sky_settings(),
+                        rebuild_after_m: 500.0,
+                    }
+                } else {
+                    SkySource::Table(table(setup))
                 };
                 camera.insert(AtmoSky {
-                    atmosphere: std::sync::Arc::new(setup.earth.atmo()),
-                    source: SkySource::Model {
-                        settings,
-                        rebuild_after_m: 500.0,
-                    },
+                    atmosphere: Arc::new(setup.earth.atmo()),
+                    source,
                     sun_disc: false,
                     aerial_perspective: false,
                     sky_light: SkyLight::Off,
@@ -386,7 +428,7 @@ fn app(renderer: Renderer, setup: Setup) -> App {
         );
     }
     match renderer {
-        Renderer::Atmo => {
+        Renderer::Atmo | Renderer::AtmoTable => {
             world.spawn((AtmoSun, Transform::default()));
         }
         Renderer::BevyLut | Renderer::BevyRaymarched => {
