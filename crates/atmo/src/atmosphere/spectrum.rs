@@ -184,4 +184,42 @@ mod tests {
         let rgb = m.rgb(&sky);
         assert!(rgb[2] > rgb[1] && rgb[1] > rgb[0], "{rgb:?}");
     }
+
+    #[test]
+    fn colour_rows_of_srgbs_primaries_give_the_channels_themselves() {
+        // An atmosphere whose three "wavelengths" are an RGB renderer's channels (Bevy's,
+        // bevy_atmo's accuracy example) gives XYZ rows that are sRGB's primaries (blue,
+        // green, red, as the wavelengths increase): its picture is the channels.
+        let text = r#"
+name = "rgb"
+bottom_radius_m = 6360000.0
+top_radius_m = 6460000.0
+sun_angular_radius_deg = 0.2667
+wavelengths_nm = [440.0, 550.0, 680.0]
+solar_irradiance = 1.0
+[rayleigh]
+scale_height_m = 8000.0
+scattering_per_m = [33.1e-6, 13.558e-6, 5.802e-6]
+phase = { kind = "rayleigh" }
+[mie]
+scale_height_m = 1200.0
+scattering_per_m = 3.996e-6
+phase = { kind = "henyey-greenstein", g = 0.8 }
+[colour]
+x = [0.1804375, 0.3575761, 0.4124564]
+y = [0.0721750, 0.7151522, 0.2126729]
+z = [0.9503041, 0.1191920, 0.0193339]
+"#;
+        let atmosphere = crate::Atmosphere::from_toml_str(text, "test").unwrap();
+        let m = SpectrumToRgb::for_atmosphere(&atmosphere);
+        for (channel, rgb) in [(0, 2), (1, 1), (2, 0)] {
+            let mut radiance = [0.0f32; 3];
+            radiance[channel] = 1.0;
+            let got = m.rgb(&radiance);
+            for (c, v) in got.iter().enumerate() {
+                let want = if c == rgb { 1.0 } else { 0.0 };
+                assert!((v - want).abs() < 1e-5, "channel {channel}: {got:?}");
+            }
+        }
+    }
 }
