@@ -65,14 +65,15 @@ impl RayMarcher {
     pub fn radiance(&self, scene: &Scene, ray: Vec3) -> Vec3 {
         let length = ray.length();
         let dir = ray / length;
-        let hit = first_hit(scene, dir, scene.far_m() * length);
+        let far = scene.far_m() * length;
+        let hit = first_hit(scene, dir, far);
         let mut radiance = match &hit {
             Some(point) => {
                 surface_radiance(scene, point, |_, light| shadow_ray(scene, light, point))
             }
             None => Vec3::ZERO,
         };
-        let end = hit.map_or(scene.far_m() * length, |p| p.distance);
+        let end = hit.map_or(far, |p| p.distance);
         for light in scene.lights() {
             radiance += self.scattered(scene, light, dir, end);
         }

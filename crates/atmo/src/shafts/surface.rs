@@ -107,10 +107,10 @@ pub fn shadow_ray(scene: &Scene, light: &Spotlight, point: &SurfacePoint) -> f32
 /// edge is among the first, the lamp's own pixel among the second).
 pub fn pixel_kinds(scene: &Scene) -> (Vec<usize>, Vec<usize>) {
     let camera = &scene.camera;
-    let width = camera.width as usize;
+    let (width, far) = (camera.width as usize, scene.far_m());
     (0..width * camera.height as usize).partition(|&k| {
         let ray = camera.ray((k % width) as f32 + 0.5, (k / width) as f32 + 0.5);
         let length = ray.length();
-        first_hit(scene, ray / length, scene.far_m() * length).is_some()
+        first_hit(scene, ray / length, far * length).is_some()
     })
 }

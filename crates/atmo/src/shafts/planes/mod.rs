@@ -127,6 +127,8 @@ pub struct SamplePlanes<'a> {
     attenuation: AttenuationTable,
     /// Per object, where it shows on the camera's view plane.
     objects: Vec<ViewBox>,
+    /// Where rays that meet nothing end, camera depth, m ([`Scene::far_m`]).
+    far: f32,
 }
 
 impl<'a> SamplePlanes<'a> {
@@ -203,6 +205,7 @@ impl<'a> SamplePlanes<'a> {
                 .iter()
                 .map(|o| ViewBox::of(o.shape.bounds(), camera))
                 .collect(),
+            far,
         }
     }
 
@@ -433,7 +436,7 @@ impl<'a> SamplePlanes<'a> {
     fn surface(&self, ray: Vec3) -> (Vec3, f32) {
         let scene = self.scene;
         let length = ray.length();
-        let far = scene.far_m() * length;
+        let far = self.far * length;
         let at = view_point(&scene.camera, ray);
         let objects = (scene.objects.list.iter().zip(&self.objects))
             .filter(|(_, b)| b.holds(at))
