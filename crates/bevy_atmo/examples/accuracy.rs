@@ -262,12 +262,17 @@ impl Setup {
     }
 }
 
+/// Where a file the example keeps between runs lies: in the workspace's `target/`.
+fn kept(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../target")
+        .join(name)
+}
+
 /// atmo's skylight table of `setup`'s atmosphere and settings (the rest its defaults),
 /// made once (about a minute on two cores) and kept in `target/`.
 fn table(setup: Setup) -> Arc<SkylightTable> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../target")
-        .join(format!("bevy-accuracy-{}.atmo-sky", setup.name()));
+    let path = kept(&format!("bevy-accuracy-{}.atmo-sky", setup.name()));
     let table = SkylightTable::read(&path).unwrap_or_else(|_| {
         eprintln!("the table: {}", path.display());
         let settings = TableSettings {
@@ -286,27 +291,20 @@ fn table(setup: Setup) -> Arc<SkylightTable> {
 /// The reference's radiance per channel (red, green, blue) and its standard error, for
 /// every case's probes, in the order of [`cases`]; computed once for `paths` and kept.
 fn reference(setup: Setup, paths: usize) -> Vec<Vec<Truth>> {
-    let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../target")
-        .join(format!(
-            "bevy-accuracy-reference-{}-{paths}.json",
-            setup.name()
-        ));
+    let cache = kept(&format!(
+        "bevy-accuracy-reference-{}-{paths}.json",
+        setup.name()
+    ));
     if let Ok(text) = std::fs::read_to_string(&cache) {
         if let Ok(kept) = serde_json::from_str(&text) {
             return kept;
         }
     }
     let atmosphere = setup.earth.atmo();
-    let jobs: Vec<(usize, usize, Probe)> = cases()
-        .iter()
+    let jobs: Vec<(usize, (f64, f64), Probe)> = cases()
+        .into_iter()
         .enumerate()
-        .flat_map(|(c, &(_, sun))| {
-            probes(sun)
-                .into_iter()
-                .enumerate()
-                .map(move |(i, p)| (c, i, p))
-        })
+        .flat_map(|(c, case)| probes(case.1).into_iter().map(move |p| (c, case, p)))
         .collect();
     eprintln!(
         "the reference: {} directions, {paths} paths a channel",
@@ -314,8 +312,7 @@ fn reference(setup: Setup, paths: usize) -> Vec<Vec<Truth>> {
     );
     let done: Vec<(usize, Truth)> = jobs
         .par_iter()
-        .map(|&(c, _, p)| {
-            let (altitude, sun) = cases()[c];
+        .map(|&(c, (altitude, sun), p)| {
             let sky = ReferenceSky::new(
                 &atmosphere,
                 altitude,
@@ -362,6 +359,25 @@ fn app(renderer: Renderer, setup: Setup) -> App {
     let mut app = scene::headless_app();
     app.init_resource::<Shots>();
     let world = app.world_mut();
+    // One atmosphere and sky for the five cameras (a table is read or made once).
+    let atmo_sky = match renderer {
+        Renderer::Atmo | Renderer::AtmoTable => Some(AtmoSky {
+            atmosphere: Arc::new(setup.earth.atmo()),
+            source: if renderer == Renderer::Atmo {
+                SkySource::Model {
+                    settings: setup.sky_settings(),
+                    rebuild_after_m: 500.0,
+                }
+            } else {
+                SkySource::Table(table(setup))
+            },
+            sun_disc: false,
+            aerial_perspective: false,
+            sky_light: SkyLight::Off,
+            ..AtmoSky::earth()
+        }),
+        Renderer::BevyLut | Renderer::BevyRaymarched => None,
+    };
     for (face, (look, up)) in FACES.into_iter().enumerate() {
         let mut image = Image::new_target_texture(FACE, FACE, TextureFormat::Rgba32Float, None);
         image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
@@ -385,26 +401,11 @@ fn app(renderer: Renderer, setup: Setup) -> App {
             Msaa::Off,
             Transform::default().looking_to(look, up),
         ));
-        match renderer {
-            Renderer::Atmo | Renderer::AtmoTable => {
-                let source = if renderer == Renderer::Atmo {
-                    SkySource::Model {
-                        settings: setup.sky_settings(),
-                        rebuild_after_m: 500.0,
-                    }
-                } else {
-                    SkySource::Table(table(setup))
-                };
-                camera.insert(AtmoSky {
-                    atmosphere: Arc::new(setup.earth.atmo()),
-                    source,
-                    sun_disc: false,
-                    aerial_perspective: false,
-                    sky_light: SkyLight::Off,
-                    ..AtmoSky::earth()
-                });
+        match &atmo_sky {
+            Some(sky) => {
+                camera.insert(sky.clone());
             }
-            Renderer::BevyLut | Renderer::BevyRaymarched => {
+            None => {
                 camera.insert(AtmosphereSettings {
                     rendering_method: if renderer == Renderer::BevyLut {
                         AtmosphereMode::LookupTexture
