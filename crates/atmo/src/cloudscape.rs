@@ -266,7 +266,7 @@ impl SkyAround {
         let background = SkyPicture::new(&self.at_camera, sun).render(&view);
         Ok((
             self.at_cloud.sunlight(sun),
-            SkyLight::from_harmonics(&self.at_cloud.skylight(sun)),
+            SkyLight::from_map(&self.at_cloud.skylight_map(sun)),
             haze_before(&self.at_camera, sun, self.centre - camera.position)?,
             background,
         ))

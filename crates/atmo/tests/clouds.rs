@@ -376,6 +376,62 @@ fn billboards_composite_as_clouds_five_each_blob_taking_its_absorbed_share() {
     assert_eq!(frame.pixels[0], Vec3::splat(2.0));
 }
 
+/// The paper's own billboards, the frame's baseline: two blobs on the axis each send
+/// `a tau p Gamma` (clouds (6)), `Gamma` read at the centre, composited by (5) over
+/// the background; the sky and every order of the light given are not theirs.
+#[test]
+fn the_papers_billboards_send_a_tau_p_gamma_each() {
+    use atmo::atmosphere::PhaseFunction;
+    use atmo::clouds::render::{paper_billboards, render, AerialHaze, CloudLight};
+    use atmo::clouds::{Scattering, SkyLight};
+    use atmo::image::Frame;
+    let particle = |z: f32, density: f32| Particle {
+        position: Vec3::new(0.0, 0.0, z),
+        radius: 6.0,
+        density,
+        albedo: 0.8,
+    };
+    let particles = vec![particle(-200.0, 0.3), particle(-100.0, 0.02)];
+    let camera = axis_camera();
+    let light = CloudLight {
+        to_sun: Vec3::Y,
+        sun: Vec3::ONE,
+        ambient: SkyLight::uniform(Vec3::ONE),
+        phase: PhaseFunction::CloudMie,
+        haze: AerialHaze::CLEAR,
+        scattering: Scattering::MULTIPLE,
+    };
+    let buffer = IntensityBuffer::new(&particles, Vec3::Y, 16, 0.0, Splat::Pieces).unwrap();
+    let mut background = Frame::new(65, 65);
+    background.pixels.fill(Vec3::splat(2.0));
+    let paper = paper_billboards(&particles, &buffer, &camera, &light, Some(&background)).unwrap();
+    // The sun straight above, the ray along the axis: the phase at 90 degrees.
+    let p = PhaseFunction::CloudMie.eval_f32(0.0);
+    let source = |k: usize| {
+        let q = &particles[k];
+        0.8 * q.faded_column(0.0) * p * buffer.sample(q.position)
+    };
+    let through = |k: usize| (-particles[k].faded_column(0.0)).exp();
+    let want = source(1) + through(1) * (source(0) + through(0) * 2.0);
+    let got = paper.pixels[32 * 65 + 32];
+    assert!(
+        (got - Vec3::splat(want)).abs().max_element() < 1e-4 * want,
+        "{got} vs {want}"
+    );
+    assert_eq!(paper.pixels[0], Vec3::splat(2.0));
+    // The far blob is thick (a column of 1.5): the paper's thin blob sends more than
+    // the drawing's, which absorbs its own light.
+    let single = CloudLight {
+        ambient: SkyLight::NONE,
+        scattering: Scattering::SINGLE,
+        ..light
+    };
+    let drawn = render(&particles, &buffer, &camera, &single, Some(&background)).unwrap();
+    let behind = 2.0 * through(0) * through(1);
+    let (thin, absorbing) = (got.x - behind, drawn.pixels[32 * 65 + 32].x - behind);
+    assert!(thin > 1.4 * absorbing, "{thin} vs {absorbing}");
+}
+
 /// The billboards are drawn eight pixels of a row at a time: a blob on the axis comes out
 /// the same on both sides of it (its pixels fall in other lanes on each side), and a
 /// blob cut by the frame's right edge lights nothing at the left of the rows below (the

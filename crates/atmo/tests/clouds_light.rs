@@ -9,7 +9,6 @@ use atmo::clouds::render::{render, AerialHaze, CloudLight};
 use atmo::clouds::{CloudShadow, Cumulus, Octaves, Particle, Scattering, SkyLight};
 use atmo::image::Frame;
 use atmo::reference::clouds::{fifths, Agreement, PathSettings, ReferenceCloud, ReferenceLight};
-use atmo::sky::lighting::project_equirect;
 use atmo::view::{Camera, Fov, Sun};
 use glam::{DVec3, Vec3};
 
@@ -311,7 +310,7 @@ fn the_sky_light_matches_the_path_tracer_in_the_mean() {
     let above = {
         let mut map = Frame::new(64, 32);
         map.pixels[..64 * 16].fill(Vec3::ONE);
-        SkyLight::from_harmonics(&project_equirect(&map))
+        SkyLight::from_map(&map)
     };
     let cloud = reference(&particles, to_sun);
     for height in [2400.0, 1200.0, 300.0] {
@@ -371,16 +370,18 @@ fn the_sky_light_matches_the_path_tracer_in_the_mean() {
             );
         }
         // Measured: 1.06 (thirds 1.15, 0.97, 1.35) from above, 1.09 (1.13, 1.10, 0.96)
-        // level, 1.08 (1.16, 1.11, 0.87) from below; through the solve 1.05 (1.02,
-        // 1.01, 1.36), 1.00 (0.93, 1.01, 1.08) and 1.03 (0.98, 1.06, 0.97); not dimmed
+        // level, 1.08 (1.16, 1.11, 0.87) from below; through the solve 0.96 (0.99,
+        // 0.93, 1.08), 1.01 (0.98, 1.01, 1.10) and 1.04 (0.97, 1.06, 1.03), where the
+        // solve read the sky's harmonics it was 1.05 (1.02, 1.01, 1.36) from above, the
+        // base lit by their ringing from below the horizon; not dimmed
         // inside the cloud, 0.97 (0.83, 0.92, 1.48), 1.10 (0.86, 1.16, 1.23) and 1.18
         // (1.01, 1.26, 1.03); the isotropic term from above 1.09 (0.86, 1.03, 1.78).
         // From above, the rows at the bottom are the cloud's lower flanks, where the
         // droplets' forward lobe looks at the dark below. Each way: the mean within
-        // `mean` of the path tracer's, every third within `low` to 1.4.
-        for (name, fast, mean, low) in [
-            ("the dimming profile", &harmonics, 0.12, 0.8),
-            ("through the solve", &solved, 0.07, 0.85),
+        // `mean` of the path tracer's, every third within `low` to `high`.
+        for (name, fast, mean, low, high) in [
+            ("the dimming profile", &harmonics, 0.12, 0.8, 1.4),
+            ("through the solve", &solved, 0.05, 0.9, 1.15),
         ] {
             let whole = ratio(fast, 0..28);
             assert!(
@@ -389,7 +390,7 @@ fn the_sky_light_matches_the_path_tracer_in_the_mean() {
             );
             for third in thirds(fast) {
                 assert!(
-                    third > low && third < 1.4,
+                    third > low && third < high,
                     "from {height} m, {name}, a third: {third}"
                 );
             }

@@ -240,7 +240,7 @@ pub(crate) fn light_the_clouds(
             let lit = CloudSun {
                 sun,
                 sunlight: daylight.sunlight(sun),
-                skylight: SkyLight::from_harmonics(&daylight.skylight(sun)),
+                skylight: SkyLight::from_map(&daylight.skylight_map(sun)),
             };
             state.lit = Some(lit);
         }

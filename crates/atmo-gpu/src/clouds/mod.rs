@@ -675,7 +675,7 @@ impl GpuClouds {
             )?);
         }
         let solve = kept.as_mut().expect("made above");
-        if solve.sun != Some((light.to_sun, frame, light.ambient.harmonics)) {
+        if solve.sun != Some((light.to_sun, frame, light.ambient)) {
             solve.record_solve(
                 gpu,
                 pipelines,

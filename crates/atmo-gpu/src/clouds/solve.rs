@@ -13,7 +13,7 @@
 
 use atmo::atmosphere::phase::PhaseFunction;
 use atmo::clouds::diffusion::{
-    directions, sky_radiance, Diffusion, PhaseTables, SolveGrid, DIRECTIONS, LAGS_COLD, LAGS_WARM,
+    directions, Diffusion, PhaseTables, SolveGrid, DIRECTIONS, LAGS_COLD, LAGS_WARM,
 };
 use atmo::clouds::SkyLight;
 
@@ -77,7 +77,7 @@ pub(super) struct GpuSolve {
     through: bool,
     /// The sun and the sky the solution is of and the light pass it read (none before
     /// the first), and the eye `seen` is for.
-    pub(super) sun: Option<(Vec3, BufferFrame, [Vec3; 9])>,
+    pub(super) sun: Option<(Vec3, BufferFrame, SkyLight)>,
     pub(super) eye: Option<Vec3>,
     cells: u32,
 }
@@ -301,10 +301,7 @@ impl GpuSolve {
             bytemuck::cast_slice(&shares),
         );
         // The sky's radiance arriving along each direction, the CPU's.
-        let radiance: Vec<f32> = sky_radiance(sky, &directions)
-            .iter()
-            .flat_map(|l| l.to_array())
-            .collect();
+        let radiance: Vec<f32> = sky.around().iter().flat_map(|l| l.to_array()).collect();
         let at = at + DIRECTIONS * 4 * 4;
         gpu.queue.write_buffer(
             &self.tables_buffer,
@@ -354,7 +351,7 @@ impl GpuSolve {
         }
         drop(pass);
         self.through |= with_sky;
-        self.sun = Some((to_sun, *frame, sky.harmonics));
+        self.sun = Some((to_sun, *frame, *sky));
         self.eye = None;
     }
 

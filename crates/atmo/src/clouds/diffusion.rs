@@ -375,16 +375,6 @@ pub fn directions() -> Vec<Vec3> {
         .collect()
 }
 
-/// The sky's radiance arriving along each of `directions` (from the opposite way), RGB,
-/// the harmonics' ringing kept from going below 0: what the solve carries in from the
-/// grid's faces.
-pub fn sky_radiance(sky: &SkyLight, directions: &[Vec3]) -> Vec<Vec3> {
-    directions
-        .iter()
-        .map(|&w| sky.along(-w).max(Vec3::ZERO))
-        .collect()
-}
-
 /// The diffuse field's radiance at a point from its fluence `phi` and flux `F` alone,
 /// by Minerbo's maximum-entropy closure: `L(w) ~ exp(b w . F/|F|)`, `b` such that its
 /// mean cosine is `r = |F| / phi` (Langevin's `coth b - 1/b = r`, the function the flux
@@ -1224,7 +1214,8 @@ impl SkyField {
                 .map(|&w| sweep(medium, w, Sweep::FromOutside, f))
                 .collect(),
         };
-        let radiance = sky_radiance(sky, directions);
+        debug_assert_eq!(directions.len(), DIRECTIONS, "the sky's directions");
+        let radiance = sky.around().to_vec();
         let weight = 4.0 * std::f32::consts::PI / directions.len() as f32;
         let n = medium.sigma_t.len();
         // Per cell the uncollided light's fluence and flux, per channel.

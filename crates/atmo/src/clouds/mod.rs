@@ -5,7 +5,8 @@
 //! filled in any particle order by the multiplicative form (7).
 //!
 //! [`harris`] is the baseline light pass the buffer is measured against; [`render`](mod@render)
-//! draws the billboards, lit by the sun through the buffer, by every order of it
+//! draws the billboards (and the paper's own, [`paper_billboards`], the drawing's
+//! baseline), lit by the sun through the buffer, by every order of it
 //! ([`transfer`]'s table, [`diffusion`]'s solve or [`octaves`]) and by the sky
 //! ([`sky_light`]); [`shadow`] is the cloud's shadow on the
 //! ground; [`files`] reads and writes particles.
@@ -29,8 +30,8 @@ pub use generator::Cumulus;
 pub use octaves::Octaves;
 pub use particles::Particle;
 pub use render::{
-    dims_the_sky, needs_depths, render, render_with_depths, solve_for, AerialHaze, CloudLight,
-    Scattering,
+    dims_the_sky, needs_depths, paper_billboards, render, render_with_depths, solve_for,
+    AerialHaze, CloudLight, Scattering,
 };
 pub use shadow::CloudShadow;
 pub use sky_light::{vertical_depths, SkyDimming, SkyLight};

@@ -44,7 +44,7 @@ use super::transfer::{Cells, CloudDepths, Slices, TransferTable};
 use crate::atmosphere::phase::PhaseFunction;
 use crate::error::{Error, Result};
 use crate::image::Frame;
-use crate::lanes::{Lanes, LANES};
+use crate::lanes::{exp_lanes, Lanes, LANES};
 use crate::view::Camera;
 
 /// How the cloud is lit.
@@ -238,6 +238,67 @@ pub fn render_with_depths(
     light: &CloudLight,
     background: Option<&Frame>,
 ) -> Result<Frame> {
+    let blob = Pixel::Blob;
+    drawn(
+        particles, depths, buffer, diffuse, camera, light, background, blob,
+    )
+}
+
+/// The paper's own billboards, the baseline `atmo bench clouds` times the frame
+/// against: each blob's pixel sends `S = a tau p Gamma / 4 pi` (clouds (6), the blob
+/// thin) with `Gamma` read from the buffer once, where the pixel's ray passes nearest
+/// the blob's centre (on its billboard; the per-fragment read of clouds 4.3), and lets
+/// through `e^-tau`. The sun's single scattering alone (`light`'s sun, phase and haze;
+/// no sky, the paper's model). The drawing is [`render`]'s (its order, footprints and
+/// finished pixels, eight pixels at a time): only the pixel differs, so the two times
+/// compare what a pixel costs.
+pub fn paper_billboards(
+    particles: &[Particle],
+    buffer: &IntensityBuffer,
+    camera: &Camera,
+    light: &CloudLight,
+    background: Option<&Frame>,
+) -> Result<Frame> {
+    let light = CloudLight {
+        ambient: SkyLight::NONE,
+        scattering: Scattering::SINGLE,
+        ..*light
+    };
+    let none = CloudDepths::default();
+    drawn(
+        particles,
+        &none,
+        buffer,
+        None,
+        camera,
+        &light,
+        background,
+        Pixel::Paper,
+    )
+}
+
+/// What a blob's pixel computes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Pixel {
+    /// The light the blob sends along the pixel's ray, integrated over its depth at its
+    /// emission nodes ([`render`]).
+    Blob,
+    /// The paper's thin blob lit by one read ([`paper_billboards`]).
+    Paper,
+}
+
+/// [`render_with_depths`] with the pixel `pixel`.
+#[allow(clippy::too_many_arguments)]
+fn drawn(
+    particles: &[Particle],
+    depths: &CloudDepths,
+    buffer: &IntensityBuffer,
+    diffuse: Option<&DiffuseLight>,
+    camera: &Camera,
+    light: &CloudLight,
+    background: Option<&Frame>,
+    pixel: Pixel,
+) -> Result<Frame> {
     let (w, h) = (camera.width as usize, camera.height as usize);
     let (_, tan_half_height) = camera.pinhole("the clouds' billboards")?;
     let focal = 0.5 * h as f32 / tan_half_height;
@@ -364,6 +425,7 @@ pub fn render_with_depths(
         finished: &finished,
         table,
         solved: solved.map(|s| s.seen_from(camera.position)),
+        pixel,
     };
     let table = blobs.table.is_some();
     let every_order = table || blobs.solved.is_some();
@@ -439,6 +501,8 @@ struct Blobs<'a> {
     table: Option<Tabled<'a>>,
     /// With a transfer solve, its light seen from the eye.
     solved: Option<Seen>,
+    /// What a blob's pixel computes.
+    pixel: Pixel,
 }
 
 /// The transfer table laid out for drawing, and per particle its depth out of the
@@ -593,6 +657,19 @@ impl Blobs<'_> {
                     // (the slope of `ln Gamma` along the light) and its whole depth
                     // along the sun's ray through the nearest; the phase for this ray.
                     let g_ray = lanes3(g_y, gx, xf);
+                    let phase = Lanes::from(&self.phases[band * BAND * w + i..][..LANES]);
+                    if self.pixel == Pixel::Paper {
+                        // clouds (6): `a tau p Gamma`, Gamma read where the ray passes
+                        // nearest the centre.
+                        let at = std::array::from_fn(|c| Lanes::splat(g_eye[c]) + g_ray[c] * t);
+                        let gamma = exp_lanes(self.buffer.sample_log_lanes(at));
+                        let old = Lanes::from(&single[i..i + LANES]);
+                        let new = old + t_through * albedo * tau * phase * gamma;
+                        single[i..i + LANES].copy_from_slice(live.select(new, old).as_array());
+                        let kept = live.select(t_through * exp_lanes(-tau), t_through);
+                        through[i..i + LANES].copy_from_slice(kept.as_array());
+                        continue;
+                    }
                     let along_scale = Lanes::splat(s) / rr.sqrt();
                     let nodes = tabulated_emission_nodes_lanes(tau);
                     let at = |j: usize| -> [Lanes; 3] {
@@ -621,7 +698,6 @@ impl Blobs<'_> {
                         beside,
                         slab: reads[0][2],
                     };
-                    let phase = Lanes::from(&self.phases[band * BAND * w + i..][..LANES]);
                     let blob = self.octaves.light(phase, &emission);
                     let lit = t_through * albedo;
                     let add = |sums: &mut [f32], v: Lanes| {

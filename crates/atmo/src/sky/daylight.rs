@@ -10,6 +10,7 @@ use super::{SkyModel, SkyPicture, SkySettings};
 use crate::atmosphere::spectrum::SpectrumToRgb;
 use crate::atmosphere::Atmosphere;
 use crate::error::Result;
+use crate::image::Frame;
 use crate::view::Sun;
 
 /// Rows of the equirectangular map [`Daylight::skylight`] projects (5.6 deg a row):
@@ -49,7 +50,14 @@ impl Daylight {
     /// disc) as nine spherical harmonics per linear-sRGB channel ([`super::lighting`]'s
     /// basis): the light a cloud's droplets scatter from the sky.
     pub fn skylight(&self, sun: Sun) -> [[f64; 3]; 9] {
-        project_equirect(&SkyPicture::new(&self.model, sun).equirect(SKYLIGHT_MAP_HEIGHT, false))
+        project_equirect(&self.skylight_map(sun))
+    }
+
+    /// The same light as an equirectangular map ([`super::envmap`]'s conventions),
+    /// [`SKYLIGHT_MAP_HEIGHT`] rows: for what needs the sky's own shape, such as its
+    /// horizon, which nine harmonics blur (a cloud's transfer solve).
+    pub fn skylight_map(&self, sun: Sun) -> Frame {
+        SkyPicture::new(&self.model, sun).equirect(SKYLIGHT_MAP_HEIGHT, false)
     }
 
     /// The model behind the two.

@@ -70,7 +70,7 @@ fn reference() -> atmo::image::Frame {
     let light = CloudLight {
         to_sun: sun.toward(),
         sun: daylight.sunlight(sun),
-        ambient: atmo::clouds::SkyLight::from_harmonics(&daylight.skylight(sun)),
+        ambient: atmo::clouds::SkyLight::from_map(&daylight.skylight_map(sun)),
         phase: clouds.phase,
         haze: haze_before(&model, sun, centre - EYE).unwrap(),
         scattering: clouds.scattering,
