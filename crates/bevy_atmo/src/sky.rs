@@ -184,7 +184,10 @@ pub(crate) fn same_atmosphere(a: &Arc<Atmosphere>, b: &Arc<Atmosphere>) -> bool 
 pub struct AtmoSkyState {
     pub(crate) ready: Option<ReadySky>,
     pub(crate) generation: u64,
-    building: Option<Task<Built>>,
+    /// The build under way, the recipe it is of and the altitude it is for, m.
+    building: Option<(Task<Built>, Recipe, f64)>,
+    /// The recipe the model drawn now was made from (another camera may share it).
+    made_from: Option<Recipe>,
     /// What the sky is made from; `None` before the first.
     recipe: Option<Recipe>,
     /// The recipe changed since the last model was started.
@@ -215,10 +218,45 @@ type SkyCameraParts<'a> = (
     Option<&'a mut Camera3d>,
 );
 
+/// A model one camera has made, or is making, that another of the same recipe near
+/// the same altitude takes rather than building its own.
+struct Shared {
+    recipe: Recipe,
+    /// The model's altitude, m.
+    altitude_m: f64,
+    /// The model and its view rays; `None` while it is being built.
+    model: Option<(Arc<SkyModel>, Option<Arc<AerialRays>>)>,
+}
+
 /// Starts a model for each camera whose sky has none, whose recipe changed (a build
 /// under way for the old one is dropped), or which left its model's altitude; takes
-/// the models that are done.
+/// the models that are done. Cameras share: one whose sky another camera of the same
+/// recipe has made, or is making, within its `rebuild_after_m` takes that model (a
+/// split screen or a mirror's camera builds nothing of its own).
 pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraParts>) {
+    let mut shared: Vec<Shared> = cameras
+        .iter()
+        .filter_map(|(.., state, _)| state)
+        .flat_map(|state| {
+            let made = match (&state.ready, &state.made_from) {
+                (Some(ReadySky::Model(model, rays)), Some(recipe)) => Some(Shared {
+                    recipe: recipe.clone(),
+                    altitude_m: model.altitude_m(),
+                    model: Some((model.clone(), rays.clone())),
+                }),
+                _ => None,
+            };
+            let making = state
+                .building
+                .as_ref()
+                .map(|(_, recipe, altitude_m)| Shared {
+                    recipe: recipe.clone(),
+                    altitude_m: *altitude_m,
+                    model: None,
+                });
+            made.into_iter().chain(making)
+        })
+        .collect();
     for (entity, sky, transform, state, camera) in &mut cameras {
         // The aerial pass reads the depth buffer.
         let binding = TextureUsages::TEXTURE_BINDING.bits();
@@ -237,6 +275,7 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
         if sky.is_changed() && state.recipe.as_ref() != Some(&Recipe::of(&sky)) {
             state.recipe = Some(Recipe::of(&sky));
             state.building = None;
+            state.made_from = None;
             state.stale = true;
             state.failed = false;
         }
@@ -254,11 +293,16 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
                 rebuild_after_m,
             } => (settings, f64::from(*rebuild_after_m)),
         };
-        if let Some(done) = state.building.as_mut().and_then(check_ready) {
-            state.building = None;
+        if let Some(done) = state
+            .building
+            .as_mut()
+            .and_then(|(task, ..)| check_ready(task))
+        {
+            let (_, recipe, _) = state.building.take().expect("checked above");
             match done {
                 Ok((model, rays)) => {
                     state.ready = Some(ReadySky::Model(Arc::new(model), rays.map(Arc::new)));
+                    state.made_from = Some(recipe);
                     state.generation += 1;
                 }
                 Err(e) => {
@@ -273,19 +317,41 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
             _ => true,
         };
         if (state.stale || far) && state.building.is_none() && !state.failed {
-            state.stale = false;
-            let (atmosphere, settings) = (sky.atmosphere.clone(), settings.0.clone());
-            let far_m = sky
-                .aerial_perspective
-                .then_some(f64::from(sky.aerial_far_m));
-            state.building = Some(AsyncComputeTaskPool::get().spawn(async move {
-                let model = SkyModel::new(&atmosphere, &settings, altitude)?;
-                let slices = far_m.map(|far| quadratic_slices(aerial::SLICES, far));
-                let rays = slices
-                    .map(|s| model.aerial_rays(aerial::ROWS, &s))
-                    .transpose()?;
-                Ok((model, rays))
-            }));
+            let recipe = Recipe::of(&sky);
+            let near =
+                |s: &&Shared| s.recipe == recipe && (s.altitude_m - altitude).abs() <= settings.1;
+            match shared.iter().find(near).map(|s| &s.model) {
+                // Another camera's model: taken as it is.
+                Some(Some((model, rays))) => {
+                    state.stale = false;
+                    state.ready = Some(ReadySky::Model(model.clone(), rays.clone()));
+                    state.made_from = Some(recipe);
+                    state.generation += 1;
+                }
+                // Another camera's build under way: taken once it is done.
+                Some(None) => {}
+                None => {
+                    state.stale = false;
+                    let (atmosphere, settings) = (sky.atmosphere.clone(), settings.0.clone());
+                    let far_m = sky
+                        .aerial_perspective
+                        .then_some(f64::from(sky.aerial_far_m));
+                    let task = AsyncComputeTaskPool::get().spawn(async move {
+                        let model = SkyModel::new(&atmosphere, &settings, altitude)?;
+                        let slices = far_m.map(|far| quadratic_slices(aerial::SLICES, far));
+                        let rays = slices
+                            .map(|s| model.aerial_rays(aerial::ROWS, &s))
+                            .transpose()?;
+                        Ok((model, rays))
+                    });
+                    shared.push(Shared {
+                        recipe: recipe.clone(),
+                        altitude_m: altitude,
+                        model: None,
+                    });
+                    state.building = Some((task, recipe, altitude));
+                }
+            }
         }
     }
 }
@@ -318,5 +384,54 @@ mod tests {
             panic!("a table")
         };
         assert_eq!(settings, SkySettings::default());
+    }
+
+    #[test]
+    fn cameras_of_one_sky_near_one_altitude_share_one_model() {
+        // Two cameras 200 m apart (within the 500 m a model holds) build one model and
+        // draw it both; a third 2 km higher builds its own.
+        let mut app = App::new();
+        app.add_plugins(TaskPoolPlugin::default());
+        app.add_systems(Update, build_skies);
+        let sky = AtmoSky {
+            source: SkySource::Model {
+                settings: SkySettings {
+                    shells: 8,
+                    directions: 8,
+                    scattering_directions: 16,
+                    sun_bins: 8,
+                    ..SkySettings::default()
+                },
+                rebuild_after_m: 500.0,
+            },
+            aerial_perspective: false,
+            ..AtmoSky::earth()
+        };
+        let at = |y: f32| GlobalTransform::from_translation(Vec3::new(0.0, y, 0.0));
+        let cameras =
+            [1000.0, 1200.0, 3000.0].map(|y| app.world_mut().spawn((sky.clone(), at(y))).id());
+        let mut states = app.world_mut().query::<&AtmoSkyState>();
+        for _ in 0..2 {
+            app.update();
+        }
+        let building = states.iter(app.world()).filter(|s| s.is_building()).count();
+        assert_eq!(
+            building, 2,
+            "one build for the two cameras near 1 km, one at 3 km"
+        );
+        let start = std::time::Instant::now();
+        while !states.iter(app.world()).all(AtmoSkyState::is_ready) {
+            assert!(start.elapsed().as_secs() < 300, "the models never came");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            app.update();
+        }
+        let model = |camera: Entity| match &app.world().get::<AtmoSkyState>(camera).unwrap().ready {
+            Some(ReadySky::Model(model, _)) => model.clone(),
+            _ => panic!("no model"),
+        };
+        let [low, near, high] = cameras.map(model);
+        assert!(Arc::ptr_eq(&low, &near), "the two near 1 km share");
+        assert!(!Arc::ptr_eq(&low, &high));
+        assert_eq!((low.altitude_m(), high.altitude_m()), (1000.0, 3000.0));
     }
 }
