@@ -128,6 +128,21 @@ fn bad_cloud_input_exits_2_and_writes_nothing() {
             "applies to --scattering single only",
         ),
         (
+            vec!["--generate", "cumulus", "--solve-cells", "3"],
+            "--solve-cells = 3 is out of range: allowed [4, 256]",
+        ),
+        (
+            vec![
+                "--generate",
+                "cumulus",
+                "--scattering",
+                "octaves",
+                "--solve-cells",
+                "64",
+            ],
+            "--solve-cells = 64 applies to --scattering solve only",
+        ),
+        (
             vec!["--generate", "cumulus", "--ambient", "sky"],
             "the sky's light needs --sky",
         ),
@@ -337,6 +352,20 @@ fn an_explicit_camera_and_sun_and_every_order_brighter_than_one() {
     assert!(means[0] > 5.0, "{means:?}");
     assert!(means[1] > 1.3 * means[0], "{means:?}");
     assert!((means[2] / means[1] - 1.0).abs() < 0.2, "{means:?}");
+    // The solve on a coarser grid is the same light, drawn from other cells.
+    let coarse = dir.join("coarse.png");
+    let mut args = vec!["clouds"];
+    args.extend(EXPLICIT_VIEW);
+    args.extend(["--solve-cells", "8", "-o", coarse.to_str().unwrap()]);
+    args.extend(&SMALL_CLOUD[..8]);
+    let o = atmo(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (a, b) = (
+        image::open(&coarse).unwrap(),
+        image::open(dir.join("solve.png")).unwrap(),
+    );
+    assert_ne!(a.as_bytes(), b.as_bytes(), "--solve-cells changed nothing");
+    assert!((mean(&coarse) / means[2] - 1.0).abs() < 0.2, "{means:?}");
     // The GPU draws the solve too, the picture as the CPU's (the library's tests hold
     // the two to each other closely; here the command line's path through it).
     if has_gpu() {

@@ -66,6 +66,11 @@ pub struct CloudStill {
     /// the eye, whenever the camera moves).
     #[arg(long, value_enum, default_value_t = ScatteringArg::Solve)]
     pub scattering: ScatteringArg,
+    /// With --scattering solve: the solve's cells along the cloud's longest side, in
+    /// [4, 256] (default 32). Finer is nearer the path tracer in a thick cloud's core
+    /// seen against the sun and costs about the cube of it (docs/clouds.md).
+    #[arg(long)]
+    pub solve_cells: Option<usize>,
     /// With --scattering single: the part of scattered light taken to go on along the
     /// light, the paper's p(l,l)/4pi, in [0, 1] (the paper's forward scattering; 0, the
     /// default, makes the buffer the sun's transmittance and the picture exact single
@@ -318,6 +323,9 @@ pub fn fixed_flags(still: &CloudStill) -> String {
         still.g,
         name(&|| still.fov_axis.to_possible_value()),
     ));
+    if let Some(cells) = still.solve_cells {
+        flags.push(format!("--solve-cells {cells}"));
+    }
     if still.sky {
         flags.push("--sky".into());
     }

@@ -16,7 +16,7 @@ use atmo::clouds::buffer::{IntensityBuffer, Splat};
 use atmo::clouds::files;
 use atmo::clouds::generator::Cumulus;
 use atmo::clouds::particles::Particle;
-use atmo::clouds::{Octaves, Scattering};
+use atmo::clouds::{Diffusion, Octaves, Scattering};
 use atmo::cloudscape::Cloudscape;
 use atmo::error::check_range;
 use atmo::files::check_folder;
@@ -163,11 +163,24 @@ impl Cloud {
                 }
                 match every {
                     ScatteringArg::Octaves => Scattering::Octaves(Octaves::MULTIPLE),
-                    ScatteringArg::Solve => Scattering::SOLVE,
+                    ScatteringArg::Solve => {
+                        let cells = still.solve_cells.unwrap_or(Diffusion::DEFAULT.cells);
+                        check_range("--solve-cells", cells as f64, 4.0, 256.0)?;
+                        Scattering::Solve(Diffusion { cells })
+                    }
                     _ => Scattering::MULTIPLE,
                 }
             }
         };
+        if let (Some(cells), false) = (
+            still.solve_cells,
+            matches!(still.scattering, ScatteringArg::Solve),
+        ) {
+            return Err(atmo::Error::Invalid(format!(
+                "--solve-cells = {cells} applies to --scattering solve only"
+            ))
+            .into());
+        }
         let phase = match still.phase {
             PhaseArg::Mie => PhaseFunction::CloudMie,
             PhaseArg::Hg => {
