@@ -54,7 +54,7 @@ impl Daylight {
     }
 
     /// The same light as an equirectangular map ([`super::envmap`]'s conventions),
-    /// [`SKYLIGHT_MAP_HEIGHT`] rows: for what needs the sky's own shape, such as its
+    /// 32 rows (5.6 deg a row): for what needs the sky's own shape, such as its
     /// horizon, which nine harmonics blur (a cloud's transfer solve).
     pub fn skylight_map(&self, sun: Sun) -> Frame {
         SkyPicture::new(&self.model, sun).equirect(SKYLIGHT_MAP_HEIGHT, false)
