@@ -47,8 +47,7 @@ use super::particles::Particle;
 use crate::atmosphere::PhaseFunction;
 use crate::error::Result;
 use crate::image::Frame;
-use crate::sky::envmap::equirect_direction;
-use crate::sky::lighting::{irradiance, project_equirect, sh_basis, SH_BAND, SH_Y00};
+use crate::sky::lighting::{cell_means, irradiance, project_equirect, sh_basis, SH_BAND, SH_Y00};
 
 /// The sky's radiance, W m^-2 sr^-1 (or the picture's units), per linear-sRGB channel,
 /// twice: as nine real spherical harmonics in [`crate::sky::lighting`]'s order (the
@@ -106,32 +105,11 @@ impl SkyLight {
     /// direction no pixel's centre falls nearest, in a map coarser than the lattice,
     /// reads the pixel it points at).
     pub fn from_map(map: &Frame) -> SkyLight {
-        debug_assert_eq!(map.width, 2 * map.height, "an equirectangular map");
-        let directions = directions();
-        let h = map.height;
-        let mut sums = [(Vec3::ZERO, 0.0f32); DIRECTIONS];
-        for y in 0..h {
-            let elevation =
-                std::f32::consts::FRAC_PI_2 - std::f32::consts::PI * (y as f32 + 0.5) / h as f32;
-            let solid_angle = elevation.cos();
-            for x in 0..map.width {
-                let travel = -equirect_direction(x, y, h);
-                let nearest = nearest(&directions, travel);
-                let (sum, weight) = &mut sums[nearest];
-                *sum += map.pixels[(y * map.width + x) as usize] * solid_angle;
-                *weight += solid_angle;
-            }
-        }
-        let mut around = [Vec3::ZERO; DIRECTIONS];
-        for ((a, (sum, weight)), w) in around.iter_mut().zip(sums).zip(&directions) {
-            *a = if weight > 0.0 {
-                sum / weight
-            } else {
-                map.pixels[equirect_pixel(-*w, h) as usize]
-            };
-        }
+        // The light travelling along `w` is seen looking along `-w`.
+        let looking: Vec<Vec3> = directions().iter().map(|w| -*w).collect();
+        let means = cell_means(map, &looking);
         SkyLight {
-            around,
+            around: std::array::from_fn(|i| means[i]),
             ..SkyLight::from_harmonics(&project_equirect(map))
         }
     }
@@ -269,30 +247,6 @@ pub(crate) fn depths_along(particles: &[Particle], axis: Vec3) -> Result<Vec<[f3
             [-buffer.sample_log_grid(g), buffer.column_depth_grid(g)]
         })
         .collect())
-}
-
-/// The index of the direction of `directions` nearest the unit `w`.
-fn nearest(directions: &[Vec3], w: Vec3) -> usize {
-    let mut best = (0, f32::NEG_INFINITY);
-    for (i, d) in directions.iter().enumerate() {
-        let cos = d.dot(w);
-        if cos > best.1 {
-            best = (i, cos);
-        }
-    }
-    best.0
-}
-
-/// The index of the pixel of an equirectangular map `height` rows high that the unit
-/// `d` points into ([`equirect_direction`]'s inverse).
-fn equirect_pixel(d: Vec3, height: u32) -> u32 {
-    let width = 2 * height;
-    let elevation = d.y.clamp(-1.0, 1.0).asin();
-    let azimuth = d.x.atan2(-d.z).rem_euclid(std::f32::consts::TAU);
-    let y =
-        ((std::f32::consts::FRAC_PI_2 - elevation) / std::f32::consts::PI * height as f32) as u32;
-    let x = (azimuth / std::f32::consts::TAU * width as f32) as u32;
-    y.min(height - 1) * width + x.min(width - 1)
 }
 
 /// `lambda_l = 2 pi integral_-1^1 p(mu) P_l(mu) d mu` for `l` = 0, 1, 2, by the midpoint

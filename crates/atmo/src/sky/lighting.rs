@@ -72,6 +72,58 @@ pub fn project_equirect(map: &Frame) -> [[f64; 3]; 9] {
     sh
 }
 
+/// The mean radiance of an equirectangular map (`envmap` conventions, width twice the
+/// height) over the cell of the sphere nearest each of the unit `directions` (looking
+/// out), each pixel weighted by its solid angle: a quadrature's values where its nodes
+/// are `directions` (a cloud's transfer solve carries the sky in along them). A
+/// direction no pixel's centre falls nearest, in a map coarser than the directions,
+/// reads the pixel it points into.
+pub fn cell_means(map: &Frame, directions: &[Vec3]) -> Vec<Vec3> {
+    debug_assert_eq!(map.width, 2 * map.height, "an equirectangular map");
+    let h = map.height;
+    let nearest = |d: Vec3| {
+        let mut best = (0, f32::NEG_INFINITY);
+        for (i, w) in directions.iter().enumerate() {
+            if w.dot(d) > best.1 {
+                best = (i, w.dot(d));
+            }
+        }
+        best.0
+    };
+    let mut sums = vec![(Vec3::ZERO, 0.0f32); directions.len()];
+    for y in 0..h {
+        let elevation =
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::PI * (y as f32 + 0.5) / h as f32;
+        for x in 0..map.width {
+            let (sum, weight) = &mut sums[nearest(equirect_direction(x, y, h))];
+            *sum += map.pixels[(y * map.width + x) as usize] * elevation.cos();
+            *weight += elevation.cos();
+        }
+    }
+    sums.iter()
+        .zip(directions)
+        .map(|(&(sum, weight), &d)| {
+            if weight > 0.0 {
+                sum / weight
+            } else {
+                map.pixels[equirect_pixel(d, h) as usize]
+            }
+        })
+        .collect()
+}
+
+/// The index of the pixel of an equirectangular map `height` rows high that the unit
+/// `d` points into ([`equirect_direction`]'s inverse).
+fn equirect_pixel(d: Vec3, height: u32) -> u32 {
+    let width = 2 * height;
+    let elevation = d.y.clamp(-1.0, 1.0).asin();
+    let azimuth = d.x.atan2(-d.z).rem_euclid(std::f32::consts::TAU);
+    let y =
+        ((std::f32::consts::FRAC_PI_2 - elevation) / std::f32::consts::PI * height as f32) as u32;
+    let x = (azimuth / std::f32::consts::TAU * width as f32) as u32;
+    y.min(height - 1) * width + x.min(width - 1)
+}
+
 /// Irradiance (linear sRGB, W m^-2) on a surface with unit normal `normal` from
 /// radiance harmonics `sh`: the cosine lobe's convolution `A_l` per band.
 pub fn irradiance(sh: &[[f64; 3]; 9], normal: Vec3) -> [f64; 3] {
