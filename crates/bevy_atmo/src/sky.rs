@@ -184,10 +184,11 @@ pub(crate) fn same_atmosphere(a: &Arc<Atmosphere>, b: &Arc<Atmosphere>) -> bool 
 pub struct AtmoSkyState {
     pub(crate) ready: Option<ReadySky>,
     pub(crate) generation: u64,
-    /// The build under way, the recipe it is of and the altitude it is for, m.
-    building: Option<(Task<Built>, Recipe, f64)>,
-    /// The recipe the model drawn now was made from (another camera may share it).
-    made_from: Option<Recipe>,
+    /// The build under way (always of `recipe`) and the altitude it is for, m.
+    building: Option<(Task<Built>, f64)>,
+    /// Whether the model drawn now is of `recipe` (not while an old one draws after the
+    /// settings changed): another camera of that recipe may share it.
+    current: bool,
     /// What the sky is made from; `None` before the first.
     recipe: Option<Recipe>,
     /// The recipe changed since the last model was started.
@@ -237,23 +238,21 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
     let mut shared: Vec<Shared> = cameras
         .iter()
         .filter_map(|(.., state, _)| state)
-        .flat_map(|state| {
-            let made = match (&state.ready, &state.made_from) {
-                (Some(ReadySky::Model(model, rays)), Some(recipe)) => Some(Shared {
+        .filter_map(|state| Some((state, state.recipe.as_ref()?)))
+        .flat_map(|(state, recipe)| {
+            let made = match &state.ready {
+                Some(ReadySky::Model(model, rays)) if state.current => Some(Shared {
                     recipe: recipe.clone(),
                     altitude_m: model.altitude_m(),
                     model: Some((model.clone(), rays.clone())),
                 }),
                 _ => None,
             };
-            let making = state
-                .building
-                .as_ref()
-                .map(|(_, recipe, altitude_m)| Shared {
-                    recipe: recipe.clone(),
-                    altitude_m: *altitude_m,
-                    model: None,
-                });
+            let making = state.building.as_ref().map(|(_, altitude_m)| Shared {
+                recipe: recipe.clone(),
+                altitude_m: *altitude_m,
+                model: None,
+            });
             made.into_iter().chain(making)
         })
         .collect();
@@ -275,7 +274,7 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
         if sky.is_changed() && state.recipe.as_ref() != Some(&Recipe::of(&sky)) {
             state.recipe = Some(Recipe::of(&sky));
             state.building = None;
-            state.made_from = None;
+            state.current = false;
             state.stale = true;
             state.failed = false;
         }
@@ -298,11 +297,11 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
             .as_mut()
             .and_then(|(task, ..)| check_ready(task))
         {
-            let (_, recipe, _) = state.building.take().expect("checked above");
+            state.building = None;
             match done {
                 Ok((model, rays)) => {
                     state.ready = Some(ReadySky::Model(Arc::new(model), rays.map(Arc::new)));
-                    state.made_from = Some(recipe);
+                    state.current = true;
                     state.generation += 1;
                 }
                 Err(e) => {
@@ -317,7 +316,7 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
             _ => true,
         };
         if (state.stale || far) && state.building.is_none() && !state.failed {
-            let recipe = Recipe::of(&sky);
+            let recipe = state.recipe.clone().expect("set with the state");
             let near =
                 |s: &&Shared| s.recipe == recipe && (s.altitude_m - altitude).abs() <= settings.1;
             match shared.iter().find(near).map(|s| &s.model) {
@@ -325,7 +324,7 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
                 Some(Some((model, rays))) => {
                     state.stale = false;
                     state.ready = Some(ReadySky::Model(model.clone(), rays.clone()));
-                    state.made_from = Some(recipe);
+                    state.current = true;
                     state.generation += 1;
                 }
                 // Another camera's build under way: taken once it is done.
@@ -345,11 +344,11 @@ pub(crate) fn build_skies(mut commands: Commands, mut cameras: Query<SkyCameraPa
                         Ok((model, rays))
                     });
                     shared.push(Shared {
-                        recipe: recipe.clone(),
+                        recipe,
                         altitude_m: altitude,
                         model: None,
                     });
-                    state.building = Some((task, recipe, altitude));
+                    state.building = Some((task, altitude));
                 }
             }
         }
