@@ -50,22 +50,29 @@ pub fn sh_basis(d: Vec3) -> [f64; 9] {
     ]
 }
 
-/// The radiance harmonics of an equirectangular map (`envmap` conventions), each pixel
-/// weighted by its solid angle.
-pub fn project_equirect(map: &Frame) -> [[f64; 3]; 9] {
+/// Each pixel of an equirectangular map (`envmap` conventions): its direction (looking
+/// out), its radiance and its solid angle, sr.
+fn pixels_of(map: &Frame) -> impl Iterator<Item = (Vec3, Vec3, f64)> + '_ {
     let h = map.height;
-    let mut sh = [[0.0; 3]; 9];
-    for y in 0..h {
+    (0..h).flat_map(move |y| {
         let elevation =
             std::f64::consts::FRAC_PI_2 - std::f64::consts::PI * (y as f64 + 0.5) / h as f64;
         let solid_angle = (std::f64::consts::PI / h as f64).powi(2) * elevation.cos();
-        for x in 0..map.width {
-            let basis = sh_basis(equirect_direction(x, y, h));
+        (0..map.width).map(move |x| {
             let p = map.pixels[(y * map.width + x) as usize];
-            for (s, b) in sh.iter_mut().zip(basis) {
-                for (c, v) in s.iter_mut().zip(p.to_array()) {
-                    *c += b * solid_angle * v as f64;
-                }
+            (equirect_direction(x, y, h), p, solid_angle)
+        })
+    })
+}
+
+/// The radiance harmonics of an equirectangular map (`envmap` conventions), each pixel
+/// weighted by its solid angle.
+pub fn project_equirect(map: &Frame) -> [[f64; 3]; 9] {
+    let mut sh = [[0.0; 3]; 9];
+    for (d, p, solid_angle) in pixels_of(map) {
+        for (s, b) in sh.iter_mut().zip(sh_basis(d)) {
+            for (c, v) in s.iter_mut().zip(p.to_array()) {
+                *c += b * solid_angle * v as f64;
             }
         }
     }
@@ -80,7 +87,6 @@ pub fn project_equirect(map: &Frame) -> [[f64; 3]; 9] {
 /// reads the pixel it points into.
 pub fn cell_means(map: &Frame, directions: &[Vec3]) -> Vec<Vec3> {
     debug_assert_eq!(map.width, 2 * map.height, "an equirectangular map");
-    let h = map.height;
     let nearest = |d: Vec3| {
         let mut best = (0, f32::NEG_INFINITY);
         for (i, w) in directions.iter().enumerate() {
@@ -91,14 +97,10 @@ pub fn cell_means(map: &Frame, directions: &[Vec3]) -> Vec<Vec3> {
         best.0
     };
     let mut sums = vec![(Vec3::ZERO, 0.0f32); directions.len()];
-    for y in 0..h {
-        let elevation =
-            std::f32::consts::FRAC_PI_2 - std::f32::consts::PI * (y as f32 + 0.5) / h as f32;
-        for x in 0..map.width {
-            let (sum, weight) = &mut sums[nearest(equirect_direction(x, y, h))];
-            *sum += map.pixels[(y * map.width + x) as usize] * elevation.cos();
-            *weight += elevation.cos();
-        }
+    for (d, p, solid_angle) in pixels_of(map) {
+        let (sum, weight) = &mut sums[nearest(d)];
+        *sum += p * solid_angle as f32;
+        *weight += solid_angle as f32;
     }
     sums.iter()
         .zip(directions)
@@ -106,7 +108,7 @@ pub fn cell_means(map: &Frame, directions: &[Vec3]) -> Vec<Vec3> {
             if weight > 0.0 {
                 sum / weight
             } else {
-                map.pixels[equirect_pixel(d, h) as usize]
+                map.pixels[equirect_pixel(d, map.height) as usize]
             }
         })
         .collect()
