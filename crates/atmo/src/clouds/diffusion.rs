@@ -60,7 +60,7 @@ use super::particles::{erf_table, Particle};
 use super::sky_light::SkyLight;
 use crate::atmosphere::phase::PhaseFunction;
 use crate::error::{check_range, Error, Result};
-use crate::lanes::Lanes;
+use crate::lanes::{Lanes, LANES};
 use crate::quadrature::legendre;
 
 /// How the transfer solve is set up.
@@ -226,10 +226,7 @@ impl DiffuseLight {
     /// and sun irradiance (1/sr), `[x][y][z]`: the second order's, scattered by the
     /// whole phase, and the diffuse field's (its radiance rebuilt by the closure).
     pub fn toward(&self, eye: Vec3) -> Vec<f32> {
-        self.both_toward(eye)
-            .into_iter()
-            .map(|(sun, _)| sun)
-            .collect()
+        self.both_toward(eye).into_iter().map(|v| v.x).collect()
     }
 
     /// The sky's light each cell's centre sends toward `eye` by every order, per unit
@@ -240,15 +237,15 @@ impl DiffuseLight {
         Some(
             self.both_toward(eye)
                 .into_iter()
-                .map(|(_, sky)| sky)
+                .map(|v| Vec3::new(v.y, v.z, v.w))
                 .collect(),
         )
     }
 
-    /// Per cell [`DiffuseLight::toward`]'s and [`DiffuseLight::sky_toward`]'s (0
-    /// without a sky): the lights carried along the directions scattered toward `eye`
-    /// by the phase, read once for both, and the diffuse fields' by the closure.
-    fn both_toward(&self, eye: Vec3) -> Vec<(f32, Vec3)> {
+    /// Per cell [`DiffuseLight::toward`]'s (x) and [`DiffuseLight::sky_toward`]'s (y, z,
+    /// w; 0 without a sky): the lights carried along the directions scattered toward
+    /// `eye` by the phase, read once for both, and the diffuse fields' by the closure.
+    fn both_toward(&self, eye: Vec3) -> Vec<Vec4> {
         (0..self.values.len())
             .into_par_iter()
             .map(|cell| {
@@ -270,7 +267,7 @@ impl DiffuseLight {
                 if let Some(field) = &self.sky {
                     sky += Vec3::from_array(field.values[cell].map(|v| self.leaving(v, w)));
                 }
-                (sun, sky)
+                Vec4::new(sun, sky.x, sky.y, sky.z)
             })
             .collect()
     }
@@ -279,13 +276,12 @@ impl DiffuseLight {
     /// rays are then one value's trilinear read (the rays pass the centres at angles a
     /// cell's width apart as seen from the eye).
     pub(crate) fn seen_from(&self, eye: Vec3) -> Seen {
-        let (values, sky): (Vec<f32>, Vec<Vec3>) = self.both_toward(eye).into_iter().unzip();
         Seen {
             min: self.grid.first_centre,
             cell: self.grid.cell,
             dims: self.grid.dims,
-            values,
-            sky: self.sky.is_some().then_some(sky),
+            light: self.both_toward(eye),
+            has_sky: self.sky.is_some(),
         }
     }
 
@@ -667,39 +663,96 @@ impl Lobe {
     }
 }
 
-/// The diffuse light each cell sends toward one eye ([`DiffuseLight::seen_from`]).
+/// The diffuse light each cell sends toward one eye ([`DiffuseLight::seen_from`]): per
+/// cell the sun's (x) and, with a sky, the sky's RGB (y, z, w).
 pub(crate) struct Seen {
     min: Vec3,
     cell: f32,
     dims: [usize; 3],
-    values: Vec<f32>,
-    /// The sky's light toward the eye, RGB, if there is a sky.
-    sky: Option<Vec<Vec3>>,
+    light: Vec<Vec4>,
+    has_sky: bool,
 }
 
 impl Seen {
     /// Whether the sky's light comes through the solve.
     pub(crate) fn has_sky(&self) -> bool {
-        self.sky.is_some()
+        self.has_sky
     }
 
-    /// The sky's light toward the eye at the world point `p`, trilinear (0 outside the
-    /// grid or without a sky).
+    /// The light toward the eye at the world point `p`, trilinear (0 outside the grid).
     #[inline]
-    pub(crate) fn sky_at(&self, p: Vec3) -> Vec3 {
-        self.sky.as_ref().map_or(Vec3::ZERO, |sky| {
-            trilinear(sky, self.min, self.cell, self.dims, p)
-        })
+    pub(crate) fn at(&self, p: Vec3) -> Vec4 {
+        trilinear(&self.light, self.min, self.cell, self.dims, p)
     }
 
-    /// The light toward the eye at eight world points, trilinear (0 outside the grid).
-    #[inline]
-    pub(crate) fn at_lanes(&self, p: [Lanes; 3]) -> Lanes {
-        let [px, py, pz] = p.map(|c| c.to_array());
-        Lanes::new(std::array::from_fn(|k| {
-            let p = Vec3::new(px[k], py[k], pz[k]);
-            trilinear(&self.values, self.min, self.cell, self.dims, p)
-        }))
+    /// The light toward the eye about a blob's centre `centre` of standard deviation
+    /// `spread` m, for the blob's pixels ([`Near`]).
+    pub(crate) fn near(&self, centre: Vec3, spread: f32) -> Near<'_> {
+        let first_order = (spread < FIRST_ORDER_SPREAD * self.cell).then(|| {
+            let slope = std::array::from_fn(|axis| {
+                let h = Vec3::AXES[axis] * spread;
+                (self.at(centre + h) - self.at(centre - h)) / (2.0 * spread)
+            });
+            FirstOrder {
+                centre,
+                value: self.at(centre),
+                slope,
+            }
+        });
+        Near {
+            seen: self,
+            first_order,
+        }
+    }
+}
+
+/// Blobs narrower than this share of a cell (their standard deviation) read the solve
+/// to first order about their centre ([`Near`]).
+const FIRST_ORDER_SPREAD: f32 = 0.35;
+
+/// [`Seen`] about a blob. A blob narrow beside the cells reads it to first order about
+/// its centre, its slopes the differences across twice its standard deviation (its
+/// column weights its pixels by a Gaussian of that width): one multiply-add an axis
+/// at each pixel where the trilinear read took a third of the frame. What the first
+/// order leaves out (the trilinear's products of fractions, its kinks at the cells'
+/// faces) grows with the blob's width beside the cell's; wider blobs, which it left
+/// visibly wrong at a cloud's thin fringe, read the trilinear at each pixel.
+pub(crate) struct Near<'a> {
+    seen: &'a Seen,
+    first_order: Option<FirstOrder>,
+}
+
+/// [`Seen::at`] to first order about `centre`.
+struct FirstOrder {
+    centre: Vec3,
+    value: Vec4,
+    /// d/dx, d/dy, d/dz, per metre.
+    slope: [Vec4; 3],
+}
+
+impl Near<'_> {
+    /// The first `CHANNELS` channels of the light (the sun's, then the sky's RGB) at
+    /// eight world points, none below 0.
+    #[inline(always)]
+    pub(crate) fn lanes<const CHANNELS: usize>(&self, p: &[Lanes; 3]) -> [Lanes; CHANNELS] {
+        match &self.first_order {
+            Some(f) => {
+                let d: [Lanes; 3] =
+                    std::array::from_fn(|axis| p[axis] - Lanes::splat(f.centre[axis]));
+                std::array::from_fn(|c| {
+                    let v = (0..3).fold(Lanes::splat(f.value[c]), |v, axis| {
+                        v + d[axis] * f.slope[axis][c]
+                    });
+                    v.fast_max(Lanes::ZERO)
+                })
+            }
+            None => {
+                let [px, py, pz] = p.map(|c| c.to_array());
+                let at: [Vec4; LANES] =
+                    std::array::from_fn(|k| self.seen.at(Vec3::new(px[k], py[k], pz[k])));
+                std::array::from_fn(|c| Lanes::new(at.map(|v| v[c])))
+            }
+        }
     }
 }
 
@@ -1588,5 +1641,72 @@ mod tests {
         let top = (0..phi.len()).filter(|&c| c / nz % ny == ny - MARGIN - 1);
         let up: f32 = top.map(|c| light.values[c].z).sum();
         assert!(up > 0.0, "{up}");
+    }
+
+    /// A blob narrow beside the cells reads the solve to first order about its centre:
+    /// over the points its pixels read (a Gaussian of its width about it), on a solved
+    /// cumulus, within 2.5 % of the trilinear read on average (the light at the centre
+    /// alone: 8 %) and, for nine blobs in ten, within 15 % of the blob's brightest
+    /// light at worst (at the cloud's edge, where the trilinear falls to 0 past the
+    /// outer cells); a wide blob reads the trilinear itself.
+    #[test]
+    fn a_narrow_blob_reads_the_solve_to_first_order_about_its_centre() {
+        let to_sun = Vec3::new(0.3, 0.8, 0.2).normalize();
+        let (.., light) = solved(2000, 0.9, to_sun);
+        let seen = light.seen_from(Vec3::new(-3000.0, 800.0, 2500.0));
+        let cell = seen.cell;
+        let mut rng = crate::clouds::generator::SplitMix64::new(5);
+        // Sums of |error| of the first order and of the centre's light alone, of the
+        // trilinear light, and per blob its worst error over its brightest light.
+        let (mut first_error, mut centre_error, mut total) = (0.0f64, 0.0f64, 0.0f64);
+        let mut worst = Vec::new();
+        while worst.len() < 300 {
+            let centre = seen.min
+                + Vec3::from_array(std::array::from_fn(|axis| {
+                    rng.range(1.0, seen.dims[axis] as f32 - 2.0) * cell
+                }));
+            let here = seen.at(centre).x;
+            if here <= 0.0 {
+                continue;
+            }
+            let spread = rng.range(0.1, FIRST_ORDER_SPREAD) * cell;
+            let near = seen.near(centre, spread);
+            assert!(near.first_order.is_some());
+            let (mut blob_error, mut brightest) = (0.0f32, here);
+            for _ in 0..8 {
+                // A point a Gaussian of the blob's width from its centre (Box-Muller).
+                let offset = Vec3::from_array(std::array::from_fn(|_| {
+                    let (u, v) = (rng.range(1e-6, 1.0), rng.range(0.0, 1.0));
+                    (-2.0 * u.ln()).sqrt() * (std::f32::consts::TAU * v).cos()
+                }));
+                let p = centre + spread * offset;
+                let lanes: [Lanes; 3] = std::array::from_fn(|axis| Lanes::splat(p[axis]));
+                let first = near.lanes::<1>(&lanes)[0].to_array()[0];
+                let exact = seen.at(p).x;
+                first_error += (first - exact).abs() as f64;
+                centre_error += (here - exact).abs() as f64;
+                total += exact as f64;
+                blob_error = blob_error.max((first - exact).abs());
+                brightest = brightest.max(exact);
+            }
+            worst.push(blob_error / brightest);
+        }
+        let (first, centre) = (first_error / total, centre_error / total);
+        worst.sort_by(f32::total_cmp);
+        let ninth = worst[worst.len() * 9 / 10];
+        assert!(
+            first < 0.025 && centre > 0.06 && ninth < 0.15,
+            "first order {first}, centre alone {centre}, nine in ten blobs within {ninth}"
+        );
+        // Wider blobs read the trilinear itself.
+        let centre = seen.min + 0.5 * cell * Vec3::from_array(seen.dims.map(|d| d as f32));
+        let wide = seen.near(centre, FIRST_ORDER_SPREAD * cell * 1.01);
+        assert!(wide.first_order.is_none());
+        let p = centre + Vec3::new(0.3, -0.2, 0.1) * cell;
+        let lanes: [Lanes; 3] = std::array::from_fn(|axis| Lanes::splat(p[axis]));
+        assert_eq!(
+            wide.lanes::<4>(&lanes).map(|l| l.to_array()[0]),
+            seen.at(p).to_array()
+        );
     }
 }

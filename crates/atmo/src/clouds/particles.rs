@@ -18,7 +18,7 @@
 use glam::Vec3;
 
 use super::buffer::FOOTPRINT;
-use crate::lanes::{exp_lanes, first, Lanes, LANES};
+use crate::lanes::{exp_lanes, first, Lanes};
 
 /// `FOOTPRINT^2 / 2`: the Gaussian's exponent at the billboards' cut.
 const CUT_EXPONENT: f32 = FOOTPRINT * FOOTPRINT / 2.0;
@@ -290,22 +290,29 @@ pub(crate) fn weighted_lanes(f: impl Fn(usize) -> Lanes) -> Lanes {
     })
 }
 
-/// [`emission_nodes`] from a table over `sqrt(tau)` (4096 steps up to a column of 400,
-/// linear between them; within 1e-3 of it, test below): the drawing needs it at every
+/// [`emission_nodes`] from a table over `sqrt(tau)` (16384 steps up to a column of
+/// 400, the nearest row; within 1e-3 of it, test below): the drawing needs it at every
 /// pixel of every billboard, where its logarithms and exponentials cost more than the
 /// rest of the pixel.
 #[inline]
 pub fn tabulated_emission_nodes(tau: f32) -> [(f32, f32); EMISSION_NODES] {
-    tabulated_emission_nodes_lanes(Lanes::splat(tau)).map(|[u, l, _]| (first(u), first(l)))
+    tabulated_emission_nodes_lanes::<true>(Lanes::splat(tau)).map(|[u, l, _]| (first(u), first(l)))
 }
 
 /// [`tabulated_emission_nodes`] of eight columns: each node's `[u, l, phi(l)]`, in
 /// lanes, `phi` the standard normal density (the blob's extinction at the node is
-/// `tau phi(l) / s`).
+/// `tau phi(l) / s`); `u` only with `DEPTHS` (else 0).
+///
+/// The nearest of many rows rather than between two of fewer: without a gather on the
+/// baseline instruction set each value is read lane by lane, and the lerp's second
+/// row doubled the reads, a seventh of the frame's instructions (callgrind).
 #[inline(always)]
-pub(crate) fn tabulated_emission_nodes_lanes(tau: Lanes) -> [[Lanes; 3]; EMISSION_NODES] {
-    const STEPS: usize = 4096;
+pub(crate) fn tabulated_emission_nodes_lanes<const DEPTHS: bool>(
+    tau: Lanes,
+) -> [[Lanes; 3]; EMISSION_NODES] {
+    const STEPS: usize = 16_384;
     const TOP: f32 = 400.0;
+    // Per row the nodes' `l`, then `phi(l)`, then `u / tau`.
     const ROW: usize = 3 * EMISSION_NODES;
     static TABLE: std::sync::OnceLock<Vec<[f32; ROW]>> = std::sync::OnceLock::new();
     let table = TABLE.get_or_init(|| {
@@ -316,33 +323,30 @@ pub(crate) fn tabulated_emission_nodes_lanes(tau: Lanes) -> [[Lanes; 3]; EMISSIO
                 // distances.
                 let nodes = emission_nodes(tau);
                 std::array::from_fn(|i| {
-                    let (u, l) = nodes[i / 3];
-                    match (i % 3, tau > 0.0) {
-                        (0, true) => u / tau,
-                        (0, false) => GAUSS_LEGENDRE[i / 3],
-                        (1, _) => l,
-                        _ => (-0.5 * l * l).exp() / (2.0 * std::f32::consts::PI).sqrt(),
+                    let (u, l) = nodes[i % EMISSION_NODES];
+                    match (i / EMISSION_NODES, tau > 0.0) {
+                        (0, _) => l,
+                        (1, _) => (-0.5 * l * l).exp() / (2.0 * std::f32::consts::PI).sqrt(),
+                        (_, true) => u / tau,
+                        (_, false) => GAUSS_LEGENDRE[i % EMISSION_NODES],
                     }
                 })
             })
             .collect()
     });
     let x = (tau.fast_max(Lanes::ZERO).sqrt() / Lanes::splat(TOP.sqrt())
-        * Lanes::splat(STEPS as f32))
-    .fast_min(Lanes::splat(STEPS as f32 - 1e-3));
-    let k = x.trunc_int();
-    let f = (x - Lanes::from_i32x8(k)).to_array();
-    // Each lane's two rows, lerped; then as lanes.
-    let mut nodes = [[0.0f32; LANES]; ROW];
-    for (lane, &k) in k.to_array().iter().enumerate() {
-        let (a, b) = (table[k as usize], table[k as usize + 1]);
-        for (i, node) in nodes.iter_mut().enumerate() {
-            node[lane] = a[i] + f[lane] * (b[i] - a[i]);
-        }
-    }
+        * Lanes::splat(STEPS as f32)
+        + Lanes::splat(0.5))
+    .fast_min(Lanes::splat(STEPS as f32));
+    let rows = x.trunc_int().to_array().map(|k| &table[k as usize]);
+    let column = |i: usize| Lanes::new(rows.map(|row| row[i]));
     std::array::from_fn(|n| {
-        let [q, l, phi] = [0, 1, 2].map(|i| Lanes::new(nodes[3 * n + i]));
-        [q * tau, l, phi]
+        let u = if DEPTHS {
+            column(2 * EMISSION_NODES + n) * tau
+        } else {
+            Lanes::ZERO
+        };
+        [u, column(n), column(EMISSION_NODES + n)]
     })
 }
 

@@ -569,6 +569,9 @@ impl Blobs<'_> {
             sky,
         } = sums;
         let (y0, y1) = (band * BAND, (band * BAND + *rows_in_band) as f32);
+        let solved_sky = self.solved.as_ref().is_some_and(Seen::has_sky);
+        // The table reads the nodes' depths.
+        let table = self.table.is_some();
         // The buffer's slope of `ln Gamma` per voxel along the light to the extinction
         // over a standard deviation of the blob, in lanes below: times `-s / voxel`.
         let per_voxel = -1.0 / self.buffer.voxel.y;
@@ -608,6 +611,8 @@ impl Blobs<'_> {
             let to_depth_per_sigma = Lanes::splat(per_voxel * s);
             let albedo = Lanes::splat(p.albedo);
             let top = Lanes::splat(self.top_shares[k]);
+            // The solve's light about the blob (to first order where it is narrow).
+            let near = self.solved.as_ref().map(|seen| seen.near(p.position, s));
             // The centre from the eye; its dot with a pixel's ray, affine in the pixel.
             let d = p.position - self.eye;
             let (d2, d0, dx, dy) = (d.length_squared(), d.dot(r0), d.dot(rx), d.dot(ry));
@@ -671,7 +676,11 @@ impl Blobs<'_> {
                         continue;
                     }
                     let along_scale = Lanes::splat(s) / rr.sqrt();
-                    let nodes = tabulated_emission_nodes_lanes(tau);
+                    let nodes = if table {
+                        tabulated_emission_nodes_lanes::<true>(tau)
+                    } else {
+                        tabulated_emission_nodes_lanes::<false>(tau)
+                    };
                     let at = |j: usize| -> [Lanes; 3] {
                         std::array::from_fn(|c| {
                             Lanes::splat(g_eye[c]) + g_ray[c] * (t + nodes[j][1] * along_scale)
@@ -707,8 +716,8 @@ impl Blobs<'_> {
                     };
                     add(single, blob.single);
                     let absorbed = Lanes::ONE - blob.transmitted;
-                    match (&self.table, &self.solved) {
-                        (None, Some(seen)) => {
+                    match (&self.table, &near) {
+                        (None, Some(near)) => {
                             // The solve's light toward the eye at the emission nodes'
                             // mean place (the grid's cells are wider than the blob's
                             // depth between its nodes: reading it at each node cost
@@ -716,16 +725,16 @@ impl Blobs<'_> {
                             let at = t + weighted_lanes(|j| nodes[j][1]) * along_scale;
                             let point =
                                 std::array::from_fn(|c| Lanes::splat(self.eye[c]) + r[c] * at);
-                            add(higher, seen.at_lanes(point) * absorbed);
-                            if seen.has_sky() {
+                            if solved_sky {
                                 // The sky's light through the same solve, every order.
-                                let [px, py, pz] = point.map(|c| c.to_array());
-                                let at: [Vec3; LANES] = std::array::from_fn(|k| {
-                                    seen.sky_at(Vec3::new(px[k], py[k], pz[k]))
-                                });
-                                for (c, sums) in sky.iter_mut().enumerate() {
-                                    add(sums, Lanes::new(at.map(|v| v[c])) * absorbed);
+                                let [sun, rgb @ ..] = near.lanes::<4>(&point);
+                                add(higher, sun * absorbed);
+                                for (sums, v) in sky.iter_mut().zip(rgb) {
+                                    add(sums, v * absorbed);
                                 }
+                            } else {
+                                let [sun] = near.lanes::<1>(&point);
+                                add(higher, sun * absorbed);
                             }
                         }
                         (None, None) => add(higher, blob.higher),
@@ -749,8 +758,12 @@ impl Blobs<'_> {
                             in_front[i..i + LANES].copy_from_slice(sum.as_array());
                         }
                     }
-                    add(skylit, absorbed);
-                    add(skytop, absorbed * top);
+                    if near.is_none() {
+                        // The sky's light dimmed inside the cloud, where no solve
+                        // carries it.
+                        add(skylit, absorbed);
+                        add(skytop, absorbed * top);
+                    }
                     let kept = live.select(t_through * blob.transmitted, t_through);
                     through[i..i + LANES].copy_from_slice(kept.as_array());
                 }
