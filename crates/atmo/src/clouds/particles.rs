@@ -290,7 +290,7 @@ pub(crate) fn weighted_lanes(f: impl Fn(usize) -> Lanes) -> Lanes {
     })
 }
 
-/// [`emission_nodes`] from a table over `sqrt(tau)` (16384 steps up to a column of
+/// [`emission_nodes`] from a table over `sqrt(tau)` (20,000 steps up to a column of
 /// 400, the nearest row; within 1e-3 of it, test below): the drawing needs it at every
 /// pixel of every billboard, where its logarithms and exponentials cost more than the
 /// rest of the pixel.
@@ -310,7 +310,7 @@ pub fn tabulated_emission_nodes(tau: f32) -> [(f32, f32); EMISSION_NODES] {
 pub(crate) fn tabulated_emission_nodes_lanes<const DEPTHS: bool>(
     tau: Lanes,
 ) -> [[Lanes; 3]; EMISSION_NODES] {
-    const STEPS: usize = 16_384;
+    const STEPS: usize = 20_000;
     const TOP: f32 = 400.0;
     // Per row the nodes' `l`, then `phi(l)`, then `u / tau`.
     const ROW: usize = 3 * EMISSION_NODES;

@@ -31,6 +31,15 @@
 //! parts in front of each node 0.990, 0.982 and 0.994: the mean field is as good as
 //! knowing them. It needs nothing of the pixel, so the GPU's blended billboards draw
 //! it too.
+//!
+//! Thin columns. Eight pixels whose columns through a blob are all under
+//! 0.1 (the outer rings of the footprints, where a blob absorbs little)
+//! take the midpoint rule: one node, where the ray passes nearest the centre, for the
+//! three. On the bench's frame (the solve's light) that drew a fifth fewer instructions
+//! and moved the picture by 0.06 level RMS (a pixel's median 0.09 %, at most 3 %); the
+//! 200-particle cloud's single scattering stayed within 1 % of the quadrature. Not
+//! with a transfer table, whose lookups by the nodes' depths it would move; the GPU
+//! draws three nodes everywhere.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -676,23 +685,44 @@ impl Blobs<'_> {
                         continue;
                     }
                     let along_scale = Lanes::splat(s) / rr.sqrt();
-                    let nodes = if table {
-                        tabulated_emission_nodes_lanes::<true>(tau)
-                    } else {
-                        tabulated_emission_nodes_lanes::<false>(tau)
-                    };
-                    let at = |j: usize| -> [Lanes; 3] {
+                    // The grid's point `l` standard deviations along the ray from where
+                    // it passes nearest the centre, and the buffer read there (with the
+                    // cloud's depth along the light where the octaves need it: at the
+                    // first node).
+                    let at = |l: Lanes| -> [Lanes; 3] {
                         std::array::from_fn(|c| {
-                            Lanes::splat(g_eye[c]) + g_ray[c] * (t + nodes[j][1] * along_scale)
+                            Lanes::splat(g_eye[c]) + g_ray[c] * (t + l * along_scale)
                         })
                     };
-                    let reads: [_; EMISSION_NODES] = std::array::from_fn(|j| {
-                        if j == 0 && self.octaves.needs_slab() {
-                            self.buffer.sample_lanes::<true>(at(0))
+                    let slab = self.octaves.needs_slab();
+                    // A thin column by the midpoint rule: one node where the ray passes
+                    // nearest the centre, for eight pixels whose columns are all under
+                    // THIN_COLUMN (the fringes of the blobs' footprints). Not with a
+                    // table, whose lookups by the nodes' depths it would move.
+                    let thin = !table && (tau.simd_lt(Lanes::splat(THIN_COLUMN)) | !live).all();
+                    let (nodes, reads) = if thin {
+                        let middle = [tau * Lanes::splat(0.5), Lanes::ZERO, Lanes::splat(PHI_0)];
+                        let read = if slab {
+                            self.buffer.sample_lanes::<true>(at(Lanes::ZERO))
                         } else {
-                            self.buffer.sample_lanes::<false>(at(j))
-                        }
-                    });
+                            self.buffer.sample_lanes::<false>(at(Lanes::ZERO))
+                        };
+                        ([middle; EMISSION_NODES], [read; EMISSION_NODES])
+                    } else {
+                        let nodes = if table {
+                            tabulated_emission_nodes_lanes::<true>(tau)
+                        } else {
+                            tabulated_emission_nodes_lanes::<false>(tau)
+                        };
+                        let reads: [_; EMISSION_NODES] = std::array::from_fn(|j| {
+                            if j == 0 && slab {
+                                self.buffer.sample_lanes::<true>(at(nodes[j][1]))
+                            } else {
+                                self.buffer.sample_lanes::<false>(at(nodes[j][1]))
+                            }
+                        });
+                        (nodes, reads)
+                    };
                     // The blobs beside (the module doc): the others' extinction at
                     // each node times its distance from the blob's middle.
                     let beside = std::array::from_fn(|j| {
@@ -819,6 +849,12 @@ const LANE_OFFSETS: Lanes = Lanes::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0])
 fn lanes3(a: Vec3, b: Vec3, x: Lanes) -> [Lanes; 3] {
     std::array::from_fn(|c| Lanes::splat(a[c]) + x * b[c])
 }
+
+/// Columns under this are drawn by the midpoint rule (the module doc, "Thin columns").
+const THIN_COLUMN: f32 = 0.1;
+
+/// The standard normal density at 0, `1 / sqrt(2 pi)`.
+const PHI_0: f32 = 0.398_942_3;
 
 /// A pixel that lets less than this through from behind is finished: the particles
 /// still to come would change it by less than 0.1 %.
