@@ -264,6 +264,27 @@ impl Gpu {
         }))
     }
 
+    /// Writes `bytes` into `buffer` at `offset` in `encoder`'s order (a copy from a
+    /// staged buffer), where `queue.write_buffer` writes before the whole submission
+    /// runs: what one eye's passes set then stays theirs when another eye's passes,
+    /// recorded after them into the same submission, set their own.
+    pub fn write_recorded(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        buffer: &wgpu::Buffer,
+        offset: u64,
+        bytes: &[u8],
+    ) {
+        let staged = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("staged for an ordered write"),
+                contents: bytes,
+                usage: wgpu::BufferUsages::COPY_SRC,
+            });
+        encoder.copy_buffer_to_buffer(&staged, 0, buffer, offset, bytes.len() as u64);
+    }
+
     /// A uniform buffer holding `value`.
     pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
         self.device

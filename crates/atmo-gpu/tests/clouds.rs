@@ -494,6 +494,65 @@ fn the_cloud_draws_over_a_callers_target_as_it_reads_back() {
     assert_eq!(at(2, 1), behind, "outside the picture: the caller's");
 }
 
+#[test]
+fn two_cameras_in_one_submission_each_see_their_own_light() {
+    // Two cameras' draws recorded into one encoder before it is submitted (as Bevy
+    // records a frame's views) draw what each draws alone: the light toward the eye
+    // the solve and the table read is each camera's own, not the last recorded.
+    let Some(gpu) = gpu() else { return };
+    let particles = cloud();
+    let mut clouds = GpuClouds::new(&gpu, &particles, 40).unwrap();
+    clouds.light(&gpu, to_sun(), 0.0, Splat::Pieces).unwrap();
+    let cameras = [camera(), camera_at(Vec3::new(-550.0, 1500.0, 250.0))];
+    for scattering in [Scattering::SOLVE, Scattering::MULTIPLE] {
+        let light = CloudLight {
+            scattering,
+            ..lighting(PhaseFunction::CloudMie, Octaves::MULTIPLE)
+        };
+        let alone = cameras
+            .clone()
+            .map(|c| clouds.render(&gpu, &c, &light, None).unwrap().frame);
+        let (w, h) = (cameras[0].width, cameras[0].height);
+        let targets = [(); 2].map(|_| picture_texture(&gpu, w, h).unwrap());
+        let mut passes = targets
+            .each_ref()
+            .map(|t| CloudsPass::new(&gpu, t.format(), 1).unwrap());
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        for ((camera, pass), target) in cameras.iter().zip(&mut passes).zip(&targets) {
+            clouds
+                .prepare(&gpu, &mut encoder, pass, camera, &light)
+                .unwrap();
+            let view = target.create_view(&Default::default());
+            let mut render = cleared_pass(&mut encoder, &view, "a view", wgpu::Color::BLACK);
+            pass.draw(&mut render);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        for (k, (target, want)) in targets.iter().zip(&alone).enumerate() {
+            let bytes = gpu.read_texture("a view", target, w, h).unwrap();
+            let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+            let brightest = want
+                .pixels
+                .iter()
+                .map(|p| p.max_element())
+                .fold(0.0, f32::max);
+            assert!(
+                mean_level(want, 4.0) > 15.0,
+                "camera {k}: the picture is dark"
+            );
+            let worst = want
+                .pixels
+                .iter()
+                .zip(texels)
+                .map(|(p, t)| (Vec3::from_slice(&t[..3]) - *p).abs().max_element())
+                .fold(0.0, f32::max);
+            assert!(
+                worst <= 1e-4 * brightest,
+                "{scattering:?}, camera {k}: {worst} off (brightest {brightest})"
+            );
+        }
+    }
+}
+
 /// The cloud of `clouds` seen by `camera` over black through a [`CloudsPass`] whose
 /// scene is `scene_depth` (m along the view axis, a value a pixel), read back as RGBA.
 fn drawn_before(

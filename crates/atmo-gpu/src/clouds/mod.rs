@@ -148,8 +148,6 @@ pub struct GpuClouds {
     frame: Option<BufferFrame>,
     /// The grid lit from the eye that `cells` holds, if any.
     eye: Cell<Option<EyeGrid>>,
-    /// The particles' records as seen from the eye (`seen_from`), for its light pass.
-    eye_particles: wgpu::Buffer,
     /// The buffer lit along an axis ([`VERTICAL_RESOLUTION`]^3) the particles' depths
     /// are read from (for the sky's light, the vertical's), and whether their records
     /// hold the vertical's.
@@ -248,11 +246,6 @@ impl GpuClouds {
             eye_offset,
             frame: None,
             eye: Cell::new(None),
-            eye_particles: gpu.storage(
-                "the particles seen from the eye",
-                bytemuck::cast_slice(&records(particles)),
-                "the particle count",
-            )?,
             sky_cells,
             sky_depths: Cell::new(false),
             out_depths: Cell::new(false),
@@ -581,21 +574,16 @@ impl GpuClouds {
             seen: Some(particles),
         }) = &billboards.eye
         {
-            gpu.queue.write_buffer(
-                &self.eye_particles,
-                0,
+            // A buffer of this eye's own (not the last eye's of the submission, as a
+            // queue write to one kept buffer would be for two cameras a frame).
+            let seen = gpu.storage(
+                "the particles seen from the eye",
                 bytemuck::cast_slice(&records(particles)),
-            );
+                "the particle count",
+            )?;
             let params = gpu.uniform("the eye's buffer frame", &eye.frame);
             let cells = grid(&self.cells, self.eye_offset, eye.frame.resolution);
-            self.record_light(
-                gpu,
-                encoder,
-                &eye.frame,
-                &params,
-                &self.eye_particles,
-                cells,
-            );
+            self.record_light(gpu, encoder, &eye.frame, &params, &seen, cells);
             self.eye.set(Some(*eye));
         }
         let size = (camera.width, camera.height);

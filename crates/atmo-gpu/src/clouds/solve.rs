@@ -310,8 +310,12 @@ impl GpuSolve {
         );
         let with_sky = sky.mean().max_element() > 0.0;
         self.params.sky = with_sky as u32;
-        gpu.queue
-            .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
+        gpu.write_recorded(
+            encoder,
+            &self.params_buffer,
+            0,
+            bytemuck::bytes_of(&self.params),
+        );
         gpu.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(frame));
         encoder.clear_buffer(&self.counts, 0, None);
@@ -363,9 +367,15 @@ impl GpuSolve {
         encoder: &mut wgpu::CommandEncoder,
         eye: Vec3,
     ) {
+        // In the encoder's order: two eyes' draws in one submission (two cameras) each
+        // read the light toward their own.
         self.params.eye = [eye.x, eye.y, eye.z, 0.0];
-        gpu.queue
-            .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
+        gpu.write_recorded(
+            encoder,
+            &self.params_buffer,
+            0,
+            bytemuck::bytes_of(&self.params),
+        );
         let cells = groups(gpu, self.cells.div_ceil(GROUP));
         let mut pass = encoder.begin_compute_pass(&Default::default());
         self.dispatch(&mut pass, pipelines, TOWARD, 0, cells);
