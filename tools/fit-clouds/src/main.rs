@@ -143,8 +143,47 @@ impl View {
     }
 }
 
+/// The flags `main` reads.
+const FLAGS: [&str; 11] = [
+    "--paths",
+    "--clouds",
+    "--octaves",
+    "--smooth",
+    "--dump",
+    "--orders",
+    "--search",
+    "--floor",
+    "--oracle",
+    "--transfer",
+    "--write",
+];
+
+/// Those of [`FLAGS`] followed by a value.
+const VALUED: [&str; 5] = ["--paths", "--clouds", "--octaves", "--smooth", "--dump"];
+
+/// What `--help` prints (the module doc has the rest).
+const USAGE: &str = "usage: cargo run --release -p atmo-fit-clouds -- [--paths N] [--clouds A,B] \
+[--search] [--floor] [--oracle] [--orders] [--dump FOLDER] [--transfer [--smooth S] [--write]] \
+[--octaves COUNT,A,B,C,K,D,E]
+(path-traced pictures of every view are made first and kept in the temporary folder: \
+minutes to an hour the first time; see the module doc of tools/fit-clouds/src/main.rs)";
+
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    // An argument it does not read would otherwise start an hour of path tracing.
+    let mut k = 0;
+    while let Some(arg) = args.get(k) {
+        if arg == "--help" || arg == "-h" {
+            println!("{USAGE}");
+            return Ok(());
+        }
+        if !FLAGS.contains(&arg.as_str()) || (VALUED.contains(&arg.as_str()) && k + 1 == args.len())
+        {
+            eprintln!("fit-clouds: {arg}: not an argument it takes, or without its value\n{USAGE}");
+            std::process::exit(2);
+        }
+        k += if VALUED.contains(&arg.as_str()) { 2 } else { 1 };
+    }
     let value = |flag: &str| {
         args.iter()
             .position(|a| a == flag)
