@@ -570,9 +570,11 @@ fn sweep(medium: &Medium, w: Vec3, what: Sweep, f: f32) -> Vec<f32> {
         Sweep::Scattered(share) => (share, 0.0, false),
         Sweep::FromOutside => (0.0, 1.0, true),
     };
-    let tau_of = |cell: usize| (medium.sigma_t[cell] - f * medium.sigma_s[cell]) / across;
     let [nx, ny, nz] = medium.dims;
     let mut l = vec![0.0f32; nx * ny * nz];
+    // What each cell passes on downwind: its light where it leaves the cell (with
+    // `means`, not its mean), kept apart so that the next cells need not undo the mean.
+    let mut passed = vec![0.0f32; nx * ny * nz];
     let order = |n: usize, ahead: bool| -> Vec<usize> {
         if ahead {
             (0..n).collect()
@@ -603,12 +605,7 @@ fn sweep(medium: &Medium, w: Vec3, what: Sweep, f: f32) -> Vec<f32> {
                     };
                     inflow += rate[a]
                         * if upwind {
-                            let up = (cell as isize + step[a]) as usize;
-                            if means {
-                                l[up] * exit_over_mean(tau_of(up))
-                            } else {
-                                l[up]
-                            }
+                            passed[(cell as isize + step[a]) as usize]
                         } else {
                             outside
                         };
@@ -626,10 +623,11 @@ fn sweep(medium: &Medium, w: Vec3, what: Sweep, f: f32) -> Vec<f32> {
                 } else {
                     emitted / across
                 };
-                l[cell] = if means {
-                    inflow / across * kept / exit_over_mean(tau)
+                let exit = inflow / across * kept;
+                (l[cell], passed[cell]) = if means {
+                    (exit / exit_over_mean(tau), exit)
                 } else {
-                    inflow / across * kept + own
+                    (exit + own, exit + own)
                 };
             }
         }
